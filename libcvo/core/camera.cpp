@@ -1,0 +1,49 @@
+#include "libcvo/core/camera.hpp"
+
+#include <array>
+#include <cmath>
+
+namespace cvo::core {
+namespace {
+
+struct Preset {
+  std::string_view name;
+  Intrinsics intrinsics;
+};
+
+// TUM values from the benchmark's "file formats / intrinsic camera calibration" page.
+constexpr std::array kPresets{
+    Preset{"tum_fr1", {517.3, 516.5, 318.6, 255.3, 640, 480, 5000.0}},
+    Preset{"tum_fr2", {520.9, 521.0, 325.1, 249.7, 640, 480, 5000.0}},
+    Preset{"tum_fr3", {535.4, 539.2, 320.1, 247.6, 640, 480, 5000.0}},
+    Preset{"synthetic", {525.0, 525.0, 319.5, 239.5, 640, 480, 5000.0}},
+};
+
+bool positive_finite(double v) { return std::isfinite(v) && v > 0; }
+
+}  // namespace
+
+std::string Intrinsics::validate() const {
+  if (!positive_finite(fx)) return "fx must be a positive number";
+  if (!positive_finite(fy)) return "fy must be a positive number";
+  if (!std::isfinite(cx)) return "cx must be a finite number";
+  if (!std::isfinite(cy)) return "cy must be a finite number";
+  if (width <= 0 || width > 16384) return "width must be in 1..16384";
+  if (height <= 0 || height > 16384) return "height must be in 1..16384";
+  if (!positive_finite(depth_scale)) return "depth_scale must be a positive number";
+  return {};
+}
+
+std::optional<Intrinsics> camera_preset(std::string_view name) {
+  for (const auto& p : kPresets)
+    if (p.name == name) return p.intrinsics;
+  return std::nullopt;
+}
+
+std::vector<std::string> camera_preset_names() {
+  std::vector<std::string> names;
+  for (const auto& p : kPresets) names.emplace_back(p.name);
+  return names;
+}
+
+}  // namespace cvo::core
