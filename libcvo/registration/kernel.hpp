@@ -1,0 +1,65 @@
+#pragma once
+// The pair loop of the CVO inner product, eq. (6) of the paper:
+//
+//   F(T) = Σ_ij  c_ij · k(x_i, T z_j),
+//   k(x, w)  = s   · exp(-|x - w|² / (2 ℓ²))        spatial kernel, signal variance s = σ
+//   c_ij     = s_c · exp(-|ℓ(x_i) - ℓ(z_j)|² / (2 ℓ_c²))   colour kernel, signal variance s_c = σ_c
+//
+// A pair counts only when its product a_ij = c_ij k(x_i, T z_j) reaches the sparsification
+// threshold; since c_ij ≤ s_c, such a pair lies within r_max = ℓ sqrt(2 ln(s s_c / threshold)) of
+// T z_j, which is what lets the neighbour search visit only nearby hash cells.
+//
+// For one moving point w = T z_j and a set of candidate fixed points, a kernel returns
+//   Σ_i a_ij,  Σ_i a_ij (x_i - w)  and the number of contributing pairs,
+// which is all the solver needs (see registration.cpp). Scalar and AVX2+FMA versions exist; they
+// agree to float rounding (the AVX2 exp is a polynomial with ~2 ulp error).
+#include <cstddef>
+#include <cstdint>
+
+#include "libcvo/registration/feature.hpp"  // not point_cloud.hpp: this header is also built for AVX2
+
+namespace cvo::registration::kernel {
+
+struct Constants {
+  float inv_two_ell_sq = 0;        // 1 / (2 ℓ²)
+  float inv_two_ell_color_sq = 0;  // 1 / (2 ℓ_c²)
+  float log_amplitude = 0;         // ln(s s_c)
+  float log_threshold = 0;         // ln(threshold): keep a pair iff its log a_ij ≥ this
+};
+
+/// The fixed cloud as the kernels read it: SoA arrays in hash-bucket order.
+struct FixedCloudView {
+  const float* x;
+  const float* y;
+  const float* z;
+  const float* f[kFeatureDim];
+};
+
+/// A half-open run [begin, end) of fixed points (one hash bucket).
+struct Range {
+  std::uint32_t begin, end;
+};
+
+struct PointSums {
+  float a = 0;                    // Σ a_ij
+  float dx = 0, dy = 0, dz = 0;   // Σ a_ij (x_i - w)
+  std::uint32_t pairs = 0;
+};
+
+using PointFunction = PointSums (*)(const FixedCloudView& fixed, const Range* ranges, int range_count,
+                                    const float w[3], const float feature[kFeatureDim], const Constants& k);
+
+PointSums point_scalar(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                       const float feature[kFeatureDim], const Constants& k);
+#if defined(CVO_HAVE_AVX2)
+PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                     const float feature[kFeatureDim], const Constants& k);
+#endif
+
+enum class Isa { kScalar, kAvx2 };
+/// The best kernel this CPU runs (AVX2+FMA when built in and supported), or the requested one.
+Isa best_isa();
+PointFunction point_function(Isa isa);
+const char* to_string(Isa isa);
+
+}  // namespace cvo::registration::kernel

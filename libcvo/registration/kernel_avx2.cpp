@@ -1,0 +1,78 @@
+// Compiled with -mavx2 -mfma; only called after a runtime check of the CPU.
+#include <immintrin.h>
+
+#include "libcvo/registration/kernel.hpp"
+
+namespace cvo::registration::kernel {
+namespace {
+
+// exp(x) for x in about [-88, 0]: x = n ln2 + r, |r| <= ln2/2, exp(r) by a degree-6 polynomial
+// (Cephes expf coefficients), 2^n through the exponent bits. Relative error ~2e-7.
+inline __m256 exp256(__m256 x) {
+  x = _mm256_max_ps(x, _mm256_set1_ps(-87.0f));
+  const __m256 n = _mm256_round_ps(_mm256_mul_ps(x, _mm256_set1_ps(1.44269504088896341f)),
+                                   _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+  __m256 r = _mm256_fnmadd_ps(n, _mm256_set1_ps(0.693359375f), x);
+  r = _mm256_fnmadd_ps(n, _mm256_set1_ps(-2.12194440e-4f), r);
+  __m256 p = _mm256_set1_ps(1.9875691500e-4f);
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.3981999507e-3f));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(8.3334519073e-3f));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(4.1665795894e-2f));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.6666665459e-1f));
+  p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(5.0000001201e-1f));
+  p = _mm256_fmadd_ps(p, _mm256_mul_ps(r, r), _mm256_add_ps(r, _mm256_set1_ps(1.0f)));
+  const __m256i e = _mm256_slli_epi32(_mm256_add_epi32(_mm256_cvtps_epi32(n), _mm256_set1_epi32(127)), 23);
+  return _mm256_mul_ps(p, _mm256_castsi256_ps(e));
+}
+
+inline float horizontal_sum(__m256 v) {
+  const __m128 s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  const __m128 t = _mm_add_ps(s, _mm_movehl_ps(s, s));
+  return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
+}
+
+}  // namespace
+
+PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                     const float feature[kFeatureDim], const Constants& k) {
+  const __m256 wx = _mm256_set1_ps(w[0]), wy = _mm256_set1_ps(w[1]), wz = _mm256_set1_ps(w[2]);
+  __m256 fz[kFeatureDim];
+  for (std::size_t c = 0; c < kFeatureDim; ++c) fz[c] = _mm256_set1_ps(feature[c]);
+  const __m256 inv_s = _mm256_set1_ps(k.inv_two_ell_sq), inv_c = _mm256_set1_ps(k.inv_two_ell_color_sq);
+  const __m256 log_amp = _mm256_set1_ps(k.log_amplitude), log_thr = _mm256_set1_ps(k.log_threshold);
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  __m256 sa = _mm256_setzero_ps(), sx = _mm256_setzero_ps(), sy = _mm256_setzero_ps(), sz = _mm256_setzero_ps();
+  std::uint32_t pairs = 0;
+
+  for (int r = 0; r < range_count; ++r) {
+    for (std::uint32_t i = ranges[r].begin; i < ranges[r].end; i += 8) {
+      // Masked loads for the tail of a run: lanes past its end read nothing and count nothing.
+      const auto remaining = static_cast<int>(ranges[r].end - i);
+      const __m256i load_mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(remaining), lane);
+      const __m256 dx = _mm256_sub_ps(_mm256_maskload_ps(fixed.x + i, load_mask), wx);
+      const __m256 dy = _mm256_sub_ps(_mm256_maskload_ps(fixed.y + i, load_mask), wy);
+      const __m256 dz = _mm256_sub_ps(_mm256_maskload_ps(fixed.z + i, load_mask), wz);
+      __m256 r2 = _mm256_mul_ps(dx, dx);
+      r2 = _mm256_fmadd_ps(dy, dy, r2);
+      r2 = _mm256_fmadd_ps(dz, dz, r2);
+      __m256 c2 = _mm256_setzero_ps();
+      for (std::size_t c = 0; c < kFeatureDim; ++c) {
+        const __m256 d = _mm256_sub_ps(_mm256_maskload_ps(fixed.f[c] + i, load_mask), fz[c]);
+        c2 = _mm256_fmadd_ps(d, d, c2);
+      }
+      const __m256 log_a = _mm256_fnmadd_ps(c2, inv_c, _mm256_fnmadd_ps(r2, inv_s, log_amp));
+      const __m256 keep = _mm256_and_ps(_mm256_cmp_ps(log_a, log_thr, _CMP_GE_OQ), _mm256_castsi256_ps(load_mask));
+      const int bits = _mm256_movemask_ps(keep);
+      if (bits == 0) continue;
+      pairs += static_cast<std::uint32_t>(__builtin_popcount(static_cast<unsigned>(bits)));
+      const __m256 a = _mm256_and_ps(exp256(log_a), keep);
+      sa = _mm256_add_ps(sa, a);
+      sx = _mm256_fmadd_ps(a, dx, sx);
+      sy = _mm256_fmadd_ps(a, dy, sy);
+      sz = _mm256_fmadd_ps(a, dz, sz);
+    }
+  }
+  return {horizontal_sum(sa), horizontal_sum(sx), horizontal_sum(sy), horizontal_sum(sz), pairs};
+}
+
+}  // namespace cvo::registration::kernel

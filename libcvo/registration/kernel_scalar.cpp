@@ -1,0 +1,32 @@
+#include <cmath>
+
+#include "libcvo/registration/kernel.hpp"
+
+namespace cvo::registration::kernel {
+
+PointSums point_scalar(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                       const float feature[kFeatureDim], const Constants& k) {
+  PointSums sums;
+  for (int r = 0; r < range_count; ++r) {
+    for (std::uint32_t i = ranges[r].begin; i < ranges[r].end; ++i) {
+      const float dx = fixed.x[i] - w[0], dy = fixed.y[i] - w[1], dz = fixed.z[i] - w[2];
+      float colour = 0;
+      for (std::size_t c = 0; c < kFeatureDim; ++c) {
+        const float d = fixed.f[c][i] - feature[c];
+        colour += d * d;
+      }
+      const float log_a = k.log_amplitude - (dx * dx + dy * dy + dz * dz) * k.inv_two_ell_sq -
+                          colour * k.inv_two_ell_color_sq;
+      if (log_a < k.log_threshold) continue;
+      const float a = std::exp(log_a);
+      sums.a += a;
+      sums.dx += a * dx;
+      sums.dy += a * dy;
+      sums.dz += a * dz;
+      ++sums.pairs;
+    }
+  }
+  return sums;
+}
+
+}  // namespace cvo::registration::kernel

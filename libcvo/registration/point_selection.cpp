@@ -1,0 +1,185 @@
+#include "libcvo/registration/point_selection.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace cvo::registration {
+namespace {
+
+constexpr int kRegion = 32;           // DSO's threshold region size (pixels)
+constexpr int kHistogramBins = 50;    // |g| on the 0-255 scale, clipped
+constexpr float kThresholdOffset = 7.0f / 255.0f;  // DSO's constant above the median
+constexpr int kMaxCellSize = 64;
+
+}  // namespace
+
+const char* to_string(SelectionStatus status) {
+  switch (status) {
+    case SelectionStatus::kOk: return "ok";
+    case SelectionStatus::kEmptyFrame: return "empty frame or size mismatch";
+    case SelectionStatus::kBadImageType: return "colour must be CV_8UC3 and depth CV_16UC1";
+    case SelectionStatus::kNoValidDepth: return "no valid depth";
+    case SelectionStatus::kCapacityClamped: return "point capacity reached, points dropped";
+  }
+  return "unknown";
+}
+
+PointSelector::PointSelector(int width, int height, const core::SelectionParameters& parameters)
+    : width_(width), height_(height), parameters_(parameters),
+      regions_x_((width + kRegion - 1) / kRegion), regions_y_((height + kRegion - 1) / kRegion) {
+  const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  grey_.resize(n);
+  gx_.resize(n);
+  gy_.resize(n);
+  magnitude_.resize(n);
+  region_threshold_.resize(static_cast<std::size_t>(regions_x_ * regions_y_));
+  smoothed_threshold_.resize(region_threshold_.size());
+  candidates_.reserve(n);
+  cell_best_.resize(n);  // enough for s = 1
+}
+
+std::size_t PointSelector::count_for_cell_size(int s) {
+  // Keep the strongest candidate of every s x s cell; cell_best_ records the winners.
+  const int cells_x = (width_ + s - 1) / s;
+  const int cells_y = (height_ + s - 1) / s;
+  std::fill_n(cell_best_.begin(), static_cast<std::size_t>(cells_x * cells_y), -1);
+  for (std::size_t k = 0; k < candidates_.size(); ++k) {
+    const auto p = candidates_[k];
+    const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
+    const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
+    auto& best = cell_best_[static_cast<std::size_t>((v / s) * cells_x + u / s)];
+    if (best < 0 || magnitude_[p] > magnitude_[candidates_[static_cast<std::size_t>(best)]])
+      best = static_cast<std::int32_t>(k);
+  }
+  std::size_t count = 0;
+  for (int c = 0; c < cells_x * cells_y; ++c) count += cell_best_[static_cast<std::size_t>(c)] >= 0;
+  return count;
+}
+
+SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud) {
+  cloud.clear();
+  SelectionResult result;
+  if (frame.bgr.empty() || frame.depth.empty() || frame.bgr.cols != width_ || frame.bgr.rows != height_ ||
+      frame.depth.cols != width_ || frame.depth.rows != height_) {
+    result.status = SelectionStatus::kEmptyFrame;
+    return result;
+  }
+  if (frame.bgr.type() != CV_8UC3 || frame.depth.type() != CV_16UC1) {
+    result.status = SelectionStatus::kBadImageType;
+    return result;
+  }
+  const auto& K = frame.intrinsics;
+  const auto W = static_cast<std::size_t>(width_);
+
+  // 1. Grey image and gradients (borders get zero gradient).
+  for (int v = 0; v < height_; ++v) {
+    const auto* row = frame.bgr.ptr<std::uint8_t>(v);
+    for (int u = 0; u < width_; ++u) {
+      const auto* px = row + 3 * u;
+      grey_[static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u)] =
+          (0.114f * px[0] + 0.587f * px[1] + 0.299f * px[2]) * (1.0f / 255.0f);
+    }
+  }
+  std::fill(gx_.begin(), gx_.end(), 0.0f);
+  std::fill(gy_.begin(), gy_.end(), 0.0f);
+  std::fill(magnitude_.begin(), magnitude_.end(), 0.0f);
+  for (int v = 1; v + 1 < height_; ++v) {
+    for (int u = 1; u + 1 < width_; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u);
+      gx_[i] = grey_[i + 1] - grey_[i - 1];  // central difference x 2: range [-1, 1]
+      gy_[i] = grey_[i + W] - grey_[i - W];
+      magnitude_[i] = 0.5f * std::sqrt(gx_[i] * gx_[i] + gy_[i] * gy_[i]);
+    }
+  }
+
+  // 2. Region thresholds: median |g| + offset, smoothed over 3x3 regions.
+  for (int ry = 0; ry < regions_y_; ++ry) {
+    for (int rx = 0; rx < regions_x_; ++rx) {
+      std::array<int, kHistogramBins> histogram{};
+      int total = 0;
+      for (int v = ry * kRegion; v < std::min(height_, (ry + 1) * kRegion); ++v)
+        for (int u = rx * kRegion; u < std::min(width_, (rx + 1) * kRegion); ++u) {
+          const float g = magnitude_[static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u)] * 255.0f;
+          ++histogram[static_cast<std::size_t>(std::min(kHistogramBins - 1, static_cast<int>(g)))];
+          ++total;
+        }
+      int bin = 0;
+      for (int acc = 0; bin < kHistogramBins - 1; ++bin) {
+        acc += histogram[static_cast<std::size_t>(bin)];
+        if (2 * acc >= total) break;
+      }
+      region_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] =
+          (static_cast<float>(bin) + 0.5f) / 255.0f + kThresholdOffset;
+    }
+  }
+  for (int ry = 0; ry < regions_y_; ++ry)
+    for (int rx = 0; rx < regions_x_; ++rx) {
+      float sum = 0;
+      int n = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int x = rx + dx, y = ry + dy;
+          if (x < 0 || y < 0 || x >= regions_x_ || y >= regions_y_) continue;
+          sum += region_threshold_[static_cast<std::size_t>(y * regions_x_ + x)];
+          ++n;
+        }
+      smoothed_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] = sum / static_cast<float>(n);
+    }
+
+  // 3. Candidates with valid depth; adapt the cell size to reach the target count.
+  const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
+  const auto max_raw = static_cast<float>(parameters_.max_depth_m * K.depth_scale);
+  candidates_.clear();
+  for (int v = 1; v + 1 < height_; ++v) {
+    const auto* depth_row = frame.depth.ptr<std::uint16_t>(v);
+    for (int u = 1; u + 1 < width_; ++u) {
+      const auto d = static_cast<float>(depth_row[u]);
+      if (d <= 0 || d < min_raw || d > max_raw) continue;
+      ++result.valid_depth_pixels;
+      const std::size_t i = static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u);
+      if (magnitude_[i] > smoothed_threshold_[static_cast<std::size_t>((v / kRegion) * regions_x_ + u / kRegion)])
+        candidates_.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  result.candidates = candidates_.size();
+  if (result.valid_depth_pixels == 0) {
+    result.status = SelectionStatus::kNoValidDepth;
+    return result;
+  }
+
+  const double target = static_cast<double>(std::max<std::size_t>(parameters_.target_points, 1));
+  int s = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(candidates_.size()) / target))));
+  std::size_t count = count_for_cell_size(s);
+  for (int pass = 0; pass < 4 && count > 0; ++pass) {
+    const double ratio = static_cast<double>(count) / target;
+    if (ratio > 0.85 && ratio < 1.15) break;
+    const int next = std::clamp(static_cast<int>(std::lround(s * std::sqrt(ratio))), 1, kMaxCellSize);
+    if (next == s) break;
+    s = next;
+    count = count_for_cell_size(s);
+  }
+  result.cell_size = s;
+
+  // 4. Back-project the winners, in row-major order of their cells (deterministic).
+  const int cells = ((width_ + s - 1) / s) * ((height_ + s - 1) / s);
+  const float fx_inv = static_cast<float>(1.0 / K.fx), fy_inv = static_cast<float>(1.0 / K.fy);
+  const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
+  const float depth_inv = static_cast<float>(1.0 / K.depth_scale);
+  for (int c = 0; c < cells; ++c) {
+    const auto best = cell_best_[static_cast<std::size_t>(c)];
+    if (best < 0) continue;
+    const auto p = candidates_[static_cast<std::size_t>(best)];
+    const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
+    const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
+    const float z = static_cast<float>(frame.depth.at<std::uint16_t>(v, u)) * depth_inv;
+    const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
+    const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gx_[p], gy_[p]};
+    cloud.push_back({(static_cast<float>(u) - cx) * z * fx_inv, (static_cast<float>(v) - cy) * z * fy_inv, z}, f);
+  }
+  result.selected = cloud.size();
+  if (cloud.overflowed() > 0) result.status = SelectionStatus::kCapacityClamped;
+  return result;
+}
+
+}  // namespace cvo::registration

@@ -1,0 +1,66 @@
+#pragma once
+// Semi-dense point selection in the manner of DSO (Engel et al., "Direct Sparse Odometry", 2018),
+// as the paper uses it to turn an RGB-D frame into about 3000 coloured points.
+//
+//  1. grey = (0.299 R + 0.587 G + 0.114 B) / 255; gradient g by central differences.
+//  2. The image is cut into 32x32 regions; each region's threshold is the median of |g| there
+//     plus a constant (DSO: median + 7 on the 0-255 scale), smoothed over the 3x3 neighbouring
+//     regions, so that weak texture in a dull region still counts while strong texture in a busy
+//     region is thinned.
+//  3. Candidates are pixels above their region's threshold with valid depth in
+//     [min_depth, max_depth]. The image is tiled by s x s cells and each cell keeps its strongest
+//     candidate; s is adapted (a few passes) so about `target_points` survive, spreading points
+//     over the whole image.
+//  4. Each point is back-projected with the intrinsics and labelled with its RGB and gradient.
+//
+// Deterministic, and after construction select() performs no heap allocation.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/registration/point_cloud.hpp"
+
+namespace cvo::registration {
+
+enum class SelectionStatus {
+  kOk,
+  kEmptyFrame,      // no image, or sizes differ from the selector's
+  kBadImageType,    // colour not CV_8UC3 or depth not CV_16UC1
+  kNoValidDepth,    // no pixel had usable depth: the cloud is empty
+  kCapacityClamped  // more points qualified than the cloud holds; the rest were dropped
+};
+const char* to_string(SelectionStatus status);
+
+struct SelectionResult {
+  SelectionStatus status = SelectionStatus::kOk;
+  std::size_t valid_depth_pixels = 0;
+  std::size_t candidates = 0;  // above threshold with valid depth
+  std::size_t selected = 0;
+  int cell_size = 1;           // the s finally used
+};
+
+class PointSelector {
+ public:
+  PointSelector(int width, int height, const core::SelectionParameters& parameters);
+
+  /// Fills `cloud` (cleared first) with the selected points of `frame` in its camera frame.
+  SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud);
+
+  [[nodiscard]] int width() const { return width_; }
+  [[nodiscard]] int height() const { return height_; }
+
+ private:
+  std::size_t count_for_cell_size(int s);
+
+  int width_, height_;
+  core::SelectionParameters parameters_;
+  int regions_x_, regions_y_;
+  std::vector<float> grey_, gx_, gy_, magnitude_;
+  std::vector<float> region_threshold_, smoothed_threshold_;
+  std::vector<std::uint32_t> candidates_;   // pixel indices, row-major order
+  std::vector<std::int32_t> cell_best_;     // per cell: best candidate index or -1
+};
+
+}  // namespace cvo::registration

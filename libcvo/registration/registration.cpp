@@ -1,0 +1,285 @@
+#include "libcvo/registration/registration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cvo::registration {
+namespace {
+
+constexpr std::size_t kChunk = 256;        // moving points per reduction chunk (fixed: thread-count independent)
+constexpr std::size_t kMinPairs = 12;      // fewer contributing pairs cannot constrain 6 DoF reliably
+constexpr std::size_t kMinPoints = 3;
+constexpr double kMaxRotationStep = 0.2;   // rad per iteration: a trust region against wild first steps
+constexpr double kShrinkFraction = 0.01;   // shrink ℓ once the step is below this fraction of ℓ
+
+std::size_t next_power_of_two(std::size_t v) {
+  std::size_t p = 1;
+  while (p < v) p <<= 1;
+  return p;
+}
+
+// Cells are keyed by their integer coordinates packed into 63 bits (21 bits each, offset to be
+// non-negative); coordinates are clamped to that range, which only merges cells tens of
+// kilometres away, and the kernel's own distance test keeps the result exact.
+constexpr std::int64_t kCoordinateRange = 1 << 20;
+constexpr std::uint64_t kEmptySlot = ~0ULL;
+
+inline std::int64_t cell_coordinate(float v, double inv_cell) {
+  const double c = std::floor(static_cast<double>(v) * inv_cell);
+  return static_cast<std::int64_t>(std::clamp(c, -static_cast<double>(kCoordinateRange - 2),
+                                              static_cast<double>(kCoordinateRange - 2)));
+}
+
+inline std::uint64_t cell_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
+  return static_cast<std::uint64_t>(ix + kCoordinateRange) << 42 |
+         static_cast<std::uint64_t>(iy + kCoordinateRange) << 21 | static_cast<std::uint64_t>(iz + kCoordinateRange);
+}
+
+inline std::size_t slot_hash(std::uint64_t key, std::size_t mask) {
+  key ^= key >> 33;
+  key *= 0xff51afd7ed558ccdULL;  // murmur3 finaliser: spreads neighbouring cells over the table
+  key ^= key >> 33;
+  return static_cast<std::size_t>(key) & mask;
+}
+
+// The product of the two kernels' signal variances: Table 1's σ and σ_c read as standard
+// deviations, so the amplitude is σ² σ_c² (see core::CvoParameters for the measurements).
+double kernel_amplitude(const core::CvoParameters& p) {
+  return p.sigma * p.sigma * p.sigma_color * p.sigma_color;
+}
+
+bool all_finite(const PointCloud& cloud, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    float s = cloud.x()[i] + cloud.y()[i] + cloud.z()[i];
+    for (std::size_t c = 0; c < kFeatureDim; ++c) s += cloud.feature_channel(c)[i];
+    if (!std::isfinite(s)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+const char* to_string(RegistrationStatus status) {
+  switch (status) {
+    case RegistrationStatus::kOk: return "ok";
+    case RegistrationStatus::kEmptyCloud: return "empty or tiny cloud";
+    case RegistrationStatus::kNonFinite: return "non-finite point, label or initial pose";
+    case RegistrationStatus::kCapacityExceeded: return "cloud larger than capacity, truncated";
+    case RegistrationStatus::kNoOverlap: return "too few contributing pairs";
+    case RegistrationStatus::kNotConverged: return "not converged within max_iterations";
+    case RegistrationStatus::kBadParameters: return "kernel amplitude below the sparsification threshold";
+  }
+  return "unknown";
+}
+
+void Registration::Sums::add(const Sums& o) {
+  s0 += o.s0;
+  s1 += o.s1;
+  s2 += o.s2;
+  bt += o.bt;
+  br += o.br;
+  pairs += o.pairs;
+}
+
+core::Matrix6d Registration::Sums::hessian() const {
+  core::Matrix6d H;
+  H.topLeftCorner<3, 3>() = s0 * Eigen::Matrix3d::Identity();
+  H.topRightCorner<3, 3>() = -core::hat(s1);
+  H.bottomLeftCorner<3, 3>() = core::hat(s1);
+  H.bottomRightCorner<3, 3>() = s2.trace() * Eigen::Matrix3d::Identity() - s2;
+  return H;
+}
+
+Registration::Registration(const Capacities& capacities, const core::CvoParameters& parameters, kernel::Isa isa)
+    : parameters_(parameters), isa_(isa), point_(kernel::point_function(isa)), capacity_(capacities.max_points),
+      bucket_mask_(next_power_of_two(std::max<std::size_t>(1024, 2 * capacities.max_points)) - 1),
+      slot_key_(bucket_mask_ + 1), bucket_start_(bucket_mask_ + 2), bucket_of_(capacities.max_points), sx_(capacities.max_points),
+      sy_(capacities.max_points), sz_(capacities.max_points),
+      chunk_sums_((capacities.max_points + kChunk - 1) / kChunk + 1),
+      pairs_log_(static_cast<std::size_t>(std::max(parameters.max_iterations, 0)) + 1) {
+  for (auto& channel : sf_) channel.resize(capacities.max_points);
+  if (isa_ == kernel::Isa::kAvx2 && kernel::best_isa() != kernel::Isa::kAvx2) isa_ = kernel::Isa::kScalar;
+}
+
+RegistrationStatus Registration::check(const PointCloud& fixed, const PointCloud& moving) const {
+  const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
+  if (nf < kMinPoints || nm < kMinPoints) return RegistrationStatus::kEmptyCloud;
+  if (!all_finite(fixed, nf) || !all_finite(moving, nm)) return RegistrationStatus::kNonFinite;
+  const double amplitude = kernel_amplitude(parameters_);
+  if (!(amplitude > parameters_.sparsification_threshold) || !(parameters_.ell_init > 0) ||
+      !(parameters_.ell_min > 0) || !(parameters_.ell_color > 0))
+    return RegistrationStatus::kBadParameters;
+  return (fixed.size() > capacity_ || moving.size() > capacity_) ? RegistrationStatus::kCapacityExceeded
+                                                                  : RegistrationStatus::kOk;
+}
+
+bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell) {
+  const double amplitude = kernel_amplitude(parameters_);
+  const double log_ratio = std::log(amplitude / parameters_.sparsification_threshold);
+  if (!(log_ratio > 0)) return false;
+  cell_ = ell * std::sqrt(2.0 * log_ratio);  // r_max: no pair farther apart can reach the threshold
+  inv_cell_ = 1.0 / cell_;
+  constants_.inv_two_ell_sq = static_cast<float>(1.0 / (2.0 * ell * ell));
+  constants_.inv_two_ell_color_sq = static_cast<float>(1.0 / (2.0 * parameters_.ell_color * parameters_.ell_color));
+  constants_.log_amplitude = static_cast<float>(std::log(amplitude));
+  constants_.log_threshold = static_cast<float>(std::log(parameters_.sparsification_threshold));
+
+  // Each occupied cell gets a slot of an open-addressing table (linear probing on the exact
+  // key, so distinct cells never share a slot); then a counting sort by slot makes every cell's
+  // points one contiguous run: bucket_start_[s] .. bucket_start_[s + 1].
+  std::fill(slot_key_.begin(), slot_key_.end(), kEmptySlot);
+  std::fill(bucket_start_.begin(), bucket_start_.end(), 0u);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto key = cell_key(cell_coordinate(fixed.x()[i], inv_cell_), cell_coordinate(fixed.y()[i], inv_cell_),
+                              cell_coordinate(fixed.z()[i], inv_cell_));
+    std::size_t slot = slot_hash(key, bucket_mask_);
+    while (slot_key_[slot] != kEmptySlot && slot_key_[slot] != key) slot = (slot + 1) & bucket_mask_;
+    slot_key_[slot] = key;
+    bucket_of_[i] = static_cast<std::uint32_t>(slot);
+    ++bucket_start_[slot + 1];
+  }
+  for (std::size_t b = 1; b < bucket_start_.size(); ++b) bucket_start_[b] += bucket_start_[b - 1];
+  // Scatter, using bucket_start_[b] as a cursor, then shift back so it holds the starts again.
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto dst = bucket_start_[bucket_of_[i]]++;
+    sx_[dst] = fixed.x()[i];
+    sy_[dst] = fixed.y()[i];
+    sz_[dst] = fixed.z()[i];
+    for (std::size_t c = 0; c < kFeatureDim; ++c) sf_[c][dst] = fixed.feature_channel(c)[i];
+  }
+  for (std::size_t b = bucket_start_.size() - 1; b > 0; --b) bucket_start_[b] = bucket_start_[b - 1];
+  bucket_start_[0] = 0;
+  return true;
+}
+
+void Registration::accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total) {
+  const Eigen::Matrix3f R = T.rotation_matrix().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  const kernel::FixedCloudView view{sx_.data(), sy_.data(), sz_.data(),
+                                    {sf_[0].data(), sf_[1].data(), sf_[2].data(), sf_[3].data(), sf_[4].data()}};
+  const auto chunks = static_cast<std::ptrdiff_t>((n + kChunk - 1) / kChunk);
+
+#pragma omp parallel for schedule(static) num_threads(parameters_.threads) if (parameters_.threads > 1)
+  for (std::ptrdiff_t chunk = 0; chunk < chunks; ++chunk) {
+    Sums sums;
+    const std::size_t begin = static_cast<std::size_t>(chunk) * kChunk, end = std::min(n, begin + kChunk);
+    kernel::Range ranges[27];
+    int count = 0;
+    std::int64_t last_cx = std::numeric_limits<std::int64_t>::min(), last_cy = 0, last_cz = 0;
+    for (std::size_t j = begin; j < end; ++j) {
+      const Eigen::Vector3f w = R * moving.position(j) + t;
+      const float wf[3] = {w.x(), w.y(), w.z()};
+      float feature[kFeatureDim];
+      for (std::size_t c = 0; c < kFeatureDim; ++c) feature[c] = moving.feature_channel(c)[j];
+
+      // The occupied cells among the 27 around w (distinct cells have distinct slots). Moving
+      // points come in image order, so consecutive ones often share a cell: reuse its lookup.
+      const auto cx = cell_coordinate(w.x(), inv_cell_), cy = cell_coordinate(w.y(), inv_cell_),
+                 cz = cell_coordinate(w.z(), inv_cell_);
+      if (cx != last_cx || cy != last_cy || cz != last_cz) {
+        last_cx = cx;
+        last_cy = cy;
+        last_cz = cz;
+        count = 0;
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const auto key = cell_key(cx + dx, cy + dy, cz + dz);
+              for (std::size_t slot = slot_hash(key, bucket_mask_); slot_key_[slot] != kEmptySlot;
+                   slot = (slot + 1) & bucket_mask_) {
+                if (slot_key_[slot] != key) continue;
+                ranges[count++] = {bucket_start_[slot], bucket_start_[slot + 1]};
+                break;
+              }
+            }
+      }
+      if (count == 0) continue;
+
+      const kernel::PointSums p = point_(view, ranges, count, wf, feature, constants_);
+      if (p.pairs == 0) continue;
+      const Eigen::Vector3d wd = w.cast<double>();
+      const Eigen::Vector3d D(p.dx, p.dy, p.dz);
+      sums.s0 += p.a;
+      sums.s1 += p.a * wd;
+      sums.s2 += p.a * wd * wd.transpose();
+      sums.bt += D;
+      sums.br += wd.cross(D);
+      sums.pairs += p.pairs;
+    }
+    chunk_sums_[static_cast<std::size_t>(chunk)] = sums;
+  }
+  total = Sums{};
+  for (std::ptrdiff_t chunk = 0; chunk < chunks; ++chunk) total.add(chunk_sums_[static_cast<std::size_t>(chunk)]);
+}
+
+double Registration::inner_product(const PointCloud& fixed, const PointCloud& moving, const core::SE3& T, double ell) {
+  const auto status = check(fixed, moving);
+  if (status != RegistrationStatus::kOk && status != RegistrationStatus::kCapacityExceeded) return 0.0;
+  if (!T.is_finite() || !(ell > 0)) return 0.0;
+  const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
+  if (!build_grid(fixed, nf, ell)) return 0.0;
+  Sums sums;
+  accumulate(moving, nm, T, sums);
+  return sums.s0;
+}
+
+RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial) {
+  RegistrationResult result;
+  result.transform = initial;
+  pairs_logged_ = 0;
+  result.status = check(fixed, moving);
+  if (result.status == RegistrationStatus::kOk && !initial.is_finite()) result.status = RegistrationStatus::kNonFinite;
+  if (result.status != RegistrationStatus::kOk && result.status != RegistrationStatus::kCapacityExceeded)
+    return result;
+  const RegistrationStatus input_status = result.status;
+  const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
+
+  double ell = parameters_.ell_init;
+  const double ell_min = std::min(parameters_.ell_min, parameters_.ell_init);
+  build_grid(fixed, nf, ell);
+  core::SE3 T = initial;
+  Sums sums;
+  result.status = RegistrationStatus::kNotConverged;
+  for (int it = 0; it < parameters_.max_iterations; ++it) {
+    accumulate(moving, nm, T, sums);
+    result.iterations = it + 1;
+    result.pairs = sums.pairs;
+    result.inner_product = sums.s0;
+    result.final_ell = ell;
+    result.hessian = sums.hessian() / (ell * ell);
+    if (pairs_logged_ < pairs_log_.size()) pairs_log_[pairs_logged_++] = sums.pairs;
+    if (sums.pairs < kMinPairs) {
+      result.status = RegistrationStatus::kNoOverlap;
+      break;
+    }
+    core::Matrix6d H = sums.hessian();
+    H.diagonal().array() += 1e-9 * H.diagonal().maxCoeff();  // keeps a degenerate H solvable
+    core::Vector6d b;
+    b << sums.bt, sums.br;
+    core::Vector6d xi = H.ldlt().solve(b);
+    if (!xi.allFinite()) {
+      result.status = RegistrationStatus::kNoOverlap;
+      break;
+    }
+    // Trust region: at most ℓ of translation and kMaxRotationStep of rotation per iteration.
+    const double scale = std::min({1.0, ell / std::max(xi.head<3>().norm(), 1e-12),
+                                   kMaxRotationStep / std::max(xi.tail<3>().norm(), 1e-12)});
+    xi *= scale;
+    T = core::SE3::exp(xi) * T;
+    const double step = xi.head<3>().norm() + xi.tail<3>().norm();
+    if (ell <= ell_min && step < parameters_.min_step) {
+      result.converged = true;
+      result.status = input_status;
+      break;
+    }
+    if (ell > ell_min && step < kShrinkFraction * ell) {
+      ell = std::max(ell * parameters_.ell_decay, ell_min);
+      build_grid(fixed, nf, ell);
+    }
+  }
+  result.transform = T;
+  return result;
+}
+
+}  // namespace cvo::registration
