@@ -1,0 +1,377 @@
+#include "libcvo/config/config.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <type_traits>
+#include <utility>
+#include <variant>
+
+#include <yaml-cpp/yaml.h>
+
+#include "libcvo/io/numbers.hpp"
+
+namespace cvo::config {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Shortest text that reads back to the same double ("0.1", "1e-05").
+std::string shortest(double v) {
+  char buffer[32];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, v).ptr;
+  return {buffer, end};
+}
+
+// The valid values of a numeric key.
+struct Range {
+  double lo = -kInf, hi = kInf;
+  bool lo_open = false, hi_open = false;
+
+  [[nodiscard]] bool contains(double v) const { return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi); }
+  [[nodiscard]] std::string text() const {
+    if (hi == kInf) return (lo_open ? "> " : ">= ") + shortest(lo);
+    return std::string("in ").append(lo_open ? "(" : "[") + shortest(lo) + ", " + shortest(hi) + (hi_open ? ")" : "]");
+  }
+};
+
+constexpr Range kAny{};
+constexpr Range kPositive{0, kInf, true, false};
+constexpr Range kNonNegative{0, kInf};
+constexpr Range kAtLeastOne{1, kInf};
+constexpr Range kUnit{0, 1};                   // [0, 1]
+constexpr Range kUnitNonZero{0, 1, true, false};  // (0, 1]
+constexpr Range kHalfTurnDeg{0, 180, true, false};
+constexpr Range kThreads{1, 1024};
+
+template <class T>
+using Get = std::function<T&(Config&)>;
+
+// One row of the table: everything the loader, the overrides and the dump know about a key.
+struct Field {
+  std::string key;  // "section.member", or "member" at the top level
+  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<std::string>> member;
+  Range range;           // numeric keys only
+  std::string_view doc;  // the dump's comment: paper symbol and meaning
+};
+
+template <class S, class T>
+Field row(std::string key, S Config::*section, T S::*member, Range range, std::string_view doc) {
+  return {std::move(key), Get<T>([=](Config& c) -> T& { return (c.*section).*member; }), range, doc};
+}
+
+using core::CvoParameters, core::SelectionParameters, core::KeyframeParameters, core::LoopClosureParameters,
+    core::PoseGraphParameters, core::DatasetParameters;
+
+// Sections must stay contiguous: the dump opens a section where the prefix changes.
+const std::vector<Field>& table() {
+  static const std::vector<Field> fields{
+      row("selection.target_points", &Config::selection, &SelectionParameters::target_points, kAtLeastOne,
+          "points selected per 640x480 frame (paper section 6)"),
+      row("selection.min_depth_m", &Config::selection, &SelectionParameters::min_depth_m, kNonNegative,
+          "nearest depth used (m)"),
+      row("selection.max_depth_m", &Config::selection, &SelectionParameters::max_depth_m, kPositive,
+          "farthest depth used (m)"),
+      row("cvo.ell_init", &Config::cvo, &CvoParameters::ell_init, kPositive,
+          "ℓ_init, initial spatial kernel length-scale (m)"),
+      row("cvo.ell_min", &Config::cvo, &CvoParameters::ell_min, kPositive,
+          "smallest spatial length-scale of the schedule (m)"),
+      row("cvo.ell_decay", &Config::cvo, &CvoParameters::ell_decay, kUnitNonZero,
+          "factor applied to ℓ as the solver converges"),
+      row("cvo.sigma", &Config::cvo, &CvoParameters::sigma, kPositive, "σ, spatial kernel signal (std. dev.; amplitude σ²)"),
+      row("cvo.ell_color", &Config::cvo, &CvoParameters::ell_color, kPositive, "ℓ_c, colour kernel length-scale"),
+      row("cvo.sigma_color", &Config::cvo, &CvoParameters::sigma_color, kPositive,
+          "σ_c, colour kernel signal (std. dev.; amplitude σ_c²)"),
+      row("cvo.sparsification_threshold", &Config::cvo, &CvoParameters::sparsification_threshold, kNonNegative,
+          "kernel products below this are dropped"),
+      row("cvo.max_iterations", &Config::cvo, &CvoParameters::max_iterations, kAtLeastOne,
+          "solver iterations per registration"),
+      row("cvo.min_step", &Config::cvo, &CvoParameters::min_step, kPositive,
+          "converged when |Δρ| + |Δφ| (m + rad) is below this at ℓ_min"),
+      row("cvo.threads", &Config::cvo, &CvoParameters::threads, kThreads, "tracker threads"),
+      row("keyframe.inner_product_ratio_threshold", &Config::keyframe,
+          &KeyframeParameters::inner_product_ratio_threshold, kUnit, "γ_thres, new keyframe below this ratio (eq. 10)"),
+      row("keyframe.translation_threshold_m", &Config::keyframe, &KeyframeParameters::translation_threshold_m,
+          kPositive, "t_thres, new keyframe beyond this translation (m)"),
+      row("keyframe.rotation_threshold_deg", &Config::keyframe, &KeyframeParameters::rotation_threshold_deg,
+          kHalfTurnDeg, "θ_thres, new keyframe beyond this rotation (degrees)"),
+      row("loop_closure.similarity_threshold", &Config::loop_closure, &LoopClosureParameters::similarity_threshold,
+          kUnit, "η_thres, normalised bag-of-words score"),
+      row("loop_closure.match_ratio", &Config::loop_closure, &LoopClosureParameters::match_ratio, kUnitNonZero,
+          "best / second-best descriptor distance"),
+      row("loop_closure.min_matches", &Config::loop_closure, &LoopClosureParameters::min_matches, kAtLeastOne,
+          "descriptor matches needed for a loop candidate"),
+      row("pose_graph.cauchy_delta", &Config::pose_graph, &PoseGraphParameters::cauchy_delta, kPositive,
+          "δ of the Cauchy loss ρ(x) = δ² log(1 + x/δ²)"),
+      row("dataset.max_association_dt", &Config::dataset, &DatasetParameters::max_association_dt, kPositive,
+          "colour-depth timestamp association window (s)"),
+      Field{"camera", Get<std::string>([](Config& c) -> std::string& { return c.camera; }), kAny,
+            "tum_fr1, tum_fr2, tum_fr3, synthetic, or a path to an intrinsics file"},
+  };
+  return fields;
+}
+
+const Field* find_field(std::string_view key) {
+  for (const auto& f : table())
+    if (f.key == key) return &f;
+  return nullptr;
+}
+
+std::string_view section_of(std::string_view key) {
+  const auto dot = key.find('.');
+  return dot == std::string_view::npos ? std::string_view{} : key.substr(0, dot);
+}
+
+bool is_section(std::string_view name) {
+  return std::any_of(table().begin(), table().end(), [&](const Field& f) { return section_of(f.key) == name; });
+}
+
+// Sets the field from its text; returns what is wrong with the text, or "" when it was set.
+std::string assign(const Field& field, Config& config, std::string_view text) {
+  // Built with append(): GCC 12 warns falsely (-Wrestrict) on "'" + std::string(...).
+  const std::string quoted = std::string("'").append(text).append("'");
+  return std::visit(
+      [&](const auto& get) -> std::string {
+        using T = std::remove_reference_t<decltype(get(config))>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          if (text.empty()) return "must not be empty";
+          get(config) = std::string(text);
+          return {};
+        } else if constexpr (std::is_same_v<T, double>) {
+          const auto v = io::to_finite(text);
+          if (!v) return "expected a finite number, got " + quoted;
+          if (!field.range.contains(*v)) return "must be " + field.range.text() + ", got " + quoted;
+          get(config) = *v;
+          return {};
+        } else {
+          const auto v = io::to_integer(text);
+          if (!v) return "expected an integer, got " + quoted;
+          if (!field.range.contains(static_cast<double>(*v))) return "must be " + field.range.text() + ", got " + quoted;
+          if (!std::in_range<T>(*v)) return "out of range: " + quoted;
+          get(config) = static_cast<T>(*v);
+          return {};
+        }
+      },
+      field.member);
+}
+
+std::string kind_of(const Field& field) {
+  return std::visit(
+      [](const auto& get) -> std::string {
+        using T = std::remove_reference_t<std::invoke_result_t<decltype(get), Config&>>;
+        if constexpr (std::is_same_v<T, std::string>) return "a string";
+        else if constexpr (std::is_same_v<T, double>) return "a number";
+        else return "an integer";
+      },
+      field.member);
+}
+
+std::string format_value(const Field& field, Config& config) {
+  return std::visit(
+      [&](const auto& get) -> std::string {
+        const auto& v = get(config);
+        using T = std::remove_cvref_t<decltype(v)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          YAML::Emitter out;  // quotes the string when YAML needs it
+          out << v;
+          return out.c_str();
+        } else if constexpr (std::is_same_v<T, double>) {
+          return shortest(v);
+        } else {
+          return std::to_string(v);
+        }
+      },
+      field.member);
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+// " (did you mean X?)" for a misspelt key or one put in the wrong section; "" when nothing is close.
+std::string suggestion(std::string_view typed, const std::vector<std::string>& candidates) {
+  if (const auto dot = typed.rfind('.'); dot != std::string_view::npos) {
+    const auto member = typed.substr(dot);  // ".ell_init"
+    for (const auto& c : candidates)
+      if (c.ends_with(member)) return " (did you mean " + c + "?)";
+  }
+  const std::string* best = nullptr;
+  std::size_t best_distance = std::max<std::size_t>(2, typed.size() / 4) + 1;
+  for (const auto& c : candidates)
+    if (const auto d = edit_distance(typed, c); d < best_distance) best = &c, best_distance = d;
+  return best ? " (did you mean " + *best + "?)" : "";
+}
+
+std::vector<std::string> top_level_names() {
+  std::vector<std::string> names;
+  for (const auto& f : table()) {
+    const auto name = std::string(section_of(f.key).empty() ? std::string_view(f.key) : section_of(f.key));
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  return names;
+}
+
+// Constraints between keys, which no single row can check.
+void check_consistency(const Config& c, const std::filesystem::path& source) {
+  if (c.selection.min_depth_m >= c.selection.max_depth_m)
+    throw ConfigError(source, "selection.min_depth_m (" + shortest(c.selection.min_depth_m) +
+                                  ") must be below selection.max_depth_m (" + shortest(c.selection.max_depth_m) + ")");
+  if (c.cvo.ell_min > c.cvo.ell_init)
+    throw ConfigError(source, "cvo.ell_min (" + shortest(c.cvo.ell_min) + ") must not exceed cvo.ell_init (" +
+                                  shortest(c.cvo.ell_init) + ")");
+}
+
+std::size_t line_of(const YAML::Mark& mark) { return mark.line >= 0 ? static_cast<std::size_t>(mark.line) + 1 : 0; }
+
+std::string node_kind(const YAML::Node& node) {
+  if (node.IsMap()) return "a mapping";
+  if (node.IsSequence()) return "a sequence";
+  return "nothing";
+}
+
+// Errors point at the key's line: a missing value has no place of its own.
+void set_from_node(const Field& field, const YAML::Node& value, std::size_t line, Config& config,
+                   const std::filesystem::path& source) {
+  if (!value.IsScalar())
+    throw ConfigError(source, line, field.key + ": expected " + kind_of(field) + ", got " + node_kind(value));
+  if (const auto error = assign(field, config, value.Scalar()); !error.empty())
+    throw ConfigError(source, line, field.key + ": " + error);
+}
+
+std::string_view trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t");
+  if (first == std::string_view::npos) return {};
+  return s.substr(first, s.find_last_not_of(" \t") - first + 1);
+}
+
+}  // namespace
+
+bool operator==(const Config& a, const Config& b) {
+  // The accessors hand out references for writing too, so compare copies.
+  Config x = a, y = b;
+  return std::all_of(table().begin(), table().end(),
+                     [&](const Field& f) { return format_value(f, x) == format_value(f, y); });
+}
+
+std::vector<std::string> config_keys() {
+  std::vector<std::string> keys;
+  for (const auto& f : table()) keys.push_back(f.key);
+  return keys;
+}
+
+Config parse_config(std::string_view yaml_text, const std::filesystem::path& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(yaml_text));
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source, line_of(e.mark), "YAML: " + e.msg);
+  }
+  Config config;
+  if (root.IsNull()) return config;  // an empty file: all defaults
+  if (!root.IsMap()) throw ConfigError(source, line_of(root.Mark()), "expected a mapping of sections (cvo: ...)");
+
+  std::map<std::string, std::size_t> seen;  // key or section -> line, to report duplicates
+  const auto first_time = [&](const std::string& key, std::size_t line) {
+    if (const auto [it, fresh] = seen.emplace(key, line); !fresh)
+      throw ConfigError(source, line, key + ": given twice (first on line " + std::to_string(it->second) + ")");
+  };
+
+  for (const auto& top : root) {
+    const std::string name = top.first.Scalar();
+    const std::size_t line = line_of(top.first.Mark());
+    first_time(name, line);
+    if (const Field* field = find_field(name)) {
+      set_from_node(*field, top.second, line, config, source);
+      continue;
+    }
+    if (!is_section(name)) throw ConfigError(source, line, name + ": unknown section" + suggestion(name, top_level_names()));
+    if (top.second.IsNull()) continue;  // "cvo:" with nothing under it
+    if (!top.second.IsMap())
+      throw ConfigError(source, line, name + ": expected a mapping of keys, e.g. '" + name + ": {key: value}'");
+    for (const auto& entry : top.second) {
+      const std::string key = name + "." + entry.first.Scalar();
+      const std::size_t key_line = line_of(entry.first.Mark());
+      const Field* field = find_field(key);
+      if (!field) throw ConfigError(source, key_line, key + ": unknown key" + suggestion(key, config_keys()));
+      first_time(key, key_line);
+      set_from_node(*field, entry.second, key_line, config, source);
+    }
+  }
+  check_consistency(config, source);
+  return config;
+}
+
+Config load_config(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(file, "cannot open config file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(file, "read error");
+  return parse_config(text.str(), file);
+}
+
+void apply_override(Config& config, std::string_view assignment) {
+  const std::filesystem::path source = "--set";
+  const auto eq = assignment.find('=');
+  if (eq == std::string_view::npos)
+    throw ConfigError(source, "'" + std::string(assignment) + "': expected key=value, e.g. cvo.ell_init=0.15");
+  const std::string key(trim(assignment.substr(0, eq)));
+  const Field* field = find_field(key);
+  if (!field) {
+    const bool section = is_section(key);
+    throw ConfigError(source, key + (section ? ": a section; set one of its keys, e.g. " + key + ".<key>=value"
+                                             : ": unknown key" + suggestion(key, config_keys())));
+  }
+  Config updated = config;  // config stays as it was if anything is wrong
+  if (const auto error = assign(*field, updated, trim(assignment.substr(eq + 1))); !error.empty())
+    throw ConfigError(source, key + ": " + error);
+  check_consistency(updated, source);
+  config = std::move(updated);
+}
+
+std::string dump_config(const Config& config) {
+  Config c = config;  // the accessors need a mutable object; they only read here
+  std::vector<std::string> entries;  // "  key: value", before comments are aligned
+  std::size_t width = 0;
+  for (const auto& f : table()) {
+    const auto section = section_of(f.key);
+    const auto member = section.empty() ? std::string_view(f.key) : std::string_view(f.key).substr(section.size() + 1);
+    entries.push_back((section.empty() ? "" : "  ") + std::string(member) + ": " + format_value(f, c));
+    width = std::max(width, entries.back().size());
+  }
+
+  std::string out =
+      "# cvo-slam configuration, every key with its value. A file may give any subset, and\n"
+      "# '--set section.key=value' overrides one key; the rest keep their defaults, the paper's\n"
+      "# Table 1 (libcvo/core/parameters.hpp). libcvo/config/default.yaml is this for the defaults.\n";
+  std::string_view open_section = "-";
+  for (std::size_t i = 0; i < table().size(); ++i) {
+    const auto& f = table()[i];
+    if (const auto section = section_of(f.key); section != open_section) {
+      out.append("\n");
+      if (!section.empty()) out.append(section).append(":\n");
+      open_section = section;
+    }
+    std::string comment(f.doc);
+    if (f.range.lo != -kInf || f.range.hi != kInf) comment.append("; ").append(f.range.text());
+    out.append(entries[i]).append(width + 2 - entries[i].size(), ' ').append("# ").append(comment).append("\n");
+  }
+  return out;
+}
+
+}  // namespace cvo::config

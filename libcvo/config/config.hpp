@@ -1,0 +1,59 @@
+#pragma once
+// Every tunable of the system in one value, read from YAML and from command-line overrides.
+//
+// The YAML mirrors the structs: a top-level section per parameter group, keyed by member name,
+//     cvo:
+//       ell_init: 0.1
+//     camera: tum_fr1
+// A file may give any subset; the rest keep their defaults (the paper's Table 1, see
+// libcvo/core/parameters.hpp). libcvo/config/default.yaml is dump_config(Config{}), every key
+// with a comment. One table in config.cpp lists every key with its member and its valid range;
+// loading, overrides, dumping and comparing all walk it, so a new parameter is one new row.
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/io/input_error.hpp"
+
+namespace cvo::config {
+
+struct Config {
+  core::SelectionParameters selection;
+  core::CvoParameters cvo;
+  core::KeyframeParameters keyframe;
+  core::LoopClosureParameters loop_closure;
+  core::PoseGraphParameters pose_graph;
+  core::DatasetParameters dataset;
+  std::string camera = "tum_fr1";  // a preset name or a path to an intrinsics file (io::load_camera)
+};
+
+/// Every key of the table is equal (doubles exactly).
+bool operator==(const Config& a, const Config& b);
+
+/// A bad configuration: names the source (file, or "--set" for an override), the line when known,
+/// the full key ("cvo.ell_init") and the offending value.
+class ConfigError : public io::InputError {
+ public:
+  using io::InputError::InputError;
+};
+
+/// Reads a YAML file; throws ConfigError on an unreadable file, a YAML syntax error, an unknown
+/// section or key (with a suggestion), a duplicate key, a value of the wrong type or out of
+/// range (NaN included), or inconsistent values (e.g. selection.min_depth_m >= max_depth_m).
+Config load_config(const std::filesystem::path& file);
+Config parse_config(std::string_view yaml_text, const std::filesystem::path& name_for_errors = "<config>");
+
+/// Applies one "--set" assignment "section.key=value" with the same checks; on error the config
+/// is left unchanged.
+void apply_override(Config& config, std::string_view assignment);
+
+/// A complete YAML document with every key, its value (round-trip precision) and a comment;
+/// parse_config(dump_config(c)) == c.
+std::string dump_config(const Config& config);
+
+/// Every full key ("selection.target_points", ..., "camera") in table order.
+std::vector<std::string> config_keys();
+
+}  // namespace cvo::config

@@ -1,0 +1,138 @@
+#include "libcvo/io/intrinsics_file.hpp"
+
+#include <algorithm>
+#include <array>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <yaml-cpp/yaml.h>
+
+#include "libcvo/io/input_error.hpp"
+#include "libcvo/io/numbers.hpp"
+#include "libcvo/io/text_lines.hpp"
+
+namespace cvo::io {
+namespace {
+
+constexpr std::array<std::string_view, 7> kKeys{"fx", "fy", "cx", "cy", "width", "height", "depth_scale"};
+constexpr std::string_view kExpected = "fx, fy, cx, cy, width, height, depth_scale";
+
+std::size_t line_of(const YAML::Node& node) {
+  const int line = node.Mark().line;
+  return line >= 0 ? static_cast<std::size_t>(line) + 1 : 0;
+}
+
+// The key of a field named in Intrinsics::validate()'s message ("fx must be ..."), to find its line.
+std::string_view key_in(const std::string& message) {
+  for (const auto key : kKeys)
+    if (message.starts_with(key) && message.size() > key.size() && message[key.size()] == ' ') return key;
+  return {};
+}
+
+core::Intrinsics parse_eth3d(std::string_view text, const std::filesystem::path& name) {
+  std::istringstream in{std::string(text)};
+  core::Intrinsics k;
+  k.width = k.height = 0;  // not in the file: from the images
+  std::size_t lines = 0;
+  for_each_data_line(in, name, [&](std::size_t line_no, const std::vector<std::string>& fields) {
+    if (++lines > 1) throw InputError(name, line_no, "an ETH3D calibration has one line 'fx fy cx cy'");
+    if (fields.size() != 4)
+      throw InputError(name, line_no, "expected 4 fields 'fx fy cx cy', got " + std::to_string(fields.size()));
+    k.fx = parse_finite(fields[0], name, line_no);
+    k.fy = parse_finite(fields[1], name, line_no);
+    k.cx = parse_finite(fields[2], name, line_no);
+    k.cy = parse_finite(fields[3], name, line_no);
+  });
+  if (lines == 0) throw InputError(name, "empty intrinsics file");
+  if (const auto error = validate_allowing_unknown_size(k); !error.empty()) throw InputError(name, 1, error);
+  return k;
+}
+
+core::Intrinsics parse_yaml(std::string_view text, const std::filesystem::path& name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(text));
+  } catch (const YAML::Exception& e) {
+    throw InputError(name, e.mark.line >= 0 ? static_cast<std::size_t>(e.mark.line) + 1 : 0, "YAML: " + e.msg);
+  }
+  if (!root.IsMap())
+    throw InputError(name, std::string("expected a YAML mapping with keys ").append(kExpected) +
+                               ", or an ETH3D line 'fx fy cx cy'");
+
+  core::Intrinsics k;
+  std::map<std::string, std::size_t, std::less<>> seen;  // key -> line
+  for (const auto& entry : root) {
+    const auto key = entry.first.Scalar();
+    const auto line = line_of(entry.first);
+    if (std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end())
+      throw InputError(name, line, "unknown key '" + key + "' (expected " + std::string(kExpected) + ")");
+    if (const auto [it, fresh] = seen.emplace(key, line); !fresh)
+      throw InputError(name, line, "duplicate key '" + key + "' (first on line " + std::to_string(it->second) + ")");
+    const auto& value = entry.second;
+    if (!value.IsScalar()) throw InputError(name, line, key + ": expected a number");
+    const auto& text_value = value.Scalar();
+    if (key == "width" || key == "height") {
+      const auto v = to_integer(text_value);
+      if (!v || *v <= 0 || *v > 16384)
+        throw InputError(name, line, key + ": expected an integer in 1..16384, got '" + text_value + "'");
+      (key == "width" ? k.width : k.height) = static_cast<int>(*v);
+    } else {
+      const auto v = to_finite(text_value);
+      if (!v) throw InputError(name, line, key + ": not a finite number: '" + text_value + "'");
+      if (key == "fx") k.fx = *v;
+      if (key == "fy") k.fy = *v;
+      if (key == "cx") k.cx = *v;
+      if (key == "cy") k.cy = *v;
+      if (key == "depth_scale") k.depth_scale = *v;
+    }
+  }
+  for (const auto key : kKeys)
+    if (key != "depth_scale" && !seen.contains(key)) throw InputError(name, "missing key '" + std::string(key) + "'");
+  if (const auto error = k.validate(); !error.empty()) {
+    const auto it = seen.find(key_in(error));
+    throw InputError(name, it != seen.end() ? it->second : 0, error);
+  }
+  return k;
+}
+
+}  // namespace
+
+std::string validate_allowing_unknown_size(const core::Intrinsics& intrinsics) {
+  if (intrinsics.width != 0 || intrinsics.height != 0) return intrinsics.validate();
+  auto sized = intrinsics;
+  sized.width = sized.height = 1;
+  return sized.validate();
+}
+
+core::Intrinsics parse_intrinsics(std::string_view text, const std::filesystem::path& name) {
+  // A YAML mapping always has a ':' outside comments; ETH3D's line of four numbers never does.
+  std::istringstream in{std::string(text)};
+  for (std::string line; std::getline(in, line);)
+    if (line.substr(0, line.find('#')).find(':') != std::string::npos) return parse_yaml(text, name);
+  return parse_eth3d(text, name);
+}
+
+core::Intrinsics read_intrinsics_file(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file, "cannot open intrinsics file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(file, "read error");
+  return parse_intrinsics(text.str(), file);
+}
+
+core::Intrinsics load_camera(std::string_view preset_or_file) {
+  if (const auto preset = core::camera_preset(preset_or_file)) return *preset;
+  const std::filesystem::path file(preset_or_file);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) {
+    std::string presets;
+    for (const auto& n : core::camera_preset_names()) presets.append(presets.empty() ? "" : ", ").append(n);
+    throw InputError(file, "not a camera preset (" + presets + ") nor an intrinsics file");
+  }
+  return read_intrinsics_file(file);
+}
+
+}  // namespace cvo::io

@@ -1,0 +1,184 @@
+#include "libcvo/config/config.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "io/temp_dir.hpp"
+
+namespace cvo::config {
+namespace {
+
+bool contains(const std::exception& e, const std::string& fragment) {
+  return std::string(e.what()).find(fragment) != std::string::npos;
+}
+
+TEST(Config, DefaultsAreThePapersTable1) {
+  const Config c;
+  EXPECT_DOUBLE_EQ(c.keyframe.translation_threshold_m, 0.15);
+  EXPECT_DOUBLE_EQ(c.keyframe.rotation_threshold_deg, 30.0);
+  EXPECT_DOUBLE_EQ(c.keyframe.inner_product_ratio_threshold, 0.7);
+  EXPECT_DOUBLE_EQ(c.loop_closure.similarity_threshold, 0.3);
+  EXPECT_DOUBLE_EQ(c.loop_closure.match_ratio, 0.7);
+  EXPECT_EQ(c.loop_closure.min_matches, 5);
+  EXPECT_DOUBLE_EQ(c.pose_graph.cauchy_delta, 2.0);
+  EXPECT_DOUBLE_EQ(c.cvo.sparsification_threshold, 8.315e-3);
+  EXPECT_DOUBLE_EQ(c.cvo.ell_init, 0.1);
+  EXPECT_DOUBLE_EQ(c.cvo.sigma, 0.1);
+  EXPECT_DOUBLE_EQ(c.cvo.ell_color, 0.1);
+  EXPECT_DOUBLE_EQ(c.cvo.sigma_color, 1.0);
+  EXPECT_DOUBLE_EQ(c.dataset.max_association_dt, 0.02);
+  EXPECT_EQ(c.camera, "tum_fr1");
+  EXPECT_TRUE(parse_config("") == Config{});
+  EXPECT_TRUE(parse_config("# only a comment\n") == Config{});
+}
+
+TEST(Config, PartialFileOverridesOnlyThoseKeys) {
+  const auto c = parse_config(
+      "cvo:\n  ell_init: 0.2\n  max_iterations: 50\nkeyframe: {rotation_threshold_deg: 15}\n"
+      "loop_closure:\ncamera: /data/cam.yaml\n");
+  Config expected;
+  expected.cvo.ell_init = 0.2;
+  expected.cvo.max_iterations = 50;
+  expected.keyframe.rotation_threshold_deg = 15;
+  expected.camera = "/data/cam.yaml";
+  EXPECT_TRUE(c == expected);
+  EXPECT_FALSE(c == Config{});
+}
+
+void expect_error(const std::string& yaml, std::size_t line, const std::string& fragment) {
+  try {
+    parse_config(yaml, "my.yaml");
+    FAIL() << "no error for:\n" << yaml;
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_EQ(e.file(), "my.yaml");
+    EXPECT_TRUE(contains(e, fragment)) << e.what();
+  }
+}
+
+TEST(Config, UnknownKeysAndSectionsAreNamedWithASuggestion) {
+  expect_error("cvo:\n  ell_int: 0.2\n", 2, "my.yaml:2: cvo.ell_int: unknown key (did you mean cvo.ell_init?)");
+  expect_error("cvo: {translation_threshold_m: 1}\n", 1,
+               "cvo.translation_threshold_m: unknown key (did you mean keyframe.translation_threshold_m?)");
+  expect_error("cvo:\n  zzz: 1\n", 2, "cvo.zzz: unknown key");
+  expect_error("\ncvx:\n  ell_init: 0.2\n", 2, "cvx: unknown section (did you mean cvo?)");
+  expect_error("camra: tum_fr2\n", 1, "camra: unknown section (did you mean camera?)");
+  try {
+    parse_config("cvo: {zzz: 1}\n");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_FALSE(contains(e, "did you mean")) << e.what();
+  }
+}
+
+TEST(Config, BadValuesNameKeyAndValue) {
+  expect_error("cvo:\n  ell_init: abc\n", 2, "cvo.ell_init: expected a finite number, got 'abc'");
+  expect_error("cvo:\n  ell_init: -0.1\n", 2, "cvo.ell_init: must be > 0, got '-0.1'");
+  expect_error("cvo:\n  ell_init: .nan\n", 2, "cvo.ell_init: expected a finite number, got '.nan'");
+  expect_error("cvo:\n  sigma: nan\n", 2, "cvo.sigma: expected a finite number, got 'nan'");
+  expect_error("cvo:\n  sigma: .inf\n", 2, "cvo.sigma: expected a finite number");
+  expect_error("cvo:\n  ell_init: [0.1, 0.2]\n", 2, "cvo.ell_init: expected a number, got a sequence");
+  expect_error("cvo:\n  ell_init:\n", 2, "cvo.ell_init: expected a number, got nothing");
+  expect_error("cvo:\n  max_iterations: 2.5\n", 2, "cvo.max_iterations: expected an integer, got '2.5'");
+  expect_error("cvo:\n  max_iterations: 0\n", 2, "cvo.max_iterations: must be >= 1, got '0'");
+  expect_error("selection: {target_points: -3}\n", 1, "selection.target_points: must be >= 1, got '-3'");
+  expect_error("keyframe: {inner_product_ratio_threshold: 1.5}\n", 1,
+               "keyframe.inner_product_ratio_threshold: must be in [0, 1], got '1.5'");
+  expect_error("keyframe: {rotation_threshold_deg: 0}\n", 1, "must be in (0, 180], got '0'");
+  expect_error("cvo: {threads: 99999999999}\n", 1, "cvo.threads: must be in [1, 1024]");
+  expect_error("camera: {fx: 1}\n", 1, "camera: expected a string, got a mapping");
+  expect_error("camera: ''\n", 1, "camera: must not be empty");
+  expect_error("cvo: 3\n", 1, "cvo: expected a mapping of keys");
+  expect_error("- cvo\n", 1, "expected a mapping of sections");
+}
+
+TEST(Config, DuplicatesInconsistenciesAndSyntaxErrors) {
+  expect_error("cvo:\n  sigma: 1\n  sigma: 2\n", 3, "cvo.sigma: given twice (first on line 2)");
+  expect_error("cvo: {}\ncvo: {}\n", 2, "cvo: given twice (first on line 1)");
+  expect_error("selection: {min_depth_m: 6}\n", 0, "selection.min_depth_m (6) must be below selection.max_depth_m (5)");
+  expect_error("cvo: {ell_min: 0.5}\n", 0, "cvo.ell_min (0.5) must not exceed cvo.ell_init (0.1)");
+  expect_error("cvo:\n  ell_init: [0.1\n", 3, "YAML:");
+}
+
+TEST(Config, LoadsFilesWithPathAndLineInErrors) {
+  const test::TempDir dir("cvo_config");
+  const auto good = dir.write("good.yaml", "pose_graph:\n  cauchy_delta: 1.5\n");
+  EXPECT_DOUBLE_EQ(load_config(good).pose_graph.cauchy_delta, 1.5);
+  const auto bad = dir.write("bad.yaml", "pose_graph:\n  cauchy_delta: -1\n");
+  try {
+    load_config(bad);
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(contains(e, bad.string() + ":2: pose_graph.cauchy_delta: must be > 0, got '-1'")) << e.what();
+  }
+  EXPECT_THROW(load_config(dir.path() / "absent.yaml"), ConfigError);
+}
+
+TEST(Config, OverridesUseTheSameChecks) {
+  Config c;
+  apply_override(c, "cvo.ell_init=0.15");
+  apply_override(c, " keyframe.rotation_threshold_deg = 20 ");
+  apply_override(c, "camera=/data/calibration.txt");
+  apply_override(c, "selection.target_points=1500");
+  EXPECT_DOUBLE_EQ(c.cvo.ell_init, 0.15);
+  EXPECT_DOUBLE_EQ(c.keyframe.rotation_threshold_deg, 20.0);
+  EXPECT_EQ(c.camera, "/data/calibration.txt");
+  EXPECT_EQ(c.selection.target_points, 1500u);
+
+  const Config before = c;
+  const auto expect_rejected = [&](const std::string& assignment, const std::string& fragment) {
+    try {
+      apply_override(c, assignment);
+      FAIL() << "accepted: " << assignment;
+    } catch (const ConfigError& e) {
+      EXPECT_TRUE(contains(e, fragment)) << e.what();
+      EXPECT_TRUE(contains(e, "--set")) << e.what();
+    }
+    EXPECT_TRUE(c == before) << "changed by the rejected " << assignment;
+  };
+  expect_rejected("cvo.ell_init", "expected key=value");
+  expect_rejected("cvo.ell_int=0.2", "cvo.ell_int: unknown key (did you mean cvo.ell_init?)");
+  expect_rejected("cvo.ell_init=abc", "cvo.ell_init: expected a finite number, got 'abc'");
+  expect_rejected("cvo.ell_init=nan", "cvo.ell_init: expected a finite number, got 'nan'");
+  expect_rejected("cvo.ell_init=", "cvo.ell_init: expected a finite number, got ''");
+  expect_rejected("cvo.ell_init=0.01", "cvo.ell_min (0.05) must not exceed cvo.ell_init (0.01)");
+  expect_rejected("cvo=1", "cvo: a section");
+}
+
+TEST(Config, DumpRoundTripsEveryKey) {
+  Config c;
+  c.selection.target_points = 1234;
+  c.cvo.ell_init = 0.1234567890123;
+  c.cvo.min_step = 1e-7;
+  c.cvo.threads = 4;
+  c.loop_closure.min_matches = 12;
+  c.dataset.max_association_dt = 0.015;
+  c.camera = "/data/my camera: v2.yaml";  // needs quoting in YAML
+  const auto text = dump_config(c);
+  EXPECT_TRUE(parse_config(text) == c) << text;
+  for (const auto& key : config_keys()) {
+    const auto member = key.substr(key.find('.') + 1);
+    EXPECT_NE(text.find(member + ": "), std::string::npos) << key << " missing from\n" << text;
+  }
+  EXPECT_EQ(config_keys().size(), 22u) << "a new parameter? add a row to the table and regenerate default.yaml";
+}
+
+TEST(Config, DefaultYamlIsInSync) {
+  const std::filesystem::path file = CVO_DEFAULT_CONFIG;
+  EXPECT_TRUE(load_config(file) == Config{});
+  std::ifstream in(file);
+  std::stringstream committed;
+  committed << in.rdbuf();
+  const auto expected = dump_config(Config{});
+  if (committed.str() != expected) {
+    const auto fresh = std::filesystem::temp_directory_path() / "cvo_default.yaml";
+    std::ofstream(fresh) << expected;
+    FAIL() << file << " differs from dump_config(Config{}); review and copy: cp " << fresh << " " << file;
+  }
+}
+
+}  // namespace
+}  // namespace cvo::config

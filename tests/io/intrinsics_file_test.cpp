@@ -1,0 +1,100 @@
+#include "libcvo/io/intrinsics_file.hpp"
+
+#include <gtest/gtest.h>
+
+#include "io/temp_dir.hpp"
+#include "libcvo/io/input_error.hpp"
+#include "libcvo/io/numbers.hpp"
+
+namespace cvo::io {
+namespace {
+
+constexpr const char* kValid = "# a Kinect\nfx: 525.5\nfy: 524\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n"
+                               "depth_scale: 1000\n";
+
+TEST(IntrinsicsFile, ReadsYaml) {
+  const auto k = parse_intrinsics(kValid, "cam.yaml");
+  EXPECT_DOUBLE_EQ(k.fx, 525.5);
+  EXPECT_DOUBLE_EQ(k.fy, 524.0);
+  EXPECT_DOUBLE_EQ(k.cx, 319.5);
+  EXPECT_DOUBLE_EQ(k.cy, 239.5);
+  EXPECT_EQ(k.width, 640);
+  EXPECT_EQ(k.height, 480);
+  EXPECT_DOUBLE_EQ(k.depth_scale, 1000.0);
+}
+
+TEST(IntrinsicsFile, DepthScaleDefaultsToTums) {
+  const auto k = parse_intrinsics("{fx: 500, fy: 500, cx: 320, cy: 240, width: 640, height: 480}", "cam.yaml");
+  EXPECT_DOUBLE_EQ(k.depth_scale, 5000.0);
+}
+
+void expect_error(const std::string& text, std::size_t line, const std::string& fragment) {
+  try {
+    parse_intrinsics(text, "cam.yaml");
+    FAIL() << "no error for:\n" << text;
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("cam.yaml", 0), 0u) << e.what();
+  }
+}
+
+TEST(IntrinsicsFile, YamlErrorsNameTheKey) {
+  expect_error("fx: 1\nfz: 2\n", 2, "unknown key 'fz'");
+  expect_error("fx: 1\nfy: abc\n", 2, "fy: not a finite number: 'abc'");
+  expect_error("fx: .nan\n", 1, "fx: not a finite number");
+  expect_error("fx: [1, 2]\n", 1, "fx: expected a number");
+  expect_error("fx: 1\nfx: 2\n", 2, "duplicate key 'fx'");
+  expect_error("fx: 1\nwidth: 640.5\n", 2, "width: expected an integer");
+  expect_error("fx: 1\nfy: 1\ncx: 1\ncy: 1\nwidth: 640\n", 0, "missing key 'height'");
+  expect_error("fx: 1\nfy: -1\ncx: 1\ncy: 1\nwidth: 640\nheight: 480\n", 2, "fy must be a positive number");
+  expect_error("fx: [1\n", 2, "YAML:");
+}
+
+TEST(IntrinsicsFile, ReadsEth3dOneLiner) {
+  const auto k = parse_intrinsics("726.28 726.28 354.65 186.46\n", "calibration.txt");
+  EXPECT_DOUBLE_EQ(k.fx, 726.28);
+  EXPECT_DOUBLE_EQ(k.cy, 186.46);
+  EXPECT_EQ(k.width, 0);  // from the images
+  EXPECT_EQ(k.height, 0);
+  EXPECT_DOUBLE_EQ(k.depth_scale, 5000.0);
+  EXPECT_EQ(validate_allowing_unknown_size(k), "");
+  EXPECT_NE(k.validate(), "");
+}
+
+TEST(IntrinsicsFile, Eth3dErrorsNameTheLine) {
+  expect_error("# comment\n726 726 354\n", 2, "expected 4 fields");
+  expect_error("726 726 354 x\n", 1, "not a number: 'x'");
+  expect_error("726 726 354 186\n1 2 3 4\n", 2, "one line");
+  expect_error("726 0 354 186\n", 1, "fy must be a positive number");
+  expect_error("", 0, "empty");
+}
+
+TEST(IntrinsicsFile, ReadsFilesAndPresets) {
+  const test::TempDir dir;
+  const auto file = dir.write("camera.yaml", kValid);
+  EXPECT_DOUBLE_EQ(read_intrinsics_file(file).fx, 525.5);
+  EXPECT_DOUBLE_EQ(load_camera(file.string()).fx, 525.5);
+  EXPECT_DOUBLE_EQ(load_camera("tum_fr2").fx, 520.9);
+  EXPECT_THROW(read_intrinsics_file(dir.path() / "absent.yaml"), InputError);
+  try {
+    load_camera("tum_fr9");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("tum_fr1, tum_fr2"), std::string::npos) << e.what();
+  }
+}
+
+TEST(IntrinsicsFile, StrictNumbers) {
+  EXPECT_EQ(to_finite("8.315e-3"), 8.315e-3);
+  EXPECT_EQ(to_finite("+2"), 2.0);
+  EXPECT_EQ(to_finite("-0.5"), -0.5);
+  for (const char* bad : {"", "nan", "inf", "-inf", "1.0x", " 1", "0x10", "+-1", "1e999"})
+    EXPECT_FALSE(to_finite(bad)) << bad;
+  EXPECT_EQ(to_integer("42"), 42);
+  EXPECT_EQ(to_integer("-3"), -3);
+  for (const char* bad : {"", "5.0", "1e3", "99999999999999999999", "7 "}) EXPECT_FALSE(to_integer(bad)) << bad;
+}
+
+}  // namespace
+}  // namespace cvo::io
