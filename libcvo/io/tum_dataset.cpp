@@ -79,10 +79,12 @@ core::Intrinsics camera_for(const std::filesystem::path& dir, const TumOptions& 
       throw std::invalid_argument("TumOptions::intrinsics: " + error);
     return *options.intrinsics;
   }
+  // A folder that carries its calibration (the renderer writes camera.yaml) says it best.
+  if (const auto own = dir / "camera.yaml"; std::filesystem::exists(own)) return read_intrinsics_file(own);
   const auto preset = guess_camera_preset(dir);
   if (!preset)
-    throw InputError(dir, "cannot tell the camera from the folder name (no fr1/fr2/fr3); give a preset or an "
-                          "intrinsics file");
+    throw InputError(dir, "cannot tell the camera: no camera.yaml and no fr1/fr2/fr3 in the folder name; give a "
+                          "preset or an intrinsics file");
   return *core::camera_preset(*preset);
 }
 

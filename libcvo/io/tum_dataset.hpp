@@ -35,7 +35,8 @@ class FrameError : public InputError {
 
 struct TumOptions {
   double max_association_dt = 0.02;  // s; core::DatasetParameters::max_association_dt
-  // nullopt: the preset guessed from the folder name (guess_camera_preset). A width and height
+  // nullopt: the folder's own camera.yaml when it has one, else the preset guessed from the
+  // folder name (guess_camera_preset). A width and height
   // of 0 (an ETH3D calibration) are taken from the first colour image.
   std::optional<core::Intrinsics> intrinsics;
   std::size_t max_frames = 0;  // 0 = all

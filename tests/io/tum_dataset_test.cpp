@@ -237,6 +237,15 @@ TEST(TumDataset, CameraNeededWhenTheNameSaysNothing) {
   expect_open_error(data, "cannot tell the camera");
 }
 
+TEST(TumDataset, FolderCameraYamlIsUsedWhenNoneIsGiven) {
+  SmallDataset data(2);
+  data.options().intrinsics.reset();
+  data.write("camera.yaml", "fx: 50\nfy: 51\ncx: 31.5\ncy: 23.5\nwidth: 64\nheight: 48\ndepth_scale: 1000\n");
+  const auto seq = data.open();
+  EXPECT_DOUBLE_EQ(seq.intrinsics().fy, 51.0);
+  EXPECT_DOUBLE_EQ(seq.read(0).intrinsics.depth_scale, 1000.0);
+}
+
 TEST(TumDataset, SizeFromImagesWhenCalibrationHasNone) {
   SmallDataset data(2);
   data.options().intrinsics->width = 0;  // as an ETH3D calibration.txt gives it

@@ -1,0 +1,50 @@
+#pragma once
+// Canned smooth hand-held camera paths through the simulated room (world z up, see scene.hpp),
+// as closed-form functions of time so ground truth is exact at any timestamp. All are periodic
+// and stay >= 0.5 m from every surface (so every visible point is beyond a sensor's minimum
+// range); speeds stay below 0.5 m/s and 60 deg/s.
+//
+//   orbit: the optical centre runs once round a 0.5 m circle at 1.3 m (+-0.1 m bob) while the
+//          camera looks outwards and ~23 degrees down, so it pans a full 360 degrees over walls, floor
+//          and furniture; pitch and roll wobble a little.
+//          Period 12 s; pose(12 s) == pose(0), for loop-closure tests.
+//   sweep: a 1.7 m diagonal translation with a 40 degree pan towards the furnished +y side, out
+//          and back with cosine easing. Period 12 s.
+//   wall:  2 m in front of the y = +2.5 wall (the textured_wall plane), drifting on a Lissajous
+//          curve (+-0.35 m sideways, +-0.2 m in depth, +-0.12 m up) while looking at a wandering
+//          point of the wall and rolling +-5 degrees. Period 10 s.
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "libcvo/core/se3.hpp"
+#include "libcvo/core/trajectory.hpp"
+
+namespace cvo::sim {
+
+enum class PathKind { orbit, sweep, wall };
+
+std::string_view path_name(PathKind kind);
+std::optional<PathKind> parse_path_kind(std::string_view name);
+std::vector<std::string> path_names();
+
+/// Seconds after which the path repeats.
+double path_period(PathKind kind);
+
+/// T_world_camera of a camera at `eye` whose optical axis (z) points at `target`, with the image
+/// x axis horizontal (world z is up) and then rolled by `roll` radians about the optical axis.
+/// `target - eye` must not be vertical.
+core::SE3 look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double roll = 0.0);
+
+/// Pose T_world_camera at `seconds` after the start of the path.
+core::SE3 path_pose(PathKind kind, double seconds);
+
+/// `frames` poses stamped start_time + i / rate_hz, each stamp rounded to the microsecond (what
+/// TUM file names hold) and the pose taken at exactly that stamp.
+core::Trajectory sample_path(PathKind kind, std::size_t frames, double start_time = 1000.0, double rate_hz = 30.0);
+
+}  // namespace cvo::sim

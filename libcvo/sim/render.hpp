@@ -1,0 +1,56 @@
+#pragma once
+// Ray-cast RGB-D rendering of an analytic scene with exact ground truth.
+//
+// Pixel (u, v) (integer = pixel centre, the convention of cx = (width - 1) / 2) looks along the
+// camera-frame ray d = ((u - cx) / fx, (v - cy) / fy, 1). Since d_z = 1 the hit's ray parameter
+// is its camera-frame z, which is what TUM depth stores:
+//     raw = round(z * depth_scale),  0 when nothing is hit, z > max_depth or raw > 65535.
+// Back-projecting raw depth therefore lands within 0.5 / depth_scale (in z) of the surface.
+// Colour is the scene's viewpoint-independent surface colour (scene.hpp), optionally averaged
+// over 2x2 sub-pixel rays (+-1/4 pixel) against aliasing; depth always comes from the centre ray.
+// (Sub-rays of a pixel whose centre ray and 4-neighbours' centre rays all meet one surface are
+// intersected with that surface's plane only: a feature thinner than a pixel spacing could be
+// missed in colour, never in depth.)
+//
+// Optional structured-light noise (all from counter-based hashes of the seed and pixel index, so
+// deterministic), applied to the clean depth z in this order:
+//   * grazing incidence: no depth when the angle between the viewing ray and the normal exceeds
+//     grazing_angle_deg;
+//   * depth discontinuities: no depth within edge_band_px pixels (Chebyshev) of a neighbour that
+//     has no surface or whose depth differs by more than edge_jump_fraction * z;
+//   * random dropout with dropout_probability;
+//   * axial Gaussian noise of std sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 m (Nguyen, Izadi and
+//     Lovell 2012, Kinect v1, valid for moderate incidence angles).
+#include <cstdint>
+
+#include "libcvo/core/camera.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/sim/scene.hpp"
+
+namespace cvo::sim {
+
+struct NoiseOptions {
+  bool enabled = false;  // everything below is ignored unless set
+  double grazing_angle_deg = 75.0;
+  int edge_band_px = 1;
+  double edge_jump_fraction = 0.05;
+  double dropout_probability = 0.01;
+  bool axial = true;
+};
+
+struct RenderOptions {
+  double max_depth = 8.0;   // metres (camera z)
+  bool supersample = true;  // 2x2 colour rays per pixel
+};
+
+/// Axial depth noise std (metres) at depth z (metres), Nguyen et al. 2012.
+double axial_noise_sigma(double z);
+
+/// Renders one frame seen from T_world_camera. `seed` drives the depth noise only (the texture is
+/// the scene's); index and timestamps of the result are 0. Throws std::invalid_argument when the
+/// intrinsics do not validate.
+core::RgbdFrame render(const Scene& scene, const core::Intrinsics& intrinsics, const core::SE3& T_world_camera,
+                       const NoiseOptions& noise = {}, std::uint64_t seed = 0, const RenderOptions& options = {});
+
+}  // namespace cvo::sim

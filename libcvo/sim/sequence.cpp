@@ -1,0 +1,106 @@
+#include "libcvo/sim/sequence.hpp"
+
+#include <charconv>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+#include <system_error>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libcvo/io/input_error.hpp"
+#include "libcvo/io/trajectory_io.hpp"
+#include "libcvo/sim/random.hpp"
+
+namespace cvo::sim {
+namespace {
+
+void make_directory(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir))
+    throw io::InputError(dir, "cannot create directory" + (ec ? ": " + ec.message() : std::string()));
+}
+
+void write_image(const std::filesystem::path& file, const cv::Mat& image) {
+  bool ok = false;
+  try {
+    ok = cv::imwrite(file.string(), image);
+  } catch (const cv::Exception& e) {
+    throw io::InputError(file, std::string("cannot write image: ") + e.what());
+  }
+  if (!ok) throw io::InputError(file, "cannot write image");
+}
+
+void write_text(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  if (!out) throw io::InputError(file, "cannot open for writing");
+  out << text;
+  out.flush();
+  if (!out) throw io::InputError(file, "write failed");
+}
+
+// Shortest text that reads back as the same double.
+std::string number(double v) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return {buffer, result.ptr};
+}
+
+std::string camera_yaml(const core::Intrinsics& k) {
+  return "# Pinhole camera of a cvo-render sequence; depth is registered to colour.\n"
+         "fx: " + number(k.fx) + "\nfy: " + number(k.fy) + "\ncx: " + number(k.cx) + "\ncy: " + number(k.cy) +
+         "\nwidth: " + std::to_string(k.width) + "\nheight: " + std::to_string(k.height) +
+         "\ndepth_scale: " + number(k.depth_scale) + "\n";
+}
+
+}  // namespace
+
+std::string stamp_string(double seconds) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.6f", seconds);
+  return buffer;
+}
+
+SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceOptions& options) {
+  if (const std::string problem = options.intrinsics.validate(); !problem.empty())
+    throw std::invalid_argument("write_sequence: " + problem);
+  make_directory(dir / "rgb");
+  make_directory(dir / "depth");
+
+  const Scene scene = make_scene(options.scene, options.seed);
+  const core::Trajectory truth = sample_path(options.path, options.frames, options.start_time, options.rate_hz);
+  const std::string source = "# file: 'cvo-render --scene " + std::string(scene_name(options.scene)) + " --path " +
+                             std::string(path_name(options.path)) + " --seed " + std::to_string(options.seed) +
+                             (options.noise.enabled ? " --noise" : "") + "'\n";
+  std::string rgb_list = "# color images\n" + source + "# timestamp filename\n";
+  std::string depth_list = "# depth maps\n" + source + "# timestamp filename\n";
+
+  SequenceSummary summary;
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const core::RgbdFrame frame =
+        render(scene, options.intrinsics, truth[i].pose, options.noise, hash(options.seed, i), options.render);
+    const std::string stamp = stamp_string(truth[i].timestamp);
+    write_image(dir / "rgb" / (stamp + ".png"), frame.bgr);
+    write_image(dir / "depth" / (stamp + ".png"), frame.depth);
+    rgb_list += stamp + " rgb/" + stamp + ".png\n";
+    depth_list += stamp + " depth/" + stamp + ".png\n";
+    valid += static_cast<std::size_t>(cv::countNonZero(frame.depth));
+    if (i > 0) summary.path_length_m += (truth[i].pose.translation() - truth[i - 1].pose.translation()).norm();
+  }
+  write_text(dir / "rgb.txt", rgb_list);
+  write_text(dir / "depth.txt", depth_list);
+  write_text(dir / "camera.yaml", camera_yaml(options.intrinsics));
+  io::write_tum_trajectory(dir / "groundtruth.txt", truth);
+
+  summary.frames = truth.size();
+  if (!truth.empty()) summary.duration_s = truth.back().timestamp - truth.front().timestamp;
+  const double pixels = static_cast<double>(truth.size()) * options.intrinsics.width * options.intrinsics.height;
+  if (pixels > 0) summary.valid_depth_fraction = static_cast<double>(valid) / pixels;
+  return summary;
+}
+
+}  // namespace cvo::sim

@@ -1,0 +1,107 @@
+#include "libcvo/registration/point_selection.hpp"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "tests/registration/registration_fixtures.hpp"
+
+namespace cvo::registration {
+namespace {
+
+core::RgbdFrame rendered(sim::SceneKind kind) {
+  const auto K = *core::camera_preset("synthetic");
+  return sim::render(sim::make_scene(kind, 42), K, testing::camera_looking_north());
+}
+
+TEST(PointSelection, SelectsAboutTheTargetWithValidDepthAndLabels) {
+  for (const auto kind : {sim::SceneKind::textured_room, sim::SceneKind::textureless_room,
+                          sim::SceneKind::textured_wall}) {
+    const auto frame = rendered(kind);
+    PointSelector selector(640, 480, core::SelectionParameters{});
+    PointCloud cloud(8192);
+    const auto r = selector.select(frame, cloud);
+    EXPECT_EQ(r.status, SelectionStatus::kOk) << sim::scene_name(kind);
+    // The texture-less room has fewer qualifying pixels; everything else lands near 3000.
+    EXPECT_GT(cloud.size(), kind == sim::SceneKind::textureless_room ? 1500u : 2400u) << sim::scene_name(kind);
+    EXPECT_LT(cloud.size(), 3600u) << sim::scene_name(kind);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const auto p = cloud.position(i);
+      ASSERT_TRUE(p.allFinite());
+      ASSERT_GE(p.z(), 0.1f);
+      ASSERT_LE(p.z(), 5.0f);
+      const auto f = cloud.feature(i);
+      for (int c = 0; c < 3; ++c) ASSERT_TRUE(f[static_cast<std::size_t>(c)] >= 0.0f && f[static_cast<std::size_t>(c)] <= 1.0f);
+      ASSERT_TRUE(std::abs(f[3]) <= 1.0f && std::abs(f[4]) <= 1.0f);
+    }
+  }
+}
+
+TEST(PointSelection, SpreadsPointsOverTheImage) {
+  const auto frame = rendered(sim::SceneKind::textured_room);
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  PointCloud cloud(8192);
+  selector.select(frame, cloud);
+  // Every quarter of the image gets a fair share (no clumping on the strongest edges).
+  int quadrant[4] = {0, 0, 0, 0};
+  const auto K = frame.intrinsics;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const auto p = cloud.position(i);
+    const double u = K.fx * p.x() / p.z() + K.cx, v = K.fy * p.y() / p.z() + K.cy;
+    ++quadrant[(u >= 320 ? 1 : 0) + (v >= 240 ? 2 : 0)];
+  }
+  for (int q : quadrant) EXPECT_GT(q, static_cast<int>(cloud.size()) / 10);
+}
+
+TEST(PointSelection, DeterministicAndBackProjectsToTheScene) {
+  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  const auto K = *core::camera_preset("synthetic");
+  const auto pose = testing::camera_looking_north();
+  const auto frame = sim::render(scene, K, pose);
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  PointCloud a(8192), b(8192);
+  selector.select(frame, a);
+  selector.select(frame, b);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.position(i), b.position(i));
+    ASSERT_EQ(a.feature(i), b.feature(i));
+    // Depth is quantised to 0.2 mm, and the point is computed in float.
+    ASSERT_LT(sim::distance_to_surface(scene, pose * a.position(i).cast<double>()), 1e-3);
+  }
+}
+
+TEST(PointSelection, BadFramesGiveAStatusNotACrash) {
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  PointCloud cloud(8192);
+  core::RgbdFrame empty;
+  EXPECT_EQ(selector.select(empty, cloud).status, SelectionStatus::kEmptyFrame);
+
+  auto frame = rendered(sim::SceneKind::textured_room);
+  core::RgbdFrame small = frame;
+  small.bgr = frame.bgr(cv::Rect(0, 0, 320, 240)).clone();
+  EXPECT_EQ(selector.select(small, cloud).status, SelectionStatus::kEmptyFrame);
+
+  core::RgbdFrame wrong_type = frame;
+  frame.depth.convertTo(wrong_type.depth, CV_32F);
+  EXPECT_EQ(selector.select(wrong_type, cloud).status, SelectionStatus::kBadImageType);
+
+  core::RgbdFrame no_depth = frame;
+  no_depth.depth = cv::Mat::zeros(480, 640, CV_16UC1);
+  const auto r = selector.select(no_depth, cloud);
+  EXPECT_EQ(r.status, SelectionStatus::kNoValidDepth);
+  EXPECT_EQ(cloud.size(), 0u);
+}
+
+TEST(PointSelection, CapacityIsClampedAndReported) {
+  const auto frame = rendered(sim::SceneKind::textured_room);
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  PointCloud tiny(100);
+  const auto r = selector.select(frame, tiny);
+  EXPECT_EQ(r.status, SelectionStatus::kCapacityClamped);
+  EXPECT_EQ(tiny.size(), 100u);
+  EXPECT_GT(tiny.overflowed(), 0u);
+}
+
+}  // namespace
+}  // namespace cvo::registration
