@@ -11,8 +11,8 @@
 //
 // For one moving point w = T z_j and a set of candidate fixed points, a kernel returns
 //   Σ_i a_ij,  Σ_i a_ij (x_i - w)  and the number of contributing pairs,
-// which is all the solver needs (see registration.cpp). Scalar and AVX2+FMA versions exist; they
-// agree to float rounding (the AVX2 exp is a polynomial with ~2 ulp error).
+// which is all the solver needs (see registration.cpp). Scalar, AVX2+FMA (x86-64) and NEON (AArch64)
+// versions exist; they agree to float rounding (the SIMD exp is a polynomial with ~2 ulp error).
 #include <cstddef>
 #include <cstdint>
 
@@ -55,9 +55,14 @@ PointSums point_scalar(const FixedCloudView& fixed, const Range* ranges, int ran
 PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
                      const float feature[kFeatureDim], const Constants& k);
 #endif
+#if defined(CVO_HAVE_NEON)
+PointSums point_neon(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                     const float feature[kFeatureDim], const Constants& k);
+#endif
 
-enum class Isa { kScalar, kAvx2 };
-/// The best kernel this CPU runs (AVX2+FMA when built in and supported), or the requested one.
+enum class Isa { kScalar, kAvx2, kNeon };
+/// The best kernel this CPU runs (AVX2+FMA when built in and supported; NEON on AArch64, where it
+/// is always present), or the requested one.
 Isa best_isa();
 PointFunction point_function(Isa isa);
 const char* to_string(Isa isa);

@@ -30,9 +30,7 @@ PointSelector::PointSelector(int width, int height, const core::SelectionParamet
       regions_x_((width + kRegion - 1) / kRegion), regions_y_((height + kRegion - 1) / kRegion) {
   const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   grey_.resize(n);
-  gx_.resize(n);
-  gy_.resize(n);
-  magnitude_.resize(n);
+  magnitude_.assign(n, 0.0f);  // borders stay zero: they are never candidates
   region_threshold_.resize(static_cast<std::size_t>(regions_x_ * regions_y_));
   smoothed_threshold_.resize(region_threshold_.size());
   candidates_.reserve(n);
@@ -72,24 +70,24 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const auto& K = frame.intrinsics;
   const auto W = static_cast<std::size_t>(width_);
 
-  // 1. Grey image and gradients (borders get zero gradient).
+  // 1. Grey image and gradient magnitude. Border pixels keep the zero magnitude set at
+  // construction; gx, gy themselves are only needed for the selected points (step 4).
   for (int v = 0; v < height_; ++v) {
     const auto* row = frame.bgr.ptr<std::uint8_t>(v);
+    float* grey_row = grey_.data() + static_cast<std::size_t>(v) * W;
     for (int u = 0; u < width_; ++u) {
       const auto* px = row + 3 * u;
-      grey_[static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u)] =
-          (0.114f * px[0] + 0.587f * px[1] + 0.299f * px[2]) * (1.0f / 255.0f);
+      grey_row[u] = (0.114f * px[0] + 0.587f * px[1] + 0.299f * px[2]) * (1.0f / 255.0f);
     }
   }
-  std::fill(gx_.begin(), gx_.end(), 0.0f);
-  std::fill(gy_.begin(), gy_.end(), 0.0f);
-  std::fill(magnitude_.begin(), magnitude_.end(), 0.0f);
   for (int v = 1; v + 1 < height_; ++v) {
+    const float* g = grey_.data() + static_cast<std::size_t>(v) * W;
+    float* m = magnitude_.data() + static_cast<std::size_t>(v) * W;
     for (int u = 1; u + 1 < width_; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u);
-      gx_[i] = grey_[i + 1] - grey_[i - 1];  // central difference x 2: range [-1, 1]
-      gy_[i] = grey_[i + W] - grey_[i - W];
-      magnitude_[i] = 0.5f * std::sqrt(gx_[i] * gx_[i] + gy_[i] * gy_[i]);
+      const float gx = g[u + 1] - g[u - 1];  // central difference x 2: range [-1, 1]
+      const float gy = g[static_cast<std::ptrdiff_t>(u) + static_cast<std::ptrdiff_t>(W)] -
+                       g[static_cast<std::ptrdiff_t>(u) - static_cast<std::ptrdiff_t>(W)];
+      m[u] = 0.5f * std::sqrt(gx * gx + gy * gy);
     }
   }
 
@@ -151,13 +149,25 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const double target = static_cast<double>(std::max<std::size_t>(parameters_.target_points, 1));
   int s = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(candidates_.size()) / target))));
   std::size_t count = count_for_cell_size(s);
+  int best_s = s;
+  double best_error = std::abs(std::log(std::max<double>(static_cast<double>(count), 1.0) / target));
   for (int pass = 0; pass < 4 && count > 0; ++pass) {
     const double ratio = static_cast<double>(count) / target;
     if (ratio > 0.85 && ratio < 1.15) break;
-    const int next = std::clamp(static_cast<int>(std::lround(s * std::sqrt(ratio))), 1, kMaxCellSize);
+    int next = std::clamp(static_cast<int>(std::lround(s * std::sqrt(ratio))), 1, kMaxCellSize);
+    if (next == s) next = std::clamp(ratio > 1 ? s + 1 : s - 1, 1, kMaxCellSize);  // rounding stalled
     if (next == s) break;
     s = next;
     count = count_for_cell_size(s);
+    const double error = std::abs(std::log(std::max<double>(static_cast<double>(count), 1.0) / target));
+    if (error < best_error) {
+      best_error = error;
+      best_s = s;
+    }
+  }
+  if (s != best_s) {  // the passes overshot: go back to the closest cell size
+    s = best_s;
+    count_for_cell_size(s);
   }
   result.cell_size = s;
 
@@ -174,7 +184,8 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
     const float z = static_cast<float>(frame.depth.at<std::uint16_t>(v, u)) * depth_inv;
     const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
-    const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gx_[p], gy_[p]};
+    const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, grey_[p + 1] - grey_[p - 1],
+                    grey_[p + W] - grey_[p - W]};
     cloud.push_back({(static_cast<float>(u) - cx) * z * fx_inv, (static_cast<float>(v) - cy) * z * fy_inv, z}, f);
   }
   result.selected = cloud.size();

@@ -57,7 +57,7 @@ class PointSelector {
   int width_, height_;
   core::SelectionParameters parameters_;
   int regions_x_, regions_y_;
-  std::vector<float> grey_, gx_, gy_, magnitude_;
+  std::vector<float> grey_, magnitude_;
   std::vector<float> region_threshold_, smoothed_threshold_;
   std::vector<std::uint32_t> candidates_;   // pixel indices, row-major order
   std::vector<std::int32_t> cell_best_;     // per cell: best candidate index or -1
