@@ -63,13 +63,14 @@ void BM_PointSelection(benchmark::State& state) {
 }
 BENCHMARK(BM_PointSelection)->Unit(benchmark::kMillisecond);
 
-// Args: {isa: 0 scalar / 1 avx2, threads, reading: 0 = σ, σ_c as standard deviations (default),
+// Args: {isa: 0 scalar / 1 SIMD, threads, reading: 0 = σ, σ_c as standard deviations (default),
 //        1 = as variances (σ = sqrt(0.1), the looser reading compared in core/parameters.hpp)}
 void BM_Align(benchmark::State& state) {
   const auto& d = data();
-  const auto isa = state.range(0) ? registration::kernel::Isa::kAvx2 : registration::kernel::Isa::kScalar;
-  if (isa == registration::kernel::Isa::kAvx2 && registration::kernel::best_isa() != isa) {
-    state.SkipWithError("no AVX2+FMA on this CPU/build");
+  // 1: the SIMD kernel this machine has (AVX2+FMA or NEON).
+  const auto isa = state.range(0) ? registration::kernel::best_isa() : registration::kernel::Isa::kScalar;
+  if (state.range(0) && isa == registration::kernel::Isa::kScalar) {
+    state.SkipWithError("no SIMD kernel on this CPU/build");
     return;
   }
   core::CvoParameters parameters;

@@ -99,7 +99,7 @@ Registration::Registration(const Capacities& capacities, const core::CvoParamete
       chunk_sums_((capacities.max_points + kChunk - 1) / kChunk + 1),
       pairs_log_(static_cast<std::size_t>(std::max(parameters.max_iterations, 0)) + 1) {
   for (auto& channel : sf_) channel.resize(capacities.max_points);
-  if (isa_ == kernel::Isa::kAvx2 && kernel::best_isa() != kernel::Isa::kAvx2) isa_ = kernel::Isa::kScalar;
+  if (isa_ != kernel::Isa::kScalar && kernel::best_isa() != isa_) isa_ = kernel::Isa::kScalar;  // what really runs
 }
 
 RegistrationStatus Registration::check(const PointCloud& fixed, const PointCloud& moving) const {
