@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "io/temp_dir.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace cvo::config {
 namespace {

@@ -15,6 +15,7 @@
 
 #include "eval/test_trajectories.hpp"
 #include "libcvo/io/trajectory_io.hpp"
+#include "tests/support/run_tool.hpp"
 
 namespace cvo::eval {
 namespace {
@@ -22,18 +23,10 @@ namespace {
 namespace fs = std::filesystem;
 using testing::kStep;
 using testing::make;
-
-struct ToolRun {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using cvo::testing::quoted;
+using cvo::testing::run_tool;
+using cvo::testing::slurp;
+using cvo::testing::ToolRun;
 
 // A fresh folder per test: ctest runs the tests of this file in parallel processes.
 class CvoEvalCli : public ::testing::Test {
@@ -50,22 +43,8 @@ class CvoEvalCli : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  ToolRun run(const std::string& args) const {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string command = "'" CVO_TOOLS_DIR "/cvo-eval' " + args + " 2>'" + err.string() + "'";
-    ToolRun r;
-    FILE* pipe = ::popen(command.c_str(), "r");
-    if (pipe == nullptr) return r;
-    char buf[4096];
-    for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) r.out.append(buf, n);
-    const int status = ::pclose(pipe);
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.err = slurp(err);
-    return r;
-  }
-  // Single-quoted for the shell. Built with append(): GCC 12 warns falsely (-Wrestrict) on
-  // chained operator+ of short strings.
-  static std::string q(const fs::path& p) { return std::string("'").append(p.string()).append("'"); }
+  ToolRun run(const std::string& args) const { return run_tool("cvo-eval", args, dir_); }
+  static std::string q(const fs::path& p) { return quoted(p); }
 
   fs::path dir_, gt_, est_;
 };

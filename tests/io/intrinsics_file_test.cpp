@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "io/temp_dir.hpp"
+#include "tests/support/temp_dir.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/numbers.hpp"
 

@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "io/temp_dir.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace cvo::io {
 namespace {

@@ -1,49 +1,24 @@
-// After construction (and a first warm-up call), align() and inner_product() must not touch the
-// heap: the tracker calls them from a realtime thread. This binary replaces the global
-// operator new/delete to count every allocation.
-#include <atomic>
-#include <cstdlib>
+// After construction (and a first warm-up call), select(), align() and inner_product() must not
+// touch the heap: the tracker calls them from a realtime thread. This binary links
+// tests/support/allocation_counter.cpp, which counts every operator new.
 #include <new>
 
 #include <gtest/gtest.h>
 
 #include "libcvo/registration/registration.hpp"
 #include "tests/registration/registration_fixtures.hpp"
+#include "tests/support/allocation_counter.hpp"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t size) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t alignment) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  const auto a = static_cast<std::size_t>(alignment);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size, std::align_val_t alignment) { return operator new(size, alignment); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+using cvo::testing::allocation_count;
 
 namespace cvo::registration {
 namespace {
 
 TEST(Allocation, CountingWorks) {
-  const long before = g_allocations.load();
+  const long before = allocation_count();
   void* p = ::operator new(16);  // an explicit call: a new-expression pair may be elided
   ::operator delete(p);
-  EXPECT_EQ(g_allocations.load() - before, 1);
+  EXPECT_EQ(allocation_count() - before, 1);
 }
 
 TEST(Allocation, SelectAlignAndInnerProductAllocateNothingAfterWarmUp) {
@@ -68,17 +43,17 @@ TEST(Allocation, SelectAlignAndInnerProductAllocateNothingAfterWarmUp) {
   // Counted separately so a failure names the culprit.
   long selection = 0, alignment = 0, inner_product = 0;
   for (int k = 0; k < 3; ++k) {
-    long before = g_allocations.load();
+    long before = allocation_count();
     selector.select(frame_a, a);
     selector.select(frame_b, b);
-    selection += g_allocations.load() - before;
-    before = g_allocations.load();
+    selection += allocation_count() - before;
+    before = allocation_count();
     const auto r = registration.align(a, b, M_guess);
-    alignment += g_allocations.load() - before;
+    alignment += allocation_count() - before;
     EXPECT_TRUE(r.converged);
-    before = g_allocations.load();
+    before = allocation_count();
     EXPECT_GT(registration.inner_product(a, b, r.transform), 0.0);
-    inner_product += g_allocations.load() - before;
+    inner_product += allocation_count() - before;
   }
   EXPECT_EQ(selection, 0) << "heap allocations in point selection";
   EXPECT_EQ(alignment, 0) << "heap allocations in align()";

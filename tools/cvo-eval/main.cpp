@@ -22,6 +22,7 @@
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/eval/trajectory_checks.hpp"
 #include "libcvo/io/input_error.hpp"
+#include "libcvo/io/json_writer.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 
 namespace {
@@ -121,37 +122,8 @@ core::Trajectory load_tum(const fs::path& file) {
 // branch here (told apart by the log's magic number); nothing after loading needs to change.
 core::Trajectory load_estimate(const fs::path& file) { return load_tum(file); }
 
-std::string json_string(std::string_view s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-          out += buf;
-        } else {
-          out += c;  // UTF-8 passes through unchanged
-        }
-    }
-  }
-  return out + "\"";
-}
-
-// Shortest text that reads back to the same double; JSON has no NaN or infinity, so null.
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  return ec == std::errc() ? std::string(buf, end) : "null";
-}
-
-std::string json_number(std::optional<double> v) { return v ? json_number(*v) : "null"; }
+using io::json_number;
+using io::json_string;
 
 void print_json(const Arguments& args, const eval::AteResult& ate, const std::optional<eval::RpeResult>& rpe) {
   const auto rpe_value = [&](auto get) -> std::optional<double> {

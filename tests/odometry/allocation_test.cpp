@@ -1,0 +1,48 @@
+// After warm-up, FrameToFrameOdometry::track() must not touch the heap: the tracker runs it in a
+// realtime thread. This binary links tests/support/allocation_counter.cpp (counts operator new);
+// the frames are rendered before counting starts.
+#include <new>
+
+#include <gtest/gtest.h>
+
+#include "libcvo/odometry/frame_to_frame.hpp"
+#include "tests/odometry/odometry_fixtures.hpp"
+#include "tests/support/allocation_counter.hpp"
+
+using cvo::testing::allocation_count;
+
+namespace cvo::odometry {
+namespace {
+
+TEST(OdometryAllocation, CountingWorks) {
+  const long before = allocation_count();
+  void* p = ::operator new(16);  // an explicit call: a new-expression pair may be elided
+  ::operator delete(p);
+  EXPECT_EQ(allocation_count() - before, 1);
+}
+
+TEST(OdometryAllocation, TrackAllocatesNothingAfterWarmUp) {
+  auto s = testing::render_path(sim::PathKind::orbit, 7);
+  core::RgbdFrame empty;  // a selection failure
+  empty.index = 4;
+  FrameToFrameParameters parameters;
+  parameters.initial_pose = s.truth[0].pose;
+  FrameToFrameOdometry odometry(s.frames[0].intrinsics.width, s.frames[0].intrinsics.height, parameters);
+  odometry.track(s.frames[0]);  // warm-up: first calls may touch lazily initialised library state
+  odometry.track(s.frames[1]);
+
+  // Normal frames, a frame without images, and an index gap (frame 5 after the empty frame 4).
+  long allocations = 0;
+  int tracked = 0;
+  for (const core::RgbdFrame* frame : {&s.frames[2], &s.frames[3], &empty, &s.frames[5], &s.frames[6]}) {
+    const long before = allocation_count();
+    const TrackResult r = odometry.track(*frame);
+    allocations += allocation_count() - before;
+    tracked += r.status == TrackStatus::kOk;
+  }
+  EXPECT_EQ(tracked, 4);
+  EXPECT_EQ(allocations, 0) << "heap allocations in track()";
+}
+
+}  // namespace
+}  // namespace cvo::odometry

@@ -1,0 +1,45 @@
+#pragma once
+// Runs one of the built command-line tools the way a user's script would, capturing stdout,
+// stderr and the exit code: the CLI tests check the contracts others script against.
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace cvo::testing {
+
+struct ToolRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+inline std::string slurp(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// Single-quoted for the shell. Built with append(): GCC 12 warns falsely (-Wrestrict) on chained
+/// operator+ of short strings.
+inline std::string quoted(const std::filesystem::path& p) { return std::string("'").append(p.string()).append("'"); }
+
+/// Runs CVO_TOOLS_DIR/<tool> <args>; stderr goes through a file in `scratch` (a folder the test owns).
+inline ToolRun run_tool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch) {
+  const auto err = scratch / (tool + ".stderr.txt");
+  const std::string command = quoted(std::filesystem::path(CVO_TOOLS_DIR) / tool) + " " + args + " 2>" + quoted(err);
+  ToolRun r;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buf[4096];
+  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) r.out.append(buf, n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = slurp(err);
+  return r;
+}
+
+}  // namespace cvo::testing

@@ -1,0 +1,45 @@
+#pragma once
+// What cvo-run measured over a run, and its two renderings: a human summary and one JSON object
+// (the contract scripts read; see main.cpp).
+#include <cstddef>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libcvo/eval/ate.hpp"
+#include "libcvo/eval/rpe.hpp"
+
+namespace cvo::tools {
+
+struct FailedFrame {
+  std::size_t index = 0;  // position in the sequence
+  double timestamp = 0;   // colour stamp
+  std::string stage;      // "read" (frame skipped), "selection" or "registration" (pose predicted)
+  std::string reason;
+};
+
+struct RunReport {
+  std::string mode;
+  std::string sequence, trajectory;
+  std::string groundtruth;     // where the ground truth came from; empty when there was none
+  std::size_t frames = 0;      // frames of the sequence attempted, unreadable ones included
+  std::size_t poses = 0;       // lines written to the trajectory
+  std::size_t keyframes = 0;   // 0 in frame-to-frame mode, which has no keyframes
+  std::vector<FailedFrame> failed;
+  std::vector<double> track_ms;         // whole track() step, per frame tracked
+  std::vector<double> points;           // selected per frame tracked
+  std::vector<double> iterations;       // per registration run
+  double wall_s = 0;                    // the whole loop, reading images included
+  std::optional<eval::AteResult> ate;   // with ground truth (and >= 3 associated poses)
+  std::optional<eval::RpeResult> rpe;   // with ground truth (and >= 2 pairs 1 s apart)
+};
+
+/// The p-th percentile (0..100) with linear interpolation between order statistics, numpy's
+/// default (so p = 50 is the median as eval::summarize has it); NaN for no values.
+double percentile(std::vector<double> values, double p);
+
+void print_text(std::FILE* out, const RunReport& report);
+std::string to_json(const RunReport& report);
+
+}  // namespace cvo::tools
