@@ -76,6 +76,8 @@ const std::vector<Field>& table() {
           "nearest depth used (m)"),
       row("selection.max_depth_m", &Config::selection, &SelectionParameters::max_depth_m, kPositive,
           "farthest depth used (m)"),
+      row("selection.gradient_weight", &Config::selection, &SelectionParameters::gradient_weight, kNonNegative,
+          "scale of the gradient part of a point's label (0: RGB only)"),
       row("cvo.ell_init", &Config::cvo, &CvoParameters::ell_init, kPositive,
           "ℓ_init, initial spatial kernel length-scale (m)"),
       row("cvo.ell_min", &Config::cvo, &CvoParameters::ell_min, kPositive,

@@ -11,6 +11,7 @@ struct SelectionParameters {
   std::size_t target_points = 3000;  // per 640x480 frame (paper section 6)
   double min_depth_m = 0.1;          // valid depth range
   double max_depth_m = 5.0;
+  double gradient_weight = 1.0;      // scale of the gradient part of each point's label (0: RGB only)
 };
 
 /// The RKHS inner product and the CVO solver (paper section 3, eq. 5-6; Table 1).

@@ -176,6 +176,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const float fx_inv = static_cast<float>(1.0 / K.fx), fy_inv = static_cast<float>(1.0 / K.fy);
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
   const float depth_inv = static_cast<float>(1.0 / K.depth_scale);
+  const auto gradient_weight = static_cast<float>(parameters_.gradient_weight);
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
     if (best < 0) continue;
@@ -184,8 +185,8 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
     const float z = static_cast<float>(frame.depth.at<std::uint16_t>(v, u)) * depth_inv;
     const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
-    const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, grey_[p + 1] - grey_[p - 1],
-                    grey_[p + W] - grey_[p - W]};
+    const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
+                    gradient_weight * (grey_[p + W] - grey_[p - W])};
     cloud.push_back({(static_cast<float>(u) - cx) * z * fx_inv, (static_cast<float>(v) - cy) * z * fy_inv, z}, f);
   }
   result.selected = cloud.size();

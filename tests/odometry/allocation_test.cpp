@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "libcvo/odometry/frame_to_frame.hpp"
+#include "libcvo/odometry/keyframe_odometry.hpp"
 #include "tests/odometry/odometry_fixtures.hpp"
 #include "tests/support/allocation_counter.hpp"
 
@@ -42,6 +43,34 @@ TEST(OdometryAllocation, TrackAllocatesNothingAfterWarmUp) {
   }
   EXPECT_EQ(tracked, 4);
   EXPECT_EQ(allocations, 0) << "heap allocations in track()";
+}
+
+TEST(OdometryAllocation, KeyframeTrackAllocatesNothingAfterWarmUp) {
+  // Keyframes are made (t_thres 2 cm), local graphs close and a failure restarts tracking: every
+  // path of KF-CVO, none of which may touch the heap.
+  auto s = testing::render_path(sim::PathKind::orbit, 9);
+  core::RgbdFrame empty;
+  empty.index = 5;
+  KeyframeOdometryParameters parameters;
+  parameters.initial_pose = s.truth[0].pose;
+  parameters.keyframe.translation_threshold_m = 0.02;
+  KeyframeOdometry odometry(s.frames[0].intrinsics.width, s.frames[0].intrinsics.height, parameters);
+  odometry.track(s.frames[0]);  // warm-up
+  odometry.track(s.frames[1]);
+  odometry.track(s.frames[2]);
+
+  long allocations = 0;
+  int keyframes = 0, closed = 0;
+  for (const core::RgbdFrame* frame : {&s.frames[3], &s.frames[4], &empty, &s.frames[6], &s.frames[7], &s.frames[8]}) {
+    const long before = allocation_count();
+    const TrackResult r = odometry.track(*frame);
+    allocations += allocation_count() - before;
+    keyframes += r.keyframe;
+    closed += odometry.local_graph_closed();
+  }
+  EXPECT_GE(keyframes, 2);
+  EXPECT_GE(closed, 1);
+  EXPECT_EQ(allocations, 0) << "heap allocations in KeyframeOdometry::track()";
 }
 
 }  // namespace

@@ -48,8 +48,7 @@ std::size_t pose_lines(const fs::path& file) {
 
 // A rendered TUM folder with exact ground truth: 40 frames (1.3 s, so there are RPE pairs 1 s
 // apart), a half-size camera so the test renders in ~1 s; camera.yaml tells cvo-run the camera.
-TEST(CvoRunCli, RenderedSequenceEndToEnd) {
-  const test::TempDir dir("cvo_run");
+fs::path write_rendered_sequence(const test::TempDir& dir) {
   sim::SequenceOptions options;
   options.frames = 40;
   options.seed = 7;
@@ -57,6 +56,12 @@ TEST(CvoRunCli, RenderedSequenceEndToEnd) {
   options.intrinsics = {262.5, 262.5, 159.25, 119.25, 320, 240, 5000.0};
   const fs::path seq = dir.path() / "seq";
   sim::write_sequence(seq, options);
+  return seq;
+}
+
+TEST(CvoRunCli, RenderedSequenceEndToEnd) {
+  const test::TempDir dir("cvo_run");
+  const fs::path seq = write_rendered_sequence(dir);
   const fs::path traj = dir.path() / "traj.txt", png = dir.path() / "plot.png";
 
   const ToolRun r = run_tool(dir, q(seq) + " --out " + q(traj) + " --json --plot " + q(png));
@@ -148,15 +153,19 @@ TEST(CvoRunCli, UsageErrorsExitTwo) {
   EXPECT_NE(help.out.find("usage: cvo-run SEQUENCE --out TRAJ.txt"), std::string::npos);
 }
 
-TEST(CvoRunCli, UnimplementedModesSaySo) {
+TEST(CvoRunCli, KeyframeModeEndToEnd) {
+  // KF-CVO on a rendered orbit with exact ground truth: keyframes are made and reported, and the
+  // trajectory is as good as frame-to-frame's (bound as in RenderedSequenceEndToEnd).
   const test::TempDir dir("cvo_run");
-  for (const char* mode : {"kf-cvo", "opencv-rgbd", "opencv-rgbd-icp"}) {
-    const ToolRun r = run_tool(dir, q(CVO_TEST_DATA_DIR "/fr1_rpy_50") + " --out " + q(dir.path() / "t.txt") +
-                                        " --mode " + mode);
-    EXPECT_EQ(r.exit_code, 2) << mode;
-    EXPECT_NE(r.err.find("not implemented yet"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(dir.path() / "t.txt"));
-  }
+  const fs::path seq = write_rendered_sequence(dir);
+  const fs::path traj = dir.path() / "traj.txt";
+  const ToolRun r = run_tool(dir, q(seq) + " --out " + q(traj) + " --mode kf-cvo --json --set keyframe.translation_threshold_m=0.05");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json_value(r.out, "mode"), "\"kf-cvo\"");
+  EXPECT_EQ(pose_lines(traj), 40u);
+  EXPECT_GE(std::stoi(json_value(r.out, "keyframes")), 3);
+  EXPECT_EQ(json_value(r.out, "failed_frames"), "0");
+  EXPECT_LT(std::stod(json_value(r.out, "ate_rmse_m")), 0.003);
 }
 
 TEST(CvoRunCli, InputErrorsExitOneAndNameTheFile) {

@@ -71,6 +71,27 @@ TEST(PointSelection, DeterministicAndBackProjectsToTheScene) {
   }
 }
 
+TEST(PointSelection, GradientWeightScalesTheGradientLabel) {
+  const auto frame = rendered(sim::SceneKind::textured_room);
+  core::SelectionParameters half, none;
+  half.gradient_weight = 0.5;
+  none.gradient_weight = 0.0;
+  PointCloud full_cloud(8192), half_cloud(8192), none_cloud(8192);
+  PointSelector(640, 480, core::SelectionParameters{}).select(frame, full_cloud);
+  PointSelector(640, 480, half).select(frame, half_cloud);
+  PointSelector(640, 480, none).select(frame, none_cloud);
+  ASSERT_EQ(full_cloud.size(), half_cloud.size());  // the weight changes labels, not the selection
+  ASSERT_EQ(full_cloud.size(), none_cloud.size());
+  double sum = 0;
+  for (std::size_t i = 0; i < full_cloud.size(); ++i) {
+    EXPECT_FLOAT_EQ(half_cloud.feature(i)[3], 0.5f * full_cloud.feature(i)[3]);
+    EXPECT_FLOAT_EQ(half_cloud.feature(i)[0], full_cloud.feature(i)[0]);
+    EXPECT_EQ(none_cloud.feature(i)[4], 0.0f);
+    sum += std::abs(full_cloud.feature(i)[3]) + std::abs(full_cloud.feature(i)[4]);
+  }
+  EXPECT_GT(sum, 0.05 * static_cast<double>(full_cloud.size()));  // selected points do have gradient
+}
+
 TEST(PointSelection, BadFramesGiveAStatusNotACrash) {
   PointSelector selector(640, 480, core::SelectionParameters{});
   PointCloud cloud(8192);

@@ -33,6 +33,8 @@
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/odometry/frame_to_frame.hpp"
+#include "libcvo/odometry/keyframe_odometry.hpp"
+#include "libcvo/odometry/opencv_odometry.hpp"
 #include "progress.hpp"
 #include "report.hpp"
 
@@ -42,7 +44,7 @@ namespace fs = std::filesystem;
 using namespace cvo;
 
 constexpr std::string_view kUsage =
-    R"(usage: cvo-run SEQUENCE --out TRAJ.txt [--mode cvo] [--max-frames N] [--groundtruth GT]
+    R"(usage: cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]
                [--plot PNG] [--json] [--config FILE] [--set key=value]...
 
 Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
@@ -52,8 +54,12 @@ no pose); a frame that cannot be tracked keeps the constant-velocity prediction 
 
 options:
   --out TRAJ.txt     the trajectory to write (required)
-  --mode MODE        cvo: frame-to-frame CVO, the paper's baseline (default). kf-cvo,
-                     opencv-rgbd and opencv-rgbd-icp are not implemented yet
+  --mode MODE        cvo: frame-to-frame CVO, the paper's baseline (default)
+                     kf-cvo: keyframe-based CVO (paper section 4; keyframes by γ, t, θ)
+                     opencv-rgbd: OpenCV contrib's dense photometric RGB-D odometry
+                     opencv-rgbd-icp: OpenCV's photometric + point-to-plane ICP odometry
+                     (both frame to frame with the same motion model; depth 0.1-5 m, from
+                     selection.min_depth_m / max_depth_m)
   --max-frames N     only the first N frames
   --groundtruth GT   evaluate against this TUM trajectory (default: SEQUENCE/groundtruth.txt)
   --plot PNG         write the evaluation figure (needs ground truth)
@@ -79,7 +85,8 @@ struct ModeInfo {
   std::string_view name;
   bool implemented;
 };
-constexpr ModeInfo kModes[] = {{"cvo", true}, {"kf-cvo", false}, {"opencv-rgbd", false}, {"opencv-rgbd-icp", false}};
+constexpr ModeInfo kModes[] = {
+    {"cvo", true}, {"kf-cvo", true}, {"opencv-rgbd", true}, {"opencv-rgbd-icp", true}};
 
 struct Arguments {
   fs::path sequence, out;
@@ -140,7 +147,12 @@ Arguments parse_arguments(int argc, char** argv) {
     if (m.name == args.mode) mode = &m;
   if (mode == nullptr)
     throw UsageError("unknown mode '" + args.mode + "' (cvo, kf-cvo, opencv-rgbd or opencv-rgbd-icp)");
-  if (!mode->implemented) throw UsageError("mode '" + args.mode + "' is not implemented yet; only 'cvo' is");
+  if (!mode->implemented) {
+    std::string implemented;
+    for (const auto& m : kModes)
+      if (m.implemented) implemented.append(implemented.empty() ? "" : ", ").append(m.name);
+    throw UsageError("mode '" + args.mode + "' is not implemented yet; these are: " + implemented);
+  }
   return args;
 }
 
@@ -167,7 +179,7 @@ std::optional<core::Intrinsics> choose_camera(const Arguments& args, const confi
 }
 
 // One tracker per mode; a mode is one more alternative and one more branch.
-using Tracker = std::variant<odometry::FrameToFrameOdometry>;
+using Tracker = std::variant<odometry::FrameToFrameOdometry, odometry::KeyframeOdometry, odometry::OpenCvOdometry>;
 
 Tracker make_tracker(std::string_view mode, const config::Config& config, const core::Intrinsics& camera) {
   if (mode == "cvo") {
@@ -175,6 +187,20 @@ Tracker make_tracker(std::string_view mode, const config::Config& config, const 
     parameters.selection = config.selection;
     parameters.cvo = config.cvo;
     return odometry::FrameToFrameOdometry(camera.width, camera.height, parameters);
+  }
+  if (mode == "kf-cvo") {
+    odometry::KeyframeOdometryParameters parameters;
+    parameters.selection = config.selection;
+    parameters.cvo = config.cvo;
+    parameters.keyframe = config.keyframe;
+    return odometry::KeyframeOdometry(camera.width, camera.height, parameters);
+  }
+  if (mode == "opencv-rgbd" || mode == "opencv-rgbd-icp") {
+    odometry::OpenCvOdometryParameters parameters;
+    parameters.variant = mode == "opencv-rgbd" ? odometry::OpenCvVariant::rgbd : odometry::OpenCvVariant::rgbd_icp;
+    parameters.min_depth_m = config.selection.min_depth_m;
+    parameters.max_depth_m = config.selection.max_depth_m;
+    return odometry::OpenCvOdometry(camera, parameters);
   }
   throw std::logic_error("make_tracker: no tracker for mode '" + std::string(mode) + "'");
 }

@@ -1,0 +1,102 @@
+#pragma once
+// Keyframe-based CVO odometry, KF-CVO (paper section 4). For each new frame n, with keyframe m:
+//
+//   frame-to-frame     T_{n-1}^n = argmax <f_X(n-1), h.f_Xn>   from h_0 = T_{n-2}^{n-1}   (eq. 7)
+//   keyframe-to-frame  T_m^n     = argmax <f_Xm,     h.f_Xn>   from h_0 = T_m^{n-1} T_{n-1}^n (eq. 8)
+//   pose               P_n = P_m T_m^n
+//   keyframe test      γ = <f_Xm, T_m^n.f_Xn> / <f_Xm, T_m^{m+1}.f_X(m+1)>                  (eq. 9)
+//                      with θ_mn = arccos((tr R_mn - 1)/2) and |t_mn|                       (eq. 10)
+//
+// (T_a^b is frame b's camera in frame a's camera frame.) When γ < γ_thres, |t_mn| > t_thres or
+// θ_mn > θ_thres, frame n-1 becomes the new keyframe, as in the paper: its local graph is closed
+// and handed out, and frame n is then re-expressed against it with the frame-to-frame result
+// (T_{n-1}^n is exactly its keyframe-to-frame transform), which also gives the new γ reference.
+//
+// Failures never crash and never jump: a frame whose points cannot be selected, or whose two
+// registrations both fail, keeps the constant-velocity prediction, is marked, and the next usable
+// frame starts a new keyframe at its predicted pose. When only the keyframe registration fails
+// (the keyframe has left the view), frame n-1 becomes the keyframe as above.
+//
+// Fixed memory: three clouds (keyframe, previous, current) whose roles rotate by index, one
+// solver, a local graph with a capacity; after the first frames track() does not allocate.
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/odometry/track_result.hpp"
+#include "libcvo/registration/point_cloud.hpp"
+#include "libcvo/registration/point_selection.hpp"
+#include "libcvo/registration/registration.hpp"
+
+namespace cvo::odometry {
+
+struct KeyframeOdometryParameters {
+  core::SelectionParameters selection;
+  core::CvoParameters cvo;
+  core::KeyframeParameters keyframe;
+  core::SE3 initial_pose;                  // P of the first usable frame
+  std::size_t max_points = 8192;           // capacity of each cloud
+  std::size_t local_graph_capacity = 300;  // frames per keyframe before one is forced (10 s at 30 Hz)
+  double gamma_ell = 0.1;                  // length-scale of the inner products of γ (see .cpp)
+  double gamma_sigma = 0.316;              // spatial signal of the inner products of γ (see .cpp)
+};
+
+/// Why the last frame made a new keyframe.
+enum class KeyframeReason { kNone, kFirst, kGamma, kTranslation, kRotation, kKeyframeLost, kRestart, kGraphFull };
+const char* to_string(KeyframeReason reason);
+
+class KeyframeOdometry {
+ public:
+  KeyframeOdometry(int width, int height, const KeyframeOdometryParameters& parameters);
+
+  /// Tracks the next frame. Never throws on bad frames: see TrackResult::status.
+  TrackResult track(const core::RgbdFrame& frame);
+
+  /// Why the last track() made a keyframe (kNone when it did not).
+  [[nodiscard]] KeyframeReason keyframe_reason() const { return reason_; }
+  /// γ of the last frame (eq. 9); 0 when no keyframe registration ran.
+  [[nodiscard]] double gamma() const { return gamma_; }
+  /// Frame index of the current keyframe.
+  [[nodiscard]] std::uint64_t keyframe_index() const { return keyframe_frame_; }
+  /// True right after a track() that closed a local graph; it stays readable until the next one.
+  [[nodiscard]] bool local_graph_closed() const { return graph_closed_; }
+  [[nodiscard]] const LocalGraph& closed_local_graph() const { return graphs_[1 - graph_]; }
+  [[nodiscard]] const LocalGraph& current_local_graph() const { return graphs_[graph_]; }
+  [[nodiscard]] const KeyframeOdometryParameters& parameters() const { return parameters_; }
+
+ private:
+  void start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose, KeyframeReason why);
+  bool trips_threshold(const core::SE3& T_mn, double gamma);
+  double gamma_inner_product(const registration::PointCloud& keyframe, const core::SE3& T_mn);
+
+  KeyframeOdometryParameters parameters_;
+  registration::PointSelector selector_;
+  registration::Registration registration_;
+  registration::Registration gamma_registration_;  // the same kernel, looser sparsification (γ only)
+  std::array<registration::PointCloud, 3> clouds_;
+  int keyframe_ = 0, previous_ = 1, current_ = 2;  // roles of clouds_
+  bool have_keyframe_ = false, have_previous_ = false, have_frame_ = false;
+
+  std::uint64_t keyframe_frame_ = 0;
+  core::SE3 keyframe_pose_;
+  double gamma_reference_ = 0;  // <f_Xm, T_m^{m+1}.f_X(m+1)>; 0 until frame m+1 is tracked
+  double gamma_ = 0;
+  KeyframeReason reason_ = KeyframeReason::kNone;
+
+  std::uint64_t previous_frame_ = 0;
+  double previous_timestamp_ = 0;
+  core::SE3 previous_pose_;   // P_{n-1}
+  core::SE3 T_m_previous_;    // T_m^{n-1}
+  core::SE3 velocity_;        // T_{n-2}^{n-1}
+  core::SE3 last_pose_;       // the last published pose (tracked or predicted)
+
+  std::array<LocalGraph, 2> graphs_;  // [graph_] is open, the other the last closed one
+  int graph_ = 0;
+  bool graph_closed_ = false;
+};
+
+}  // namespace cvo::odometry

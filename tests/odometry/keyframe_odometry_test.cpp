@@ -1,0 +1,185 @@
+#include "libcvo/odometry/keyframe_odometry.hpp"
+
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "libcvo/eval/rpe.hpp"
+#include "libcvo/io/tum_dataset.hpp"
+#include "tests/odometry/odometry_fixtures.hpp"
+
+namespace cvo::odometry {
+namespace {
+
+// A half-size synthetic camera keeps these tests fast.
+core::Intrinsics small_camera() {
+  core::Intrinsics k = *core::camera_preset("synthetic");
+  k.fx /= 2;
+  k.fy /= 2;
+  k.cx = 159.5;
+  k.cy = 119.5;
+  k.width = 320;
+  k.height = 240;
+  return k;
+}
+
+/// Frames seen from start * step^i in the textured room: a constant motion per frame.
+std::vector<core::RgbdFrame> constant_motion(const core::SE3& step, int n) {
+  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  const auto camera = small_camera();
+  core::SE3 pose = sim::look_at({0.0, -1.2, 1.3}, {0.3, 2.5, 1.0});
+  std::vector<core::RgbdFrame> frames;
+  for (int i = 0; i < n; ++i) {
+    auto frame = sim::render(scene, camera, pose, {}, 0, testing::fast_render());
+    frame.index = static_cast<std::uint64_t>(i);
+    frame.timestamp = frame.depth_timestamp = 1000.0 + i / 30.0;
+    frames.push_back(std::move(frame));
+    pose = pose * step;
+  }
+  return frames;
+}
+
+KeyframeOdometryParameters only(double gamma, double translation_m, double rotation_deg) {
+  KeyframeOdometryParameters p;
+  p.keyframe.inner_product_ratio_threshold = gamma;
+  p.keyframe.translation_threshold_m = translation_m;
+  p.keyframe.rotation_threshold_deg = rotation_deg;
+  return p;
+}
+
+struct Switch {
+  std::uint64_t at_frame, keyframe;
+  KeyframeReason reason;
+};
+
+std::vector<Switch> keyframe_switches(const std::vector<core::RgbdFrame>& frames, const KeyframeOdometryParameters& p,
+                                      std::vector<double>* gammas = nullptr) {
+  KeyframeOdometry odometry(320, 240, p);
+  std::vector<Switch> switches;
+  for (const auto& f : frames) {
+    const auto r = odometry.track(f);
+    EXPECT_TRUE(r.tracked()) << "frame " << f.index;
+    if (gammas) gammas->push_back(odometry.gamma());
+    if (r.keyframe && f.index > 0) switches.push_back({f.index, odometry.keyframe_index(), odometry.keyframe_reason()});
+  }
+  return switches;
+}
+
+TEST(KeyframeOdometry, TranslationAloneTriggersAndFrameBeforeBecomesKeyframe) {
+  // 2 cm per frame along the view direction; t_thres 5 cm: frame m+3 (6 cm) trips, m+2 becomes
+  // the keyframe, so switches happen at frames 3, 5, 7 with keyframes 2, 4, 6.
+  const auto frames = constant_motion(core::SE3::from_translation({0.0, 0.0, 0.02}), 8);
+  const auto s = keyframe_switches(frames, only(0.0, 0.05, 180.0));
+  ASSERT_EQ(s.size(), 3u);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    EXPECT_EQ(s[k].at_frame, 3 + 2 * k);
+    EXPECT_EQ(s[k].keyframe, s[k].at_frame - 1);
+    EXPECT_EQ(s[k].reason, KeyframeReason::kTranslation);
+  }
+}
+
+TEST(KeyframeOdometry, RotationAloneTriggers) {
+  // 2° of yaw per frame; θ_thres 5°: frame m+3 (6°) trips. The walls are 3-4 m away, so the first
+  // frame (identity guess) moves points by ~12 cm: start the schedule wider than the tracker's
+  // default reach of ~6 cm.
+  const auto frames = constant_motion(core::SE3::from_rotation_vector({0.0, 2.0 * std::numbers::pi / 180.0, 0.0}), 8);
+  auto parameters = only(0.0, 10.0, 5.0);
+  parameters.cvo.ell_init = 0.3;
+  const auto s = keyframe_switches(frames, parameters);
+  ASSERT_EQ(s.size(), 3u);
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    EXPECT_EQ(s[k].at_frame, 3 + 2 * k);
+    EXPECT_EQ(s[k].keyframe, s[k].at_frame - 1);
+    EXPECT_EQ(s[k].reason, KeyframeReason::kRotation);
+  }
+}
+
+TEST(KeyframeOdometry, InnerProductRatioAloneTriggers) {
+  // γ falls as the view moves away from the keyframe; with t and θ out of the way, a threshold
+  // between its values at m+2 and m+4 must make keyframes for the γ reason alone.
+  const auto frames = constant_motion(core::SE3::from_translation({0.03, 0.0, 0.0}), 8);
+  std::vector<double> gammas;
+  keyframe_switches(frames, only(0.0, 10.0, 180.0), &gammas);
+  ASSERT_GT(gammas[2], gammas[4]) << "γ must decrease with the distance to the keyframe";
+  const double threshold = 0.5 * (gammas[2] + gammas[4]);
+  const auto s = keyframe_switches(frames, only(threshold, 10.0, 180.0));
+  ASSERT_FALSE(s.empty());
+  for (const auto& sw : s) {
+    EXPECT_EQ(sw.reason, KeyframeReason::kGamma);
+    EXPECT_EQ(sw.keyframe, sw.at_frame - 1);
+  }
+}
+
+TEST(KeyframeOdometry, TracksConstantMotionAndClosesLocalGraphs) {
+  const core::SE3 step = core::SE3::exp((core::Vector6d() << 0.01, 0.0, 0.015, 0.0, 0.015, 0.005).finished());
+  const auto frames = constant_motion(step, 10);
+  KeyframeOdometry odometry(320, 240, only(0.0, 0.05, 180.0));
+  core::SE3 first;
+  int closed = 0;
+  for (const auto& f : frames) {
+    const auto r = odometry.track(f);
+    ASSERT_TRUE(r.tracked());
+    if (f.index == 0) first = r.pose;
+    // Relative to the first frame the camera moved by step^index.
+    core::SE3 truth;
+    for (std::uint64_t i = 0; i < f.index; ++i) truth = truth * step;
+    const auto e = testing::motion_error(truth, first.inverse() * r.pose);
+    EXPECT_LT(e.translation_mm, 3.0) << "frame " << f.index;
+    EXPECT_LT(e.rotation_deg, 0.15) << "frame " << f.index;
+    if (odometry.local_graph_closed()) {
+      ++closed;
+      const auto& g = odometry.closed_local_graph();
+      // Keyframe first, then every frame tracked against it; the new keyframe is the last node.
+      EXPECT_GE(g.nodes().size(), 2u);
+      EXPECT_EQ(g.nodes().back().frame_index, odometry.keyframe_index());
+      EXPECT_GE(g.edges().size(), g.nodes().size() - 1);
+      for (const auto& edge : g.edges()) EXPECT_GT(edge.information.trace(), 0.0);
+    }
+  }
+  EXPECT_GE(closed, 2);
+}
+
+TEST(KeyframeOdometry, FailuresPredictAndRestart) {
+  const auto frames = constant_motion(core::SE3::from_translation({0.0, 0.0, 0.01}), 6);
+  KeyframeOdometry odometry(320, 240, KeyframeOdometryParameters{});
+  odometry.track(frames[0]);
+  const auto r1 = odometry.track(frames[1]);
+  core::RgbdFrame empty;  // no images: selection fails, the pose is predicted
+  empty.index = 2;
+  const auto r2 = odometry.track(empty);
+  EXPECT_EQ(r2.status, TrackStatus::kSelectionFailed);
+  EXPECT_FALSE(r2.tracked());
+  EXPECT_LT((r2.pose.translation() - (r1.pose * r1.motion).translation()).norm(), 1e-9);
+  // The next usable frame restarts with a keyframe at its predicted pose: no jump, no crash.
+  const auto r3 = odometry.track(frames[3]);
+  EXPECT_TRUE(r3.keyframe);
+  EXPECT_EQ(odometry.keyframe_reason(), KeyframeReason::kRestart);
+  EXPECT_LT((r3.pose.translation() - r2.pose.translation()).norm(), 0.05);
+  EXPECT_TRUE(odometry.track(frames[4]).tracked());
+}
+
+TEST(KeyframeOdometry, RealSampleTracks) {
+  auto sequence = io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50");
+  KeyframeOdometry odometry(640, 480, KeyframeOdometryParameters{});
+  core::Trajectory estimate;
+  int keyframes = 0;
+  while (const auto frame = sequence.next()) {
+    const auto r = odometry.track(*frame);
+    EXPECT_TRUE(r.tracked()) << "frame " << frame->index;
+    keyframes += r.keyframe;
+    estimate.push_back({frame->timestamp, r.pose});
+  }
+  const auto rpe = eval::relative_pose_error(sequence.groundtruth(), estimate, {});
+  std::printf("KF-CVO on fr1_rpy_50: %d keyframes, RPE %.4f m/s, %.3f deg/s\n", keyframes, rpe.translation.rmse,
+              rpe.rotation_deg.rmse);
+  // Measured 0.055 m/s and 3.8-4.3 deg/s with 12-13 keyframes: worse than frame-to-frame CVO on
+  // this clip (0.048, 2.3) — keyframe registrations across > 10° of roll lose accuracy; see the
+  // closing note of the KF-CVO work. The bound only catches breakage (drift of a lost tracker is
+  // an order of magnitude larger).
+  EXPECT_LT(rpe.translation.rmse, 0.10);
+  EXPECT_LT(rpe.rotation_deg.rmse, 8.0);
+  EXPECT_GT(keyframes, 1);
+}
+
+}  // namespace
+}  // namespace cvo::odometry
