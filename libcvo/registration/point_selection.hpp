@@ -14,6 +14,7 @@
 //  4. Each point is back-projected with the intrinsics and labelled with its RGB and gradient.
 //
 // Deterministic, and after construction select() performs no heap allocation.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -57,6 +58,7 @@ class PointSelector {
   int width_, height_;
   core::SelectionParameters parameters_;
   int regions_x_, regions_y_;
+  std::array<float, 3 * 256> grey_lut_{};  // B, G, R contributions to grey
   std::vector<float> grey_, magnitude_;
   std::vector<float> region_threshold_, smoothed_threshold_;
   std::vector<std::uint32_t> candidates_;   // pixel indices, row-major order
