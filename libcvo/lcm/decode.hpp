@@ -1,0 +1,88 @@
+#pragma once
+// Decoding of cvo_lcm messages from bytes that came off the network or out of a file, trusting
+// nothing: every failure is a nullopt and a message, never an exception, a crash or a huge
+// allocation.
+//
+// Checks, in order: at least 8 bytes (LCM's encoding starts with the type's 64-bit fingerprint, a
+// hash of its definition and of the types it embeds); the fingerprint (another type, or another
+// schema of this one); the element counts against the buffer (wire_layout.hpp); lcm-gen's decoder
+// (truncated body); no trailing bytes (an oversized buffer is not this message); and, for types
+// with a `version` field, version == SCHEMA_VERSION.
+#include <cstdint>
+#include <exception>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libcvo/lcm/wire_layout.hpp"
+
+namespace cvo::lcm {
+
+namespace detail {
+std::string hex64(std::uint64_t v);
+inline void set_error(std::string* error, const char* type, const std::string& what) {
+  if (error != nullptr) *error = std::string("cvo_lcm.") + type + ": " + what;
+}
+}  // namespace detail
+
+/// T is an lcm-gen type of package cvo_lcm. On failure returns nullopt and, when error is not
+/// null, says why ("cvo_lcm.pose_t: wrong fingerprint ...").
+template <class T>
+std::optional<T> decode(const void* data, int size, std::string* error) {
+  const char* type = T::getTypeName();
+  if (data == nullptr || size < 8) {
+    detail::set_error(error, type, "buffer of " + std::to_string(data == nullptr ? 0 : size) +
+                                       " bytes is shorter than the 8-byte fingerprint");
+    return std::nullopt;
+  }
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  std::uint64_t fingerprint = 0;
+  for (int i = 0; i < 8; ++i) fingerprint = (fingerprint << 8) | bytes[i];
+  const auto expected = static_cast<std::uint64_t>(T::getHash());
+  if (fingerprint != expected) {
+    detail::set_error(error, type,
+                      "wrong fingerprint " + detail::hex64(fingerprint) + " (expected " + detail::hex64(expected) +
+                          "): another message type or another schema version");
+    return std::nullopt;
+  }
+  if (const std::string bad = check_counts(wire_layout(type), bytes + 8, size - 8); !bad.empty()) {
+    detail::set_error(error, type, bad);
+    return std::nullopt;
+  }
+  T message;
+  int used = -1;
+  try {
+    used = message.decode(data, 0, size);
+  } catch (const std::exception& e) {  // lcm-gen strings: a negative length throws std::length_error
+    detail::set_error(error, type, std::string("corrupt body (") + e.what() + ")");
+    return std::nullopt;
+  }
+  if (used < 0) {
+    detail::set_error(error, type, "truncated or corrupt body (" + std::to_string(size) + " bytes)");
+    return std::nullopt;
+  }
+  if (used != size) {
+    detail::set_error(error, type,
+                      std::to_string(size - used) + " trailing bytes after a " + std::to_string(used) + "-byte message");
+    return std::nullopt;
+  }
+  if constexpr (requires { message.version; T::SCHEMA_VERSION; }) {
+    if (message.version != T::SCHEMA_VERSION) {
+      detail::set_error(error, type,
+                        "schema version " + std::to_string(message.version) + ", this build reads version " +
+                            std::to_string(T::SCHEMA_VERSION));
+      return std::nullopt;
+    }
+  }
+  return message;
+}
+
+/// The message's encoding (fingerprint included), as lcm::LCM::publish and lcm::LogFile send it.
+template <class T>
+std::vector<std::uint8_t> encode(const T& message) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+}  // namespace cvo::lcm

@@ -1,0 +1,77 @@
+#include "libcvo/lcm/wire_layout.hpp"
+
+#include <array>
+
+namespace cvo::lcm {
+namespace {
+
+// Wire sizes of the embedded types (proto/*.lcm).
+constexpr int kPose3d = 7 * 8;                       // position[3], orientation[4]
+constexpr int kGraphNode = 8 + 8 + kPose3d;          // frame_index, utime, pose
+constexpr int kGraphEdge = 8 + 8 + kPose3d + 36 * 8;  // from, to, measurement, information
+
+// rgbd_frame_t: version, utime, depth_utime, frame_index (28), fx fy cx cy (60), width height (68),
+// depth_scale (76), two encodings (78), then the counts.
+constexpr std::array kRgbdCounts{CountField{"colour_size", 78, 1}, CountField{"depth_size", 82, 1}};
+// keyframe_t: version, id, frame_index, utime (28), pose (84), fx..cy (116), width height (124),
+// depth_scale (132), two encodings (134), then the counts; a point is xyz[3] + labels[5] floats.
+constexpr std::array kKeyframeCounts{CountField{"num_points", 134, 8 * 4}, CountField{"colour_size", 138, 1},
+                                     CountField{"depth_size", 142, 1}};
+// local_graph_t: version, keyframe_id, utime (20), then the counts.
+constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 20, kGraphNode},
+                                       CountField{"num_edges", 24, kGraphEdge}};
+// map_t: version, utime, revision (20), then the counts; a keyframe is an id and a pose.
+constexpr std::array kMapCounts{CountField{"num_keyframes", 20, 8 + kPose3d}, CountField{"num_loops", 24, kGraphEdge}};
+
+std::int32_t read_be32(const std::uint8_t* p) {
+  return static_cast<std::int32_t>((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
+                                   (std::uint32_t{p[2]} << 8) | std::uint32_t{p[3]});
+}
+
+}  // namespace
+
+WireLayout wire_layout(std::string_view type_name) {
+  if (type_name == "rgbd_frame_t") return {86, kRgbdCounts};
+  if (type_name == "keyframe_t") return {146, kKeyframeCounts};
+  if (type_name == "local_graph_t") return {28, kLocalGraphCounts};
+  if (type_name == "map_t") return {28, kMapCounts};
+  // status_t: version, utime, pid, state (17), 3 doubles (41), 2 int64 (57), queue_depth (61),
+  // rss_bytes (69), bad_messages[5] (109), then the strings process and detail.
+  if (type_name == "status_t") return {109, {}, 109, 2};
+  return {};
+}
+
+std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int size) {
+  if (size < layout.header_bytes) return {};
+  for (int i = 0, at = layout.strings_at; i < layout.num_strings; ++i) {
+    if (size - at < 4) return {};  // truncated: the lcm-gen decoder says so
+    const std::int32_t length = read_be32(body + at);  // includes the terminating NUL
+    if (length < 1 || length > size - at - 4)
+      return "corrupt string length " + std::to_string(length) + " at body offset " + std::to_string(at);
+    at += 4 + length;
+  }
+  if (layout.counts.empty()) return {};
+  std::int64_t needed = layout.header_bytes;  // 64-bit: counts up to 2^31 times up to 360 bytes
+  for (const auto& field : layout.counts) {
+    const std::int32_t count = read_be32(body + field.offset);
+    if (count < 0) return "negative count " + std::string(field.name) + " = " + std::to_string(count);
+    needed += std::int64_t{count} * field.bytes_per_element;
+  }
+  if (needed > size)
+    return "truncated body: its counts need at least " + std::to_string(needed) + " bytes, it has " +
+           std::to_string(size);
+  return {};
+}
+
+}  // namespace cvo::lcm
+
+namespace cvo::lcm::detail {
+
+std::string hex64(std::uint64_t v) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string s = "0x0000000000000000";
+  for (int i = 17; i >= 2; --i, v >>= 4) s[static_cast<std::size_t>(i)] = kDigits[v & 0xf];
+  return s;
+}
+
+}  // namespace cvo::lcm::detail

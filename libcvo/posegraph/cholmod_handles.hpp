@@ -1,0 +1,59 @@
+#pragma once
+// RAII ownership of CHOLMOD's objects (the 64-bit-index "cholmod_l_" interface). Internal to the
+// posegraph library: only .cpp files include this, so users never see cholmod.h.
+//
+// Every cholmod object is freed through the cholmod_common that made it, so a Cholmod bundle owns
+// the common and the objects together, declared in that order: members are destroyed in reverse,
+// the objects before the common. The bundle is neither copyable nor movable (the deleters hold the
+// common's address); own it through a std::unique_ptr to move it.
+#include <memory>
+
+#include <cholmod.h>
+
+namespace cvo::posegraph::detail {
+
+class CholmodCommon {
+ public:
+  CholmodCommon() {
+    cholmod_l_start(&common_);
+    common_.print = 1;  // errors only: a not-positive-definite warning is handled by the caller
+  }
+  ~CholmodCommon() { cholmod_l_finish(&common_); }
+  CholmodCommon(const CholmodCommon&) = delete;
+  CholmodCommon& operator=(const CholmodCommon&) = delete;
+  CholmodCommon(CholmodCommon&&) = delete;
+  CholmodCommon& operator=(CholmodCommon&&) = delete;
+
+  cholmod_common* get() { return &common_; }
+
+ private:
+  cholmod_common common_{};
+};
+
+struct SparseDeleter {
+  cholmod_common* common = nullptr;
+  void operator()(cholmod_sparse* p) const { cholmod_l_free_sparse(&p, common); }
+};
+struct FactorDeleter {
+  cholmod_common* common = nullptr;
+  void operator()(cholmod_factor* p) const { cholmod_l_free_factor(&p, common); }
+};
+struct DenseDeleter {
+  cholmod_common* common = nullptr;
+  void operator()(cholmod_dense* p) const { cholmod_l_free_dense(&p, common); }
+};
+
+using SparsePtr = std::unique_ptr<cholmod_sparse, SparseDeleter>;
+using FactorPtr = std::unique_ptr<cholmod_factor, FactorDeleter>;
+using DensePtr = std::unique_ptr<cholmod_dense, DenseDeleter>;
+
+/// A common with the matrix and symbolic factor that belong to it.
+struct Cholmod {
+  CholmodCommon common;
+  SparsePtr matrix{nullptr, SparseDeleter{common.get()}};
+  FactorPtr factor{nullptr, FactorDeleter{common.get()}};
+
+  DensePtr wrap(cholmod_dense* p) { return DensePtr(p, DenseDeleter{common.get()}); }
+};
+
+}  // namespace cvo::posegraph::detail

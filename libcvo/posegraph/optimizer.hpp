@@ -1,0 +1,83 @@
+#pragma once
+// Levenberg-Marquardt on SE(3)^n for a PoseGraph, sparse normal equations solved by CHOLMOD.
+//
+// Each iteration linearises every edge (right perturbation T <- T exp(delta), exact Jacobians, see
+// residual.hpp), weights it by IRLS (w = rho'(chi^2), see cost.hpp) and assembles
+//   H = sum w J^T Omega J,  g = sum w J^T Omega e
+// over the free nodes only: fixed nodes are removed from the system, and when no node is fixed
+// the first (lowest id) is held, which fixes the gauge. It then solves (H + lambda D) delta = -g,
+// D = diag(H) (clamped below, Marquardt's scaling), applies T_k <- T_k exp(delta_k) and keeps the
+// step if the cost went down; lambda follows Nielsen's rule (gain ratio r: lambda *= max(1/3,
+// 1 - (2r - 1)^3) on success, lambda *= nu, nu *= 2 on failure).
+//
+// H is a cholmod_sparse upper triangle made of 6x6 blocks. Its symbolic analysis (fill-reducing
+// ordering, supernodes) runs once per graph structure, and an Optimizer keeps it between calls,
+// so a graph that grows (add_node / add_edge between optimise calls) is re-analysed only when its
+// sparsity pattern changed; each iteration only refactorises numerically.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/posegraph/cost.hpp"
+#include "libcvo/posegraph/pose_graph.hpp"
+
+namespace cvo::posegraph {
+
+namespace detail {
+struct Cholmod;
+}
+
+struct OptimizerOptions {
+  int max_iterations = 100;
+  double relative_decrease = 1e-6;  // stop when an accepted step lowers the cost by less than this fraction
+  double step_tolerance = 1e-10;    // stop when |delta| falls below this
+  double initial_lambda = 1e-5;
+  double cauchy_delta = core::PoseGraphParameters{}.cauchy_delta;  // for edges marked robust
+};
+
+struct IterationRecord {
+  double cost = 0;    // after the iteration
+  double lambda = 0;  // the damping of the accepted (or last tried) step
+  int trials = 0;     // factorisations this iteration needed (more than one when steps were rejected)
+};
+
+struct OptimizationReport {
+  double initial_cost = 0;
+  double final_cost = 0;
+  int iterations = 0;  // linearisations; each may hold several lambda trials
+  double seconds = 0;
+  bool converged = false;
+  std::string stop_reason;
+  bool reanalysed = false;  // whether this call ran a new symbolic analysis
+  std::vector<IterationRecord> log;
+};
+
+class Optimizer {
+ public:
+  explicit Optimizer(OptimizerOptions options = {});
+  ~Optimizer();
+  Optimizer(Optimizer&&) noexcept;
+  Optimizer& operator=(Optimizer&&) noexcept;
+  Optimizer(const Optimizer&) = delete;
+  Optimizer& operator=(const Optimizer&) = delete;
+
+  /// Optimises the poses of the graph's free nodes in place.
+  OptimizationReport optimize(PoseGraph& graph);
+
+  /// How many symbolic analyses this optimiser has run (one per distinct structure seen in a row).
+  [[nodiscard]] int symbolic_analyses() const { return analyses_; }
+  [[nodiscard]] const OptimizerOptions& options() const { return options_; }
+
+ private:
+  struct Pattern;
+  OptimizerOptions options_;
+  std::unique_ptr<detail::Cholmod> cholmod_;
+  std::unique_ptr<Pattern> pattern_;
+  int analyses_ = 0;
+};
+
+/// One-shot convenience: a fresh Optimizer.
+OptimizationReport optimize(PoseGraph& graph, const OptimizerOptions& options = {});
+
+}  // namespace cvo::posegraph

@@ -1,0 +1,18 @@
+# cmake -DJAR_TOOL=jar -DJAR=cvo_lcm_types.jar -DSPY=bin/cvo-spy -DTYPES="a;b" -P check_jar.cmake
+# Fails unless the jar holds cvo_lcm/<type>.class for every type and cvo-spy puts it on its class path.
+execute_process(COMMAND ${JAR_TOOL} tf ${JAR} OUTPUT_VARIABLE listing RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "jar tf ${JAR} failed (${rc})")
+endif()
+foreach(type IN LISTS TYPES)
+  string(FIND "${listing}" "cvo_lcm/${type}.class" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "${JAR} has no class cvo_lcm/${type}.class:\n${listing}")
+  endif()
+endforeach()
+execute_process(COMMAND ${SPY} --print-classpath OUTPUT_VARIABLE classpath RESULT_VARIABLE rc)
+string(FIND "${classpath}" "cvo_lcm_types.jar" at)
+if(NOT rc EQUAL 0 OR at EQUAL -1 OR NOT classpath MATCHES "lcm\\.jar")
+  message(FATAL_ERROR "cvo-spy --print-classpath (${rc}) does not name lcm.jar and the types jar: ${classpath}")
+endif()
+message(STATUS "${JAR}: all types present; cvo-spy class path ${classpath}")

@@ -1,0 +1,156 @@
+#pragma once
+// One message of each cvo_lcm type with every field set to a distinct, non-default value and every
+// array non-empty, so that a round trip or a truncation exercises the whole encoding.
+#include <cstdint>
+
+#include "cvo_lcm/keyframe_t.hpp"
+#include "cvo_lcm/local_graph_t.hpp"
+#include "cvo_lcm/map_t.hpp"
+#include "cvo_lcm/pose_t.hpp"
+#include "cvo_lcm/rgbd_frame_t.hpp"
+#include "cvo_lcm/status_t.hpp"
+
+namespace cvo::test {
+
+inline cvo_lcm::pose3d_t sample_pose(double seed) {
+  cvo_lcm::pose3d_t p{};
+  p.position[0] = seed;
+  p.position[1] = -2 * seed;
+  p.position[2] = 0.5 + seed;
+  p.orientation[0] = 0.5;  // w, x, y, z of a unit quaternion
+  p.orientation[1] = -0.5;
+  p.orientation[2] = 0.5;
+  p.orientation[3] = 0.5;
+  return p;
+}
+
+inline cvo_lcm::graph_edge_t sample_edge(std::int64_t from, std::int64_t to) {
+  cvo_lcm::graph_edge_t e{};
+  e.from = from;
+  e.to = to;
+  e.measurement = sample_pose(0.1 * static_cast<double>(to));
+  for (int i = 0; i < 36; ++i) e.information[i] = i % 7 == 0 ? 100.0 + i : 0.25 * i;
+  return e;
+}
+
+inline cvo_lcm::rgbd_frame_t sample_rgbd() {
+  cvo_lcm::rgbd_frame_t m{};
+  m.version = cvo_lcm::rgbd_frame_t::SCHEMA_VERSION;
+  m.utime = 1305031229528748;
+  m.depth_utime = 1305031229528749;
+  m.frame_index = 42;
+  m.fx = 517.3;
+  m.fy = 516.5;
+  m.cx = 318.6;
+  m.cy = 255.3;
+  m.width = 4;
+  m.height = 2;
+  m.depth_scale = 5000;
+  m.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_RAW_BGR8;
+  m.depth_encoding = cvo_lcm::rgbd_frame_t::DEPTH_RAW_U16LE;
+  for (int i = 0; i < 4 * 2 * 3; ++i) m.colour.push_back(static_cast<std::uint8_t>(7 * i));
+  for (int i = 0; i < 4 * 2 * 2; ++i) m.depth.push_back(static_cast<std::uint8_t>(200 - i));
+  m.colour_size = static_cast<std::int32_t>(m.colour.size());
+  m.depth_size = static_cast<std::int32_t>(m.depth.size());
+  return m;
+}
+
+inline cvo_lcm::pose_t sample_pose_message() {
+  cvo_lcm::pose_t m{};
+  m.version = cvo_lcm::pose_t::SCHEMA_VERSION;
+  m.utime = 1305031229528748;
+  m.frame_index = 7;
+  m.keyframe_id = 3;
+  m.odom_pose = sample_pose(1.0);
+  m.map_pose = sample_pose(2.0);
+  for (int i = 0; i < 36; ++i) m.covariance[i] = 1e-4 * (i + 1);
+  m.status = cvo_lcm::pose_t::STATUS_REGISTRATION_FAILED;
+  m.is_keyframe = true;
+  m.inner_product = 1234.5;
+  m.gamma_frame = 0.91;
+  m.gamma_keyframe = 0.72;
+  m.iterations = 37;
+  m.points = 9001;
+  m.latency_ms = 12.25;
+  return m;
+}
+
+inline cvo_lcm::keyframe_t sample_keyframe() {
+  cvo_lcm::keyframe_t m{};
+  m.version = cvo_lcm::keyframe_t::SCHEMA_VERSION;
+  m.id = 5;
+  m.frame_index = 120;
+  m.utime = 1305031233528748;
+  m.pose = sample_pose(3.0);
+  m.fx = 517.3;
+  m.fy = 516.5;
+  m.cx = 318.6;
+  m.cy = 255.3;
+  m.width = 640;
+  m.height = 480;
+  m.depth_scale = 5000;
+  m.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_JPEG;
+  m.depth_encoding = cvo_lcm::rgbd_frame_t::DEPTH_PNG;
+  m.num_points = 3;
+  for (int p = 0; p < m.num_points; ++p) {
+    m.xyz.push_back({0.1f * p, -0.2f * p, 1.0f + p});
+    m.labels.push_back({0.1f, 0.2f, 0.3f + p, 0.4f, 0.5f});
+  }
+  m.colour = {0xff, 0xd8, 0xff, 0xe0, 1, 2, 3};  // not a real JPEG: the wire format does not care
+  m.depth = {0x89, 'P', 'N', 'G', 9, 8};
+  m.colour_size = static_cast<std::int32_t>(m.colour.size());
+  m.depth_size = static_cast<std::int32_t>(m.depth.size());
+  return m;
+}
+
+inline cvo_lcm::local_graph_t sample_local_graph() {
+  cvo_lcm::local_graph_t m{};
+  m.version = cvo_lcm::local_graph_t::SCHEMA_VERSION;
+  m.keyframe_id = 5;
+  m.utime = 1305031233528748;
+  for (int n = 0; n < 3; ++n) {
+    cvo_lcm::local_graph_node_t node{};
+    node.frame_index = 120 + n;
+    node.utime = 1305031233528748 + 33333 * n;
+    node.pose = sample_pose(n);
+    m.nodes.push_back(node);
+  }
+  m.edges = {sample_edge(120, 121), sample_edge(120, 122), sample_edge(121, 122)};
+  m.num_nodes = static_cast<std::int32_t>(m.nodes.size());
+  m.num_edges = static_cast<std::int32_t>(m.edges.size());
+  return m;
+}
+
+inline cvo_lcm::map_t sample_map() {
+  cvo_lcm::map_t m{};
+  m.version = cvo_lcm::map_t::SCHEMA_VERSION;
+  m.utime = 1305031299000000;
+  m.revision = 17;
+  m.keyframe_ids = {0, 1, 2, 5};
+  for (std::size_t i = 0; i < m.keyframe_ids.size(); ++i) m.poses.push_back(sample_pose(static_cast<double>(i)));
+  m.loops = {sample_edge(0, 5), sample_edge(1, 5)};
+  m.num_keyframes = static_cast<std::int32_t>(m.keyframe_ids.size());
+  m.num_loops = static_cast<std::int32_t>(m.loops.size());
+  return m;
+}
+
+inline cvo_lcm::status_t sample_status() {
+  cvo_lcm::status_t m{};
+  m.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  m.utime = 1305031299000000;
+  m.pid = 4242;
+  m.state = cvo_lcm::status_t::STATE_DEGRADED;
+  m.rate_hz = 29.8;
+  m.latency_median_ms = 18.5;
+  m.latency_p99_ms = 31.0;
+  m.deadline_misses = 3;
+  m.dropped_frames = 11;
+  m.queue_depth = 2;
+  m.rss_bytes = 123456789;
+  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) m.bad_messages[k] = 10 * k + 1;
+  m.process = "cvo-trackerd";
+  m.detail = "camera re-opened after unplug";
+  return m;
+}
+
+}  // namespace cvo::test

@@ -1,0 +1,52 @@
+// Runs the built pgo-bench the way a script would: both solvers on one g2o file, --json keys.
+#include <filesystem>
+#include <regex>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace cvo::posegraph {
+namespace {
+
+namespace fs = std::filesystem;
+using cvo::testing::quoted;
+using cvo::testing::run_tool;
+
+double number_after(const std::string& json, const std::string& solver, const std::string& key) {
+  std::smatch m;
+  const std::regex re("\"" + solver + "\": \\{[^}]*\"" + key + "\": ([-0-9.eE+]+)");
+  if (!std::regex_search(json, m, re)) return -1;
+  return std::stod(m[1]);
+}
+
+TEST(PgoBenchCli, BothSolversReachTheSameCostOnTinyGrid) {
+  const fs::path file = fs::path(CVO_SHARED_DATA_DIR) / "posegraph" / "tinyGrid3D.g2o";
+  if (!fs::exists(file)) GTEST_SKIP() << "shared data absent: " << file;
+  const test::TempDir dir("pgo_bench");
+  const auto r = run_tool("pgo-bench", quoted(file) + " --json", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* solver : {"cvo", "ceres"}) {
+    EXPECT_GT(number_after(r.out, solver, "iterations"), 0) << solver << "\n" << r.out;
+    EXPECT_GE(number_after(r.out, solver, "seconds"), 0) << solver;
+  }
+  const double ours = number_after(r.out, "cvo", "final_cost"), ceres = number_after(r.out, "ceres", "final_cost");
+  EXPECT_LT(ours, number_after(r.out, "cvo", "initial_cost"));
+  EXPECT_NEAR(ours, ceres, 1e-3 * ceres);  // the target: equal final cost within 0.1 %
+}
+
+TEST(PgoBenchCli, BadInputAndArguments) {
+  const test::TempDir dir("pgo_bench");
+  const fs::path bad = dir.path() / "bad.g2o";
+  dir.write("bad.g2o", "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nEDGE_SE3:QUAT 0 oops\n");
+  auto r = run_tool("pgo-bench", quoted(bad), dir.path());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("bad.g2o:2"), std::string::npos) << r.err;
+  r = run_tool("pgo-bench", "--no-such-option", dir.path());
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+}  // namespace
+}  // namespace cvo::posegraph

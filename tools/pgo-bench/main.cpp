@@ -1,0 +1,218 @@
+// pgo-bench FILE.g2o [--json] [--max-iterations N] [--robust]
+//
+// Optimises one g2o pose graph twice from the same initial guess (the vertices as given), with
+// the same gauge (FIX'ed vertices, or the first vertex when there are none) and the same iteration
+// cap: once with cvo::posegraph (LM on SE(3), CHOLMOD) and once with Ceres Solver using the
+// formulation of Ceres' examples/slam/pose_graph_3d (quaternion + translation blocks,
+// EigenQuaternionManifold, SPARSE_NORMAL_CHOLESKY, LM), written out below.
+//
+// The two solvers minimise slightly different residuals (Ceres' example: [R_a^T (p_b - p_a) -
+// p_ab; 2 vec(q_ab q_est^-1)]; ours: log(T_ab^-1 T_a^-1 T_b)), so their own final costs are not
+// comparable. Every cost this tool prints is therefore posegraph::cost() evaluated on each
+// solver's final poses: 1/2 sum rho(e^T Omega e) with our residual. Ceres' own figure is in the
+// JSON as solver_cost. --robust puts a Cauchy kernel (delta = 2, Ceres' CauchyLoss(2)) on every
+// edge in both.
+//
+// Exit status: 0 done, 1 bad input file, 2 bad command line.
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <string>
+
+#include <ceres/ceres.h>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/io/input_error.hpp"
+#include "libcvo/io/json_writer.hpp"
+#include "libcvo/posegraph/cost.hpp"
+#include "libcvo/posegraph/g2o_io.hpp"
+#include "libcvo/posegraph/optimizer.hpp"
+
+namespace {
+
+using cvo::posegraph::Edge;
+using cvo::posegraph::NodeId;
+using cvo::posegraph::PoseGraph;
+
+struct Options {
+  std::string file;
+  bool json = false;
+  bool robust = false;
+  int max_iterations = 100;
+};
+
+struct Result {
+  std::string solver;
+  double initial_cost = 0;
+  double final_cost = 0;
+  double solver_cost = 0;  // the solver's own objective at the end
+  int iterations = 0;
+  double seconds = 0;
+  bool converged = false;
+  std::string stop_reason;
+};
+
+// Ceres' pose_graph_3d error term: residual sqrt(Omega) [R_a^T (p_b - p_a) - p_ab; 2 vec(q_ab q_est^-1)].
+// sqrt(Omega) is the upper Cholesky factor U (U^T U = Omega), so that r^T r = e^T Omega e.
+struct PoseGraph3dErrorTerm {
+  Eigen::Vector3d p_ab;
+  Eigen::Quaterniond q_ab;
+  Eigen::Matrix<double, 6, 6> sqrt_information;
+
+  template <typename T>
+  bool operator()(const T* p_a_ptr, const T* q_a_ptr, const T* p_b_ptr, const T* q_b_ptr, T* residuals_ptr) const {
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p_a(p_a_ptr), p_b(p_b_ptr);
+    const Eigen::Map<const Eigen::Quaternion<T>> q_a(q_a_ptr), q_b(q_b_ptr);
+    const Eigen::Quaternion<T> q_a_inverse = q_a.conjugate();
+    const Eigen::Quaternion<T> q_ab_estimated = q_a_inverse * q_b;
+    const Eigen::Matrix<T, 3, 1> p_ab_estimated = q_a_inverse * (p_b - p_a);
+    const Eigen::Quaternion<T> delta_q = q_ab.template cast<T>() * q_ab_estimated.conjugate();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> residuals(residuals_ptr);
+    residuals.template head<3>() = p_ab_estimated - p_ab.template cast<T>();
+    residuals.template tail<3>() = T(2.0) * delta_q.vec();
+    residuals.applyOnTheLeft(sqrt_information.template cast<T>());
+    return true;
+  }
+};
+
+Result run_ours(PoseGraph graph, const Options& options) {
+  cvo::posegraph::OptimizerOptions o;
+  o.max_iterations = options.max_iterations;
+  const auto report = cvo::posegraph::optimize(graph, o);
+  return {"cvo", report.initial_cost, cvo::posegraph::cost(graph), report.final_cost, report.iterations,
+          report.seconds, report.converged, report.stop_reason};
+}
+
+Result run_ceres(PoseGraph graph, const Options& options) {
+  struct Block {
+    Eigen::Vector3d p;
+    Eigen::Quaterniond q;  // Eigen's storage (x, y, z, w), as EigenQuaternionManifold expects
+  };
+  std::map<NodeId, Block> blocks;
+  for (const auto& [id, node] : graph.nodes()) blocks[id] = {node.pose.translation(), node.pose.rotation()};
+
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  ceres::EigenQuaternionManifold quaternion_manifold;
+  const double delta = cvo::core::PoseGraphParameters{}.cauchy_delta;
+  for (const Edge& e : graph.edges()) {
+    auto* cost = new ceres::AutoDiffCostFunction<PoseGraph3dErrorTerm, 6, 3, 4, 3, 4>(new PoseGraph3dErrorTerm{
+        e.measurement.translation(), e.measurement.rotation(), e.information.llt().matrixU()});
+    ceres::LossFunction* loss = e.robust ? new ceres::CauchyLoss(delta) : nullptr;
+    Block& a = blocks.at(e.from);
+    Block& b = blocks.at(e.to);
+    problem.AddResidualBlock(cost, loss, a.p.data(), a.q.coeffs().data(), b.p.data(), b.q.coeffs().data());
+    problem.SetManifold(a.q.coeffs().data(), &quaternion_manifold);
+    problem.SetManifold(b.q.coeffs().data(), &quaternion_manifold);
+  }
+  // The same gauge as ours: FIX'ed vertices, or the first one.
+  bool any_fixed = false;
+  for (const auto& [id, node] : graph.nodes()) any_fixed = any_fixed || node.fixed;
+  for (auto& [id, block] : blocks) {
+    if (!(graph.node(id).fixed || (!any_fixed && id == blocks.begin()->first))) continue;
+    if (!problem.HasParameterBlock(block.p.data())) continue;
+    problem.SetParameterBlockConstant(block.p.data());
+    problem.SetParameterBlockConstant(block.q.coeffs().data());
+  }
+
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  solver_options.minimizer_type = ceres::TRUST_REGION;
+  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 1;  // like ours (and the GTSAM reference figures)
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+
+  const cvo::posegraph::RobustKernel kernel;
+  Result r{"ceres", cvo::posegraph::cost(graph, kernel), 0, summary.final_cost,
+           summary.num_successful_steps + summary.num_unsuccessful_steps, summary.total_time_in_seconds,
+           summary.termination_type == ceres::CONVERGENCE, summary.message};
+  for (const auto& [id, block] : blocks) graph.set_pose(id, cvo::core::SE3(block.q, block.p));
+  r.final_cost = cvo::posegraph::cost(graph, kernel);
+  return r;
+}
+
+[[noreturn]] void usage(const std::string& why) {
+  std::cerr << "pgo-bench: " << why << "\nusage: pgo-bench FILE.g2o [--json] [--max-iterations N] [--robust]\n";
+  std::exit(2);
+}
+
+Options parse_arguments(int argc, char** argv) {
+  Options o;
+  for (int k = 1; k < argc; ++k) {
+    const std::string arg = argv[k];
+    if (arg == "--json") {
+      o.json = true;
+    } else if (arg == "--robust") {
+      o.robust = true;
+    } else if (arg == "--max-iterations") {
+      if (++k == argc) usage("--max-iterations needs a value");
+      char* end = nullptr;
+      const long n = std::strtol(argv[k], &end, 10);
+      if (*end != '\0' || n < 1 || n > 1000000) usage("--max-iterations needs a positive integer");
+      o.max_iterations = static_cast<int>(n);
+    } else if (!arg.empty() && arg[0] == '-') {
+      usage("unknown option " + arg);
+    } else if (o.file.empty()) {
+      o.file = arg;
+    } else {
+      usage("more than one file");
+    }
+  }
+  if (o.file.empty()) usage("no g2o file given");
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options options = parse_arguments(argc, argv);
+  PoseGraph graph;
+  try {
+    graph = cvo::posegraph::read_g2o(options.file);
+  } catch (const cvo::io::InputError& e) {
+    std::cerr << "pgo-bench: " << e.what() << '\n';
+    return 1;
+  }
+  if (options.robust) {
+    PoseGraph robust;
+    for (const auto& [id, node] : graph.nodes()) robust.add_node(id, node.pose, node.fixed);
+    for (Edge e : graph.edges()) {
+      e.robust = true;
+      robust.add_edge(e);
+    }
+    graph = std::move(robust);
+  }
+  const Result results[] = {run_ours(graph, options), run_ceres(graph, options)};
+
+  using cvo::io::json_number;
+  using cvo::io::json_string;
+  if (options.json) {
+    std::cout << "{\"file\": " << json_string(options.file) << ", \"nodes\": " << graph.nodes().size()
+              << ", \"edges\": " << graph.edges().size() << ", \"robust\": " << (options.robust ? "true" : "false")
+              << ", \"max_iterations\": " << options.max_iterations << ", \"solvers\": {";
+    for (std::size_t k = 0; k < 2; ++k) {
+      const Result& r = results[k];
+      std::cout << (k ? ", " : "") << json_string(r.solver) << ": {\"initial_cost\": " << json_number(r.initial_cost)
+                << ", \"final_cost\": " << json_number(r.final_cost) << ", \"iterations\": " << r.iterations
+                << ", \"seconds\": " << json_number(r.seconds) << ", \"converged\": " << (r.converged ? "true" : "false")
+                << ", \"solver_cost\": " << json_number(r.solver_cost) << ", \"stop_reason\": " << json_string(r.stop_reason)
+                << "}";
+    }
+    std::cout << "}}\n";
+    return 0;
+  }
+  std::printf("%s: %zu nodes, %zu edges, %s, at most %d iterations; cost = 1/2 sum rho(chi2), our residual\n",
+              options.file.c_str(), graph.nodes().size(), graph.edges().size(),
+              options.robust ? "Cauchy(2) on every edge" : "plain least squares", options.max_iterations);
+  std::printf("%-6s %14s %14s %10s %9s  %s\n", "solver", "initial_cost", "final_cost", "iterations", "seconds",
+              "stop");
+  for (const Result& r : results)
+    std::printf("%-6s %14.6g %14.6g %10d %9.3f  %s\n", r.solver.c_str(), r.initial_cost, r.final_cost, r.iterations,
+                r.seconds, r.stop_reason.c_str());
+  return 0;
+}
