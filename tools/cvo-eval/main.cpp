@@ -24,6 +24,7 @@
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/json_writer.hpp"
 #include "libcvo/io/trajectory_io.hpp"
+#include "tools/common/cli.hpp"
 
 namespace {
 
@@ -51,9 +52,7 @@ options:
 exit status: 0 ok, 1 bad input, 2 usage error
 )";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using tools::UsageError;
 
 struct Arguments {
   fs::path groundtruth, estimate;
@@ -182,49 +181,33 @@ void print_table(const Arguments& args, std::size_t gt_poses, std::size_t est_po
   }
 }
 
+int run(const Arguments& args) {
+  const core::Trajectory gt = load_tum(args.groundtruth);
+  const core::Trajectory est = load_estimate(args.estimate);
+  eval::AteResult ate;
+  try {
+    ate = eval::absolute_trajectory_error(gt, est, {.max_difference = args.max_dt, .offset = args.offset});
+  } catch (const std::invalid_argument& e) {
+    throw io::InputError(args.estimate, std::string("against ") + args.groundtruth.string() + ": " + e.what());
+  }
+  // A run shorter than delta still has an ATE: report RPE as missing rather than failing.
+  std::optional<eval::RpeResult> rpe;
+  try {
+    rpe = eval::relative_pose_error(gt, est, {.delta = args.delta, .offset = args.offset});
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "cvo-eval: warning: " << args.estimate.string() << ": no RPE: " << e.what() << "\n";
+  }
+  if (args.plot)
+    eval::write_evaluation_plot(*args.plot, gt, est, ate, {.title = args.estimate.filename().string()});
+  if (args.json)
+    print_json(args, ate, rpe);
+  else
+    print_table(args, gt.size(), est.size(), ate, rpe);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments args;
-  try {
-    args = parse_arguments(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "cvo-eval: " << e.what() << "\n\n" << kUsage;
-    return 2;
-  }
-  if (args.help) {
-    std::cout << kUsage;
-    return 0;
-  }
-
-  try {
-    const core::Trajectory gt = load_tum(args.groundtruth);
-    const core::Trajectory est = load_estimate(args.estimate);
-    eval::AteResult ate;
-    try {
-      ate = eval::absolute_trajectory_error(gt, est, {.max_difference = args.max_dt, .offset = args.offset});
-    } catch (const std::invalid_argument& e) {
-      throw io::InputError(args.estimate, std::string("against ") + args.groundtruth.string() + ": " + e.what());
-    }
-    // A run shorter than delta still has an ATE: report RPE as missing rather than failing.
-    std::optional<eval::RpeResult> rpe;
-    try {
-      rpe = eval::relative_pose_error(gt, est, {.delta = args.delta, .offset = args.offset});
-    } catch (const std::invalid_argument& e) {
-      std::cerr << "cvo-eval: warning: " << args.estimate.string() << ": no RPE: " << e.what() << "\n";
-    }
-    if (args.plot)
-      eval::write_evaluation_plot(*args.plot, gt, est, ate, {.title = args.estimate.filename().string()});
-    if (args.json)
-      print_json(args, ate, rpe);
-    else
-      print_table(args, gt.size(), est.size(), ate, rpe);
-  } catch (const io::InputError& e) {
-    std::cerr << "cvo-eval: " << e.what() << "\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "cvo-eval: error: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
+  return tools::cli_main("cvo-eval", kUsage, argc, argv, parse_arguments, run);
 }

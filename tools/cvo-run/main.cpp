@@ -37,6 +37,7 @@
 #include "libcvo/odometry/opencv_odometry.hpp"
 #include "progress.hpp"
 #include "report.hpp"
+#include "tools/common/cli.hpp"
 
 namespace {
 
@@ -75,9 +76,7 @@ else SEQUENCE/camera.yaml (cvo-render writes one), else the preset the folder na
 exit status: 0 ok, 1 bad input, 2 usage error
 )";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using tools::UsageError;
 
 // Every mode the contract names. Implementing one is a row flipped here and a branch in
 // make_tracker().
@@ -305,27 +304,5 @@ int run(const Arguments& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments args;
-  try {
-    args = parse_arguments(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "cvo-run: " << e.what() << "\n\n" << kUsage;
-    return 2;
-  }
-  if (args.help) {
-    std::cout << kUsage;
-    return 0;
-  }
-  try {
-    return run(args);
-  } catch (const UsageError& e) {
-    std::cerr << "cvo-run: " << e.what() << "\n\n" << kUsage;
-    return 2;
-  } catch (const io::InputError& e) {
-    std::cerr << "cvo-run: " << e.what() << "\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "cvo-run: error: " << e.what() << "\n";
-    return 1;
-  }
+  return tools::cli_main("cvo-run", kUsage, argc, argv, parse_arguments, run);
 }

@@ -14,6 +14,7 @@
 #include "libcvo/io/input_error.hpp"
 #include "log_to_tum.hpp"
 #include "tum_to_log.hpp"
+#include "tools/common/cli.hpp"
 
 namespace {
 
@@ -42,9 +43,7 @@ options:
 exit status: 0 ok, 1 bad input, 2 usage error
 )";
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using tools::UsageError;
 
 struct Arguments {
   bool help = false;
@@ -107,40 +106,24 @@ Arguments parse_arguments(int argc, char** argv) {
   return args;
 }
 
+int run(const Arguments& args) {
+  if (args.to_tum) {
+    const auto s = tools::log_to_tum(args.input, args.output, args.options.channel);
+    std::cout << "tum2lcm: wrote " << s.frames << " frames to " << args.output.string();
+    if (s.other_events > 0) std::cout << " (skipped " << s.other_events << " events on other channels)";
+    std::cout << "\n";
+  } else {
+    const auto s = tools::tum_to_log(args.input, args.output, args.options);
+    std::cout << "tum2lcm: wrote " << s.frames << " frames to " << args.output.string() << " on "
+              << args.options.channel << ", colour " << lcm::to_string(args.options.encoding.colour) << ", depth "
+              << lcm::to_string(args.options.encoding.depth) << ", " << s.bytes << " bytes ("
+              << (s.frames > 0 ? s.bytes / s.frames : 0) << " per frame)\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  Arguments args;
-  try {
-    args = parse_arguments(argc, argv);
-  } catch (const UsageError& e) {
-    std::cerr << "tum2lcm: " << e.what() << "\n\n" << kUsage;
-    return 2;
-  }
-  if (args.help) {
-    std::cout << kUsage;
-    return 0;
-  }
-
-  try {
-    if (args.to_tum) {
-      const auto s = tools::log_to_tum(args.input, args.output, args.options.channel);
-      std::cout << "tum2lcm: wrote " << s.frames << " frames to " << args.output.string();
-      if (s.other_events > 0) std::cout << " (skipped " << s.other_events << " events on other channels)";
-      std::cout << "\n";
-    } else {
-      const auto s = tools::tum_to_log(args.input, args.output, args.options);
-      std::cout << "tum2lcm: wrote " << s.frames << " frames to " << args.output.string() << " on "
-                << args.options.channel << ", colour " << lcm::to_string(args.options.encoding.colour) << ", depth "
-                << lcm::to_string(args.options.encoding.depth) << ", " << s.bytes << " bytes ("
-                << (s.frames > 0 ? s.bytes / s.frames : 0) << " per frame)\n";
-    }
-  } catch (const io::InputError& e) {
-    std::cerr << "tum2lcm: " << e.what() << "\n";
-    return 1;
-  } catch (const std::exception& e) {  // e.g. a filesystem error on the output
-    std::cerr << "tum2lcm: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
+  return tools::cli_main("tum2lcm", kUsage, argc, argv, parse_arguments, run);
 }
