@@ -21,7 +21,15 @@ Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& phi) {
   return Eigen::Matrix3d::Identity() + 2.0 * s * s / th2 * W + (th - std::sin(th)) / (th2 * th) * W * W;
 }
 
-Eigen::Matrix3d left_jacobian_inverse(const Eigen::Vector3d& phi) {
+}  // namespace
+
+Eigen::Matrix3d hat(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d m;
+  m << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return m;
+}
+
+Eigen::Matrix3d so3_left_jacobian_inverse(const Eigen::Vector3d& phi) {
   const double th = phi.norm();
   const double th2 = th * th;
   const Eigen::Matrix3d W = hat(phi);
@@ -29,14 +37,6 @@ Eigen::Matrix3d left_jacobian_inverse(const Eigen::Vector3d& phi) {
   const double c = th < kSmallAngle ? 1.0 / 12.0 + th2 / 720.0
                                     : (1.0 - 0.5 * th / std::tan(0.5 * th)) / th2;
   return Eigen::Matrix3d::Identity() - 0.5 * W + c * W * W;
-}
-
-}  // namespace
-
-Eigen::Matrix3d hat(const Eigen::Vector3d& w) {
-  Eigen::Matrix3d m;
-  m << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
-  return m;
 }
 
 Eigen::Quaterniond so3_exp(const Eigen::Vector3d& phi) {
@@ -87,7 +87,7 @@ SE3 SE3::exp(const Vector6d& xi) {
 Vector6d SE3::log() const {
   const Eigen::Vector3d phi = so3_log(q_);
   Vector6d xi;
-  xi << left_jacobian_inverse(phi) * t_, phi;
+  xi << so3_left_jacobian_inverse(phi) * t_, phi;
   return xi;
 }
 

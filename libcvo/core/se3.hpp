@@ -63,4 +63,8 @@ SE3 interpolate(const SE3& a, const SE3& b, double s);
 Eigen::Quaterniond so3_exp(const Eigen::Vector3d& phi);
 Eigen::Vector3d so3_log(const Eigen::Quaterniond& q);
 
+/// Inverse of the left Jacobian of SO(3) (the V⁻¹ of the SE(3) logarithm):
+///   I - 1/2 φ^ + (1 - (θ/2) cot(θ/2)) / θ² φ^²,  θ = |φ|.
+Eigen::Matrix3d so3_left_jacobian_inverse(const Eigen::Vector3d& phi);
+
 }  // namespace cvo::core

@@ -6,20 +6,11 @@ namespace cvo::posegraph {
 namespace {
 
 using core::hat;
+using core::so3_left_jacobian_inverse;
 
 // Below this angle the closed-form coefficients lose digits to cancellation; their Taylor series
 // (two terms) are exact to double precision there.
 constexpr double kSmallAngle = 1e-3;
-
-// Inverse left Jacobian of SO(3): I - 1/2 W + (1/th^2 - (1 + cos th) / (2 th sin th)) W^2.
-Eigen::Matrix3d so3_left_jacobian_inverse(const Eigen::Vector3d& phi) {
-  const double th = phi.norm();
-  const double th2 = th * th;
-  const Eigen::Matrix3d W = hat(phi);
-  const double c = th < kSmallAngle ? 1.0 / 12.0 + th2 / 720.0
-                                    : (1.0 - 0.5 * th / std::tan(0.5 * th)) / th2;
-  return Eigen::Matrix3d::Identity() - 0.5 * W + c * W * W;
-}
 
 // The coupling block Q(rho, phi) of the SE(3) left Jacobian [[J, Q], [0, J]] (Barfoot 7.86).
 Eigen::Matrix3d left_jacobian_q(const Eigen::Vector3d& rho, const Eigen::Vector3d& phi) {
