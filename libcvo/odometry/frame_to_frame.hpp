@@ -28,6 +28,7 @@
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/odometry/motion_model.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 #include "libcvo/registration/point_selection.hpp"
@@ -57,16 +58,8 @@ class FrameToFrameOdometry {
   FrameToFrameParameters parameters_;
   registration::PointSelector selector_;
   registration::Registration registration_;
-  std::array<registration::PointCloud, 2> clouds_;  // [reference_] and the other one, swapped by index
-  int reference_ = 0;
-  bool have_reference_ = false;
-  bool have_frame_ = false;  // any frame seen: last_pose_ and last_index_ are set
-  core::SE3 reference_pose_;
-  std::uint64_t reference_index_ = 0;
-  int failures_on_reference_ = 0;
-  core::SE3 last_pose_;
-  std::uint64_t last_index_ = 0;
-  core::SE3 velocity_;  // V, per frame
+  std::array<registration::PointCloud, 2> clouds_;  // slots of MotionModel: reference and current
+  MotionModel motion_;
 };
 
 }  // namespace cvo::odometry

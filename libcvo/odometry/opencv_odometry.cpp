@@ -1,5 +1,7 @@
 #include "libcvo/odometry/opencv_odometry.hpp"
 
+#include "libcvo/odometry/motion_model.hpp"
+
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -24,8 +26,6 @@ double ms_since(Clock::time_point start) {
 
 // As in frame_to_frame.cpp: V^s = exp(s log V), and the frames between two stream indices (1 when
 // they do not increase).
-core::SE3 power(const core::SE3& v, double s) { return s == 1.0 ? v : core::SE3::exp(s * v.log()); }
-std::uint64_t frames_between(std::uint64_t from, std::uint64_t to) { return to > from ? to - from : 1; }
 
 cv::Mat to_cv(const core::SE3& transform) {
   const Eigen::Matrix4d m = transform.matrix();
@@ -62,16 +62,8 @@ struct OpenCvOdometry::State {
   OpenCvOdometryParameters parameters;
   core::Intrinsics camera;
   cv::Ptr<cv::rgbd::Odometry> odometry;
-  std::array<cv::Ptr<OdometryFrame>, 2> frames;  // [reference] and the other one, swapped by index
-  int reference = 0;
-  bool have_reference = false;
-  bool have_frame = false;  // any frame seen: last_pose and last_index are set
-  core::SE3 reference_pose;
-  std::uint64_t reference_index = 0;
-  int failures_on_reference = 0;
-  core::SE3 last_pose;
-  std::uint64_t last_index = 0;
-  core::SE3 velocity;  // V, per frame
+  std::array<cv::Ptr<OdometryFrame>, 2> frames;  // slots of `motion`: reference and current
+  MotionModel motion;
 
   // Converts `frame` into frames[slot] and prepares its cache for both roles. Returns the
   // selection status; on kOk `points` holds the pixels OpenCV samples in it.
@@ -103,11 +95,9 @@ registration::SelectionStatus OpenCvOdometry::State::prepare(const core::RgbdFra
 }
 
 OpenCvOdometry::OpenCvOdometry(const core::Intrinsics& camera, const OpenCvOdometryParameters& parameters)
-    : state_(std::make_unique<State>()) {
+    : state_(std::make_unique<State>(State{parameters, camera, {}, {}, MotionModel(parameters.initial_pose,
+                                                                                     parameters.restart_after_failures)})) {
   State& s = *state_;
-  s.parameters = parameters;
-  s.camera = camera;
-  s.last_pose = parameters.initial_pose;
   // CV_32FC1 as OpenCV's own sample: RgbdICPOdometry compares it with its normals computer's K.
   const cv::Mat k = (cv::Mat_<float>(3, 3) << static_cast<float>(camera.fx), 0.f, static_cast<float>(camera.cx), 0.f,
                      static_cast<float>(camera.fy), static_cast<float>(camera.cy), 0.f, 0.f, 1.f);
@@ -128,10 +118,8 @@ const OpenCvOdometryParameters& OpenCvOdometry::parameters() const { return stat
 TrackResult OpenCvOdometry::track(const core::RgbdFrame& frame) {
   State& s = *state_;
   TrackResult result;
-  const std::uint64_t gap = s.have_frame ? frames_between(s.last_index, frame.index) : 0;
-  const core::SE3 predicted = s.have_frame ? s.last_pose * power(s.velocity, static_cast<double>(gap)) : s.last_pose;
-
-  const int current = s.have_reference ? 1 - s.reference : s.reference;
+  const core::SE3 predicted = s.motion.predict(frame.index);
+  const int current = s.motion.current_slot();
   const auto selection_start = Clock::now();
   try {
     result.selection_status = s.prepare(frame, current, result.points);
@@ -140,38 +128,30 @@ TrackResult OpenCvOdometry::track(const core::RgbdFrame& frame) {
   }
   result.selection_ms = ms_since(selection_start);
 
-  bool becomes_reference = false;
+  core::SE3 measured;
   if (result.selection_status != registration::SelectionStatus::kOk) {
     result.status = TrackStatus::kSelectionFailed;
-    result.pose = predicted;
     result.points = 0;
-  } else if (!s.have_reference) {
+  } else if (!s.motion.has_reference()) {
     result.status = TrackStatus::kFirstFrame;
-    result.pose = predicted;  // the initial pose, or a prediction when earlier frames were unusable
-    becomes_reference = true;
   } else {
-    const core::SE3 initial = s.reference_pose.inverse() * predicted;  // guess of T_r_k
-    const cv::Mat initial_rt = to_cv(initial.inverse());                // OpenCV's Rt: p_k = Rt p_r
+    const cv::Mat initial_rt = to_cv(s.motion.guess(predicted).inverse());  // OpenCV's Rt: p_k = Rt p_r
     cv::Mat rt;
     bool ok = false;
     const auto registration_start = Clock::now();
     try {
-      ok = s.odometry->compute(s.frames[static_cast<std::size_t>(s.reference)],
+      ok = s.odometry->compute(s.frames[static_cast<std::size_t>(s.motion.reference_slot())],
                                s.frames[static_cast<std::size_t>(current)], rt, initial_rt);
     } catch (const cv::Exception&) {
       ok = false;
       rt.release();
     }
     result.registration_ms = ms_since(registration_start);
-    const std::optional<core::SE3> measured = ok ? from_cv(rt) : std::nullopt;
-    if (measured) {
-      const core::SE3 transform = measured->inverse();  // T_r_k
+    const std::optional<core::SE3> rt_pose = ok ? from_cv(rt) : std::nullopt;
+    if (rt_pose) {
+      measured = rt_pose->inverse();  // T_r_k
       result.status = TrackStatus::kOk;
       result.registration_status = registration::RegistrationStatus::kOk;
-      result.pose = s.reference_pose * transform;
-      const std::uint64_t span = frames_between(s.reference_index, frame.index);
-      s.velocity = power(transform, 1.0 / static_cast<double>(span));
-      becomes_reference = true;
     } else {
       result.status = TrackStatus::kRegistrationFailed;
       // No step taken (too few correspondences, singular system, or OpenCV threw) or a step that
@@ -180,22 +160,9 @@ TrackResult OpenCvOdometry::track(const core::RgbdFrame& frame) {
                            cv::norm(rt, initial_rt, cv::NORM_INF) > 0;
       result.registration_status =
           stepped ? registration::RegistrationStatus::kNotConverged : registration::RegistrationStatus::kNoOverlap;
-      result.pose = predicted;  // V is kept: the constant-velocity guess carries on
-      becomes_reference = ++s.failures_on_reference >= s.parameters.restart_after_failures;
     }
   }
-
-  if (becomes_reference) {
-    s.reference = current;
-    s.reference_pose = result.pose;
-    s.reference_index = frame.index;
-    s.have_reference = true;
-    s.failures_on_reference = 0;
-  }
-  result.motion = s.last_pose.inverse() * result.pose;
-  s.last_pose = result.pose;
-  s.last_index = frame.index;
-  s.have_frame = true;
+  s.motion.update(frame.index, predicted, measured, result);
   return result;
 }
 
