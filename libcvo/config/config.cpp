@@ -54,7 +54,7 @@ using Get = std::function<T&(Config&)>;
 // One row of the table: everything the loader, the overrides and the dump know about a key.
 struct Field {
   std::string key;  // "section.member", or "member" at the top level
-  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<std::string>> member;
+  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<bool>, Get<std::string>> member;
   Range range;           // numeric keys only
   std::string_view doc;  // the dump's comment: paper symbol and meaning
 };
@@ -66,6 +66,9 @@ Field row(std::string key, S Config::*section, T S::*member, Range range, std::s
 
 using core::CvoParameters, core::SelectionParameters, core::KeyframeParameters, core::LoopClosureParameters,
     core::PoseGraphParameters, core::DatasetParameters;
+
+constexpr Range kRealtimePriority{0, 99};  // SCHED_FIFO priorities; 0 = do not ask for one
+constexpr Range kCpu{-1, 4095};            // -1 = no affinity
 
 // Sections must stay contiguous: the dump opens a section where the prefix changes.
 const std::vector<Field>& table() {
@@ -111,6 +114,31 @@ const std::vector<Field>& table() {
           "δ of the Cauchy loss ρ(x) = δ² log(1 + x/δ²)"),
       row("dataset.max_association_dt", &Config::dataset, &DatasetParameters::max_association_dt, kPositive,
           "colour-depth timestamp association window (s)"),
+      row("trackerd.source", &Config::trackerd, &TrackerdParameters::source, kAny,
+          "frame source: tum:DIR, lcm:URL, openni2:URI (openni2:any), v4l2:COLOUR[,DEPTH]"),
+      row("trackerd.lcm_url", &Config::trackerd, &TrackerdParameters::lcm_url, kAny,
+          "LCM provider the results are published on (ttl=0: never leaves the host)"),
+      row("trackerd.paced", &Config::trackerd, &TrackerdParameters::paced, kAny,
+          "tum: sources play at their recorded rate (false: as fast as possible)"),
+      row("trackerd.exit_on_eof", &Config::trackerd, &TrackerdParameters::exit_on_eof, kAny,
+          "exit 0 when a finite source (folder, log, .oni) ends, after tracking every frame"),
+      row("trackerd.ring_slots", &Config::trackerd, &TrackerdParameters::ring_slots, kAtLeastOne,
+          "preallocated frames between acquisition and tracking; when full the oldest is dropped"),
+      row("trackerd.deterministic", &Config::trackerd, &TrackerdParameters::deterministic, kAny,
+          "never drop: acquisition waits for the tracker, so a replay gives the same poses every time"),
+      row("trackerd.realtime_priority", &Config::trackerd, &TrackerdParameters::realtime_priority, kRealtimePriority,
+          "SCHED_FIFO priority of the tracking thread (0: normal scheduling)"),
+      row("trackerd.cpu", &Config::trackerd, &TrackerdParameters::cpu, kCpu, "CPU the tracking thread is pinned to (-1: any)"),
+      row("trackerd.lock_memory", &Config::trackerd, &TrackerdParameters::lock_memory, kAny,
+          "mlockall: no page faults in the tracking thread"),
+      row("trackerd.deadline_ms", &Config::trackerd, &TrackerdParameters::deadline_ms, kPositive,
+          "a frame whose receipt-to-pose latency exceeds this is a deadline miss"),
+      row("trackerd.warmup_frames", &Config::trackerd, &TrackerdParameters::warmup_frames, kNonNegative,
+          "frames after which the tracking thread must not allocate (counted in CVO_STATUS)"),
+      row("trackerd.keyframe_colour_encoding", &Config::trackerd, &TrackerdParameters::keyframe_colour_encoding, kAny,
+          "colour image encoding of CVO_KEYFRAME: raw, jpeg or png"),
+      row("trackerd.status_period_s", &Config::trackerd, &TrackerdParameters::status_period_s, kPositive,
+          "CVO_STATUS period"),
       Field{"camera", Get<std::string>([](Config& c) -> std::string& { return c.camera; }), kAny,
             "tum_fr1, tum_fr2, tum_fr3, synthetic, or a path to an intrinsics file"},
   };
@@ -143,6 +171,11 @@ std::string assign(const Field& field, Config& config, std::string_view text) {
           if (text.empty()) return "must not be empty";
           get(config) = std::string(text);
           return {};
+        } else if constexpr (std::is_same_v<T, bool>) {
+          const auto v = io::to_bool(text);
+          if (!v) return "expected true or false, got " + quoted;
+          get(config) = *v;
+          return {};
         } else if constexpr (std::is_same_v<T, double>) {
           const auto v = io::to_finite(text);
           if (!v) return "expected a finite number, got " + quoted;
@@ -166,6 +199,7 @@ std::string kind_of(const Field& field) {
       [](const auto& get) -> std::string {
         using T = std::remove_reference_t<std::invoke_result_t<decltype(get), Config&>>;
         if constexpr (std::is_same_v<T, std::string>) return "a string";
+        else if constexpr (std::is_same_v<T, bool>) return "true or false";
         else if constexpr (std::is_same_v<T, double>) return "a number";
         else return "an integer";
       },
@@ -181,6 +215,8 @@ std::string format_value(const Field& field, Config& config) {
           YAML::Emitter out;  // quotes the string when YAML needs it
           out << v;
           return out.c_str();
+        } else if constexpr (std::is_same_v<T, bool>) {
+          return v ? "true" : "false";
         } else if constexpr (std::is_same_v<T, double>) {
           return shortest(v);
         } else {

@@ -19,6 +19,24 @@
 
 namespace cvo::config {
 
+/// cvo-trackerd's own settings (daemon/trackerd): where frames come from, where results go, and how
+/// the realtime tracking thread runs. The tracker's maths is configured by the sections above.
+struct TrackerdParameters {
+  std::string source = "openni2:any";
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  bool paced = true;
+  bool exit_on_eof = false;
+  std::size_t ring_slots = 4;   // ~130 ms at 30 Hz: a hiccup is absorbed, a slow tracker sheds load
+  bool deterministic = false;
+  int realtime_priority = 40;   // SCHED_FIFO, below threaded IRQ handlers (50) so camera interrupts go first
+  int cpu = -1;
+  bool lock_memory = true;
+  double deadline_ms = 33.3;    // one frame period at 30 Hz
+  std::size_t warmup_frames = 30;
+  std::string keyframe_colour_encoding = "jpeg";
+  double status_period_s = 1.0;
+};
+
 struct Config {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
@@ -26,6 +44,7 @@ struct Config {
   core::LoopClosureParameters loop_closure;
   core::PoseGraphParameters pose_graph;
   core::DatasetParameters dataset;
+  TrackerdParameters trackerd;
   std::string camera = "tum_fr1";  // a preset name or a path to an intrinsics file (io::load_camera)
 };
 

@@ -29,4 +29,12 @@ std::optional<long long> to_integer(std::string_view field) {
   return value;
 }
 
+std::optional<bool> to_bool(std::string_view field) {
+  for (const std::string_view t : {"true", "True", "TRUE"})
+    if (field == t) return true;
+  for (const std::string_view f : {"false", "False", "FALSE"})
+    if (field == f) return false;
+  return std::nullopt;
+}
+
 }  // namespace cvo::io

@@ -35,9 +35,9 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "keyframe_t") return {146, kKeyframeCounts};
   if (type_name == "local_graph_t") return {28, kLocalGraphCounts};
   if (type_name == "map_t") return {28, kMapCounts};
-  // status_t: version, utime, pid, state (17), 3 doubles (41), 2 int64 (57), queue_depth (61),
-  // rss_bytes (69), bad_messages[5] (109), then the strings process and detail.
-  if (type_name == "status_t") return {109, {}, 109, 2};
+  // status_t: version, utime, pid, state (17), 3 doubles (41), 5 int64 (81), queue_depth (85),
+  // rss_bytes (93), bad_messages[5] (133), then the strings process and detail.
+  if (type_name == "status_t") return {133, {}, 133, 2};
   return {};
 }
 

@@ -91,6 +91,10 @@ TEST(Config, BadValuesNameKeyAndValue) {
   expect_error("cvo: {threads: 99999999999}\n", 1, "cvo.threads: must be in [1, 1024]");
   expect_error("camera: {fx: 1}\n", 1, "camera: expected a string, got a mapping");
   expect_error("camera: ''\n", 1, "camera: must not be empty");
+  expect_error("trackerd: {deterministic: 1}\n", 1, "trackerd.deterministic: expected true or false, got '1'");
+  expect_error("trackerd: {paced: ture}\n", 1, "trackerd.paced: expected true or false, got 'ture'");
+  expect_error("trackerd: {realtime_priority: 100}\n", 1, "trackerd.realtime_priority: must be in [0, 99]");
+  expect_error("trackerd: {ring_slots: 0}\n", 1, "trackerd.ring_slots: must be >= 1");
   expect_error("cvo: 3\n", 1, "cvo: expected a mapping of keys");
   expect_error("- cvo\n", 1, "expected a mapping of sections");
 }
@@ -148,6 +152,15 @@ TEST(Config, OverridesUseTheSameChecks) {
   expect_rejected("cvo=1", "cvo: a section");
 }
 
+TEST(Config, BooleansAreYamlCoreBooleans) {
+  auto c = parse_config("trackerd:\n  deterministic: true\n  paced: False\n");
+  EXPECT_TRUE(c.trackerd.deterministic);
+  EXPECT_FALSE(c.trackerd.paced);
+  apply_override(c, "trackerd.deterministic=false");
+  EXPECT_FALSE(c.trackerd.deterministic);
+  EXPECT_THROW(apply_override(c, "trackerd.deterministic=yes"), ConfigError);  // YAML 1.1 only
+}
+
 TEST(Config, DumpRoundTripsEveryKey) {
   Config c;
   c.selection.target_points = 1234;
@@ -157,13 +170,17 @@ TEST(Config, DumpRoundTripsEveryKey) {
   c.loop_closure.min_matches = 12;
   c.dataset.max_association_dt = 0.015;
   c.camera = "/data/my camera: v2.yaml";  // needs quoting in YAML
+  c.trackerd.source = "lcm:udpm://239.255.76.67:7667?ttl=0";
+  c.trackerd.deterministic = true;
+  c.trackerd.lock_memory = false;
+  c.trackerd.cpu = 1;
   const auto text = dump_config(c);
   EXPECT_TRUE(parse_config(text) == c) << text;
   for (const auto& key : config_keys()) {
     const auto member = key.substr(key.find('.') + 1);
     EXPECT_NE(text.find(member + ": "), std::string::npos) << key << " missing from\n" << text;
   }
-  EXPECT_EQ(config_keys().size(), 23u) << "a new parameter? add a row to the table and regenerate default.yaml";
+  EXPECT_EQ(config_keys().size(), 36u) << "a new parameter? add a row to the table and regenerate default.yaml";
 }
 
 TEST(Config, DefaultYamlIsInSync) {

@@ -145,6 +145,9 @@ inline cvo_lcm::status_t sample_status() {
   m.latency_p99_ms = 31.0;
   m.deadline_misses = 3;
   m.dropped_frames = 11;
+  m.failed_frames = 5;
+  m.source_gaps = 1;
+  m.allocations_after_warmup = 7;
   m.queue_depth = 2;
   m.rss_bytes = 123456789;
   for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) m.bad_messages[k] = 10 * k + 1;

@@ -1,0 +1,31 @@
+#pragma once
+// A keyframe <-> cvo_lcm::keyframe_t (channel CVO_KEYFRAME): its images (for ORB and loop
+// detection in the back end), its pose and its CVO point cloud (for the loop's CVO refinement and
+// the α test). The images use rgbd_frame_t's encodings (rgbd_conversion.hpp).
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "cvo_lcm/keyframe_t.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/lcm/rgbd_conversion.hpp"
+#include "libcvo/registration/point_cloud.hpp"
+
+namespace cvo::lcm {
+
+struct Keyframe {
+  std::int64_t id = 0;         // increasing, per tracker run
+  core::RgbdFrame frame;       // the frame it was made from (index, stamps, images, intrinsics)
+  core::SE3 pose;              // T_odom_camera
+  registration::PointCloud cloud;  // in the keyframe's camera frame
+};
+
+/// Fails (nullopt, *error) as rgbd_conversion's to_message does.
+std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const RgbdEncoding& encoding,
+                                              std::string* error);
+
+/// Fails on another schema version, a bad pose, non-finite points, or images that do not decode.
+std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& message, std::string* error);
+
+}  // namespace cvo::lcm
