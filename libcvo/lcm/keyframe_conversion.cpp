@@ -1,5 +1,6 @@
 #include "libcvo/lcm/keyframe_conversion.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "libcvo/lcm/pose_conversion.hpp"
@@ -38,6 +39,7 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
   m.labels.resize(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     m.xyz[i] = {cloud.x()[i], cloud.y()[i], cloud.z()[i]};
+    m.labels[i].resize(registration::kFeatureDim);  // lcm-gen makes the fixed inner dimension a vector too
     for (std::size_t c = 0; c < registration::kFeatureDim; ++c) m.labels[i][c] = cloud.feature_channel(c)[i];
   }
   m.colour = std::move(frame->colour);
@@ -74,6 +76,14 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   frame.depth_size = m.depth_size;
   auto images = from_message(frame, &why);
   if (!images) return fail(error, why);
+
+  // A decoded message has these sizes (decode.hpp checks the counts); one built in memory may not.
+  const auto n = static_cast<std::size_t>(std::max(m.num_points, 0));
+  if (m.num_points < 0 || m.xyz.size() != n || m.labels.size() != n)
+    return fail(error, "num_points " + std::to_string(m.num_points) + " does not match the point arrays");
+  for (std::size_t i = 0; i < n; ++i)
+    if (m.xyz[i].size() != 3 || m.labels[i].size() != registration::kFeatureDim)
+      return fail(error, "point " + std::to_string(i) + " has the wrong number of coordinates or label channels");
 
   Keyframe k{m.id, std::move(*images), *pose, registration::PointCloud(static_cast<std::size_t>(m.num_points))};
   for (std::int32_t i = 0; i < m.num_points; ++i) {

@@ -1,0 +1,136 @@
+// Keyframe <-> keyframe_t and LocalGraph <-> local_graph_t: lossless round trips through bytes,
+// and malformed messages refused with a message.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include <opencv2/core.hpp>
+
+#include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/lcm/decode.hpp"
+#include "libcvo/lcm/keyframe_conversion.hpp"
+#include "libcvo/lcm/local_graph_conversion.hpp"
+#include "libcvo/registration/point_selection.hpp"
+
+namespace cvo::lcm {
+namespace {
+
+template <class T>
+std::optional<T> through_bytes(const T& message) {
+  const auto bytes = encode(message);
+  std::string error;
+  auto decoded = decode<T>(bytes.data(), static_cast<int>(bytes.size()), &error);
+  EXPECT_TRUE(decoded) << error;
+  return decoded;
+}
+
+TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
+  Keyframe k;
+  k.id = 7;
+  k.frame = io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").read(5);
+  k.pose = core::SE3::exp((core::Vector6d() << 0.1, -0.2, 0.3, 0.01, 0.02, -0.03).finished());
+  registration::PointSelector selector(k.frame.bgr.cols, k.frame.bgr.rows, core::SelectionParameters{});
+  k.cloud = registration::PointCloud(8192);
+  selector.select(k.frame, k.cloud);
+  ASSERT_GT(k.cloud.size(), 1000u);
+
+  std::string error;
+  const auto message = to_message(k, RgbdEncoding{ColourEncoding::kPng, DepthEncoding::kPng}, &error);
+  ASSERT_TRUE(message) << error;
+  const auto decoded = through_bytes(*message);
+  ASSERT_TRUE(decoded);
+  const auto back = from_message(*decoded, &error);
+  ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->id, 7);
+  EXPECT_EQ(back->frame.index, k.frame.index);
+  EXPECT_EQ(back->frame.timestamp, k.frame.timestamp);
+  EXPECT_EQ(cv::norm(back->frame.bgr, k.frame.bgr, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(back->frame.depth, k.frame.depth, cv::NORM_INF), 0);
+  EXPECT_LT((back->pose.matrix() - k.pose.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  ASSERT_EQ(back->cloud.size(), k.cloud.size());
+  for (std::size_t i = 0; i < k.cloud.size(); i += 97) {
+    EXPECT_EQ(back->cloud.position(i), k.cloud.position(i));
+    EXPECT_EQ(back->cloud.feature(i), k.cloud.feature(i));
+  }
+}
+
+TEST(KeyframeConversion, NonFinitePointsAndBadPosesAreRefused) {
+  Keyframe k;
+  k.frame = io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").read(0);
+  k.cloud = registration::PointCloud(4);
+  k.cloud.push_back({0, 0, 1}, registration::Feature{});
+  std::string error;
+  auto message = to_message(k, RgbdEncoding{ColourEncoding::kJpeg, DepthEncoding::kPng}, &error);
+  ASSERT_TRUE(message) << error;
+  EXPECT_TRUE(from_message(*message, &error)) << error;
+
+  auto bad_point = *message;
+  bad_point.xyz[0][2] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(from_message(bad_point, &error));
+  EXPECT_NE(error.find("not finite"), std::string::npos) << error;
+
+  auto bad_pose = *message;
+  bad_pose.pose.orientation[0] = 3;  // not a unit quaternion
+  EXPECT_FALSE(from_message(bad_pose, &error));
+  EXPECT_NE(error.find("pose"), std::string::npos) << error;
+
+  auto bad_image = *message;
+  bad_image.colour.resize(10);
+  bad_image.colour_size = 10;
+  EXPECT_FALSE(from_message(bad_image, &error));
+}
+
+odometry::LocalGraph sample_graph() {
+  odometry::LocalGraph g(8);
+  for (std::uint64_t i = 10; i < 14; ++i)
+    g.add_node({i, 100.0 + 0.033 * static_cast<double>(i), core::SE3::from_translation({0.01 * static_cast<double>(i), 0, 0})});
+  for (std::uint64_t i = 11; i < 14; ++i) {
+    core::Matrix6d information = core::Matrix6d::Identity() * static_cast<double>(i);
+    information(0, 1) = information(1, 0) = 0.5;
+    g.add_edge({10, i, core::SE3::from_translation({0.01 * static_cast<double>(i - 10), 0, 0}), information});
+    g.add_edge({i - 1, i, core::SE3::from_translation({0.01, 0, 0}), information * 2});
+  }
+  return g;
+}
+
+TEST(LocalGraphConversion, RoundTripKeepsNodesEdgesAndInformation) {
+  const auto graph = sample_graph();
+  const auto decoded = through_bytes(to_message(graph, 3, 123456));
+  ASSERT_TRUE(decoded);
+  EXPECT_EQ(decoded->keyframe_id, 3);
+  std::string error;
+  const auto back = from_message(*decoded, &error);
+  ASSERT_TRUE(back) << error;
+  ASSERT_EQ(back->nodes().size(), graph.nodes().size());
+  ASSERT_EQ(back->edges().size(), graph.edges().size());
+  EXPECT_EQ(back->keyframe().frame_index, 10u);
+  for (std::size_t i = 0; i < graph.edges().size(); ++i) {
+    EXPECT_EQ(back->edges()[i].from, graph.edges()[i].from);
+    EXPECT_EQ(back->edges()[i].to, graph.edges()[i].to);
+    EXPECT_EQ(back->edges()[i].information, graph.edges()[i].information);
+    EXPECT_LT((back->edges()[i].measurement.matrix() - graph.edges()[i].measurement.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  }
+}
+
+TEST(LocalGraphConversion, EdgesToUnknownFramesAndBadInformationAreRefused) {
+  auto message = to_message(sample_graph(), 3, 0);
+  std::string error;
+  auto dangling = message;
+  dangling.edges[1].to = 99;
+  EXPECT_FALSE(from_message(dangling, &error));
+  EXPECT_NE(error.find("not in the graph"), std::string::npos) << error;
+
+  auto nan = message;
+  nan.edges[0].information[7] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(from_message(nan, &error));
+  EXPECT_NE(error.find("information"), std::string::npos) << error;
+
+  auto empty = message;
+  empty.nodes.clear();
+  empty.num_nodes = 0;
+  EXPECT_FALSE(from_message(empty, &error));
+}
+
+}  // namespace
+}  // namespace cvo::lcm
