@@ -100,6 +100,36 @@ TEST(Decode, CorruptStringLengthIsRefused) {
   }
 }
 
+// Each refusal says which check failed, so receivers count them by kind (CVO_STATUS bad_messages).
+TEST(Decode, FailureKindNamesTheCheck) {
+  const auto good = encode(test::sample_rgbd());
+  const auto kind_of = [](const std::vector<std::uint8_t>& bytes) {
+    auto failure = static_cast<DecodeFailure>(-1);  // none of the kinds: each must be set
+    const auto decoded =
+        decode<cvo_lcm::rgbd_frame_t>(bytes.data(), static_cast<int>(bytes.size()), nullptr, &failure);
+    EXPECT_FALSE(decoded);
+    return failure;
+  };
+  EXPECT_EQ(kind_of({1, 2, 3}), DecodeFailure::kTooShort);
+  EXPECT_EQ(kind_of(encode(test::sample_pose_message())), DecodeFailure::kFingerprint);
+  EXPECT_EQ(kind_of({good.begin(), good.end() - 1}), DecodeFailure::kBody);
+  auto oversized = good;
+  oversized.push_back(0);
+  EXPECT_EQ(kind_of(oversized), DecodeFailure::kBody);
+  auto other_version = test::sample_rgbd();
+  other_version.version = 7;
+  EXPECT_EQ(kind_of(encode(other_version)), DecodeFailure::kVersion);
+  // The values are CVO_STATUS's indices.
+  EXPECT_EQ(static_cast<int>(DecodeFailure::kTooShort), cvo_lcm::status_t::BAD_TOO_SHORT);
+  EXPECT_EQ(static_cast<int>(DecodeFailure::kFingerprint), cvo_lcm::status_t::BAD_FINGERPRINT);
+  EXPECT_EQ(static_cast<int>(DecodeFailure::kBody), cvo_lcm::status_t::BAD_BODY);
+  EXPECT_EQ(static_cast<int>(DecodeFailure::kVersion), cvo_lcm::status_t::BAD_VERSION);
+
+  DecodeFailure untouched = DecodeFailure::kFingerprint;
+  EXPECT_TRUE(decode<cvo_lcm::rgbd_frame_t>(good.data(), static_cast<int>(good.size()), nullptr, &untouched));
+  EXPECT_EQ(untouched, DecodeFailure::kFingerprint) << "left as it was on success";
+}
+
 template <class T>
 void expect_garbage_fails(std::mt19937& rng, bool keep_fingerprint) {
   std::uniform_int_distribution<int> byte(0, 255), length(0, 400);

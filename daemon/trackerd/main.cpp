@@ -1,0 +1,94 @@
+// cvo-trackerd: the realtime tracking daemon (daemon/trackerd/trackerd.hpp for its threads).
+//
+// A contract that scripts and the systemd unit rely on (extras may be added, nothing changed):
+//   cvo-trackerd [--config FILE] [--source SPEC] [--lcm-url URL] [--exit-on-eof] [--set key=value]...
+//   exit status 0 after SIGTERM/SIGINT or the end of the source with --exit-on-eof; 1 when the
+//   configuration or the source is unusable (the message says which); 2 on a usage error.
+#include <iostream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "daemon/common/signals.hpp"
+#include "daemon/trackerd/trackerd.hpp"
+#include "libcvo/config/config.hpp"
+#include "tools/common/cli.hpp"
+
+namespace {
+
+using namespace cvo;
+
+constexpr std::string_view kUsage =
+    R"(usage: cvo-trackerd [--config FILE] [--source SPEC] [--lcm-url URL] [--exit-on-eof]
+                    [--deterministic] [--set key=value]... [--print-config]
+
+Tracks an RGB-D stream with keyframe-based CVO in a realtime thread and publishes on LCM:
+CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes one) and CVO_STATUS
+(once a second). Applies the newest CVO_MAP from cvo-backendd to the map pose. Stops cleanly on
+SIGTERM or SIGINT; under systemd it sends READY, STATUS and WATCHDOG notifications.
+
+options:
+  --config FILE      YAML configuration (every key: libcvo/config/default.yaml; the trackerd
+                     section configures this daemon)
+  --source SPEC      frame source (trackerd.source):
+                       tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)
+                       lcm:URL              CVO_RGBD messages, live (udpm://...) or a log (file://...)
+                       openni2:URI          an OpenNI2 device (openni2:any) or an .oni recording
+                       v4l2:COLOUR[,DEPTH]  V4L2 device nodes (intrinsics from the camera key)
+  --lcm-url URL      where results are published (trackerd.lcm_url)
+  --exit-on-eof      exit 0 when a finite source ends, after tracking every frame
+  --deterministic    never drop frames: a replay gives the same poses every time
+  --set key=value    override one configuration key (repeatable), e.g. trackerd.ring_slots=8
+  --print-config     print the effective configuration as YAML and exit
+  --help             this text
+)";
+
+struct Arguments {
+  bool help = false;
+  bool print_config = false;
+  std::optional<std::string> config_file, source, lcm_url;
+  bool exit_on_eof = false, deterministic = false;
+  std::vector<std::string> sets;
+};
+
+Arguments parse_arguments(int argc, char** argv) {
+  Arguments args;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw tools::UsageError(std::string(a) + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") args.help = true;
+    else if (a == "--config") args.config_file = value();
+    else if (a == "--source") args.source = value();
+    else if (a == "--lcm-url") args.lcm_url = value();
+    else if (a == "--exit-on-eof") args.exit_on_eof = true;
+    else if (a == "--deterministic") args.deterministic = true;
+    else if (a == "--set") args.sets.push_back(value());
+    else if (a == "--print-config") args.print_config = true;
+    else throw tools::UsageError("unknown argument '" + std::string(a) + "'");
+  }
+  return args;
+}
+
+int run(const Arguments& args) {
+  config::Config config = args.config_file ? config::load_config(*args.config_file) : config::Config{};
+  for (const auto& s : args.sets) config::apply_override(config, s);
+  if (args.source) config::apply_override(config, "trackerd.source=" + *args.source);
+  if (args.lcm_url) config::apply_override(config, "trackerd.lcm_url=" + *args.lcm_url);
+  if (args.exit_on_eof) config.trackerd.exit_on_eof = true;
+  if (args.deterministic) config.trackerd.deterministic = true;
+  if (args.print_config) {
+    std::cout << config::dump_config(config);
+    return 0;
+  }
+  daemon::block_stop_signals();  // before any thread starts, so every thread inherits the mask
+  daemon::trackerd::Trackerd trackerd(std::move(config));
+  return trackerd.run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return tools::cli_main("cvo-trackerd", kUsage, argc, argv, parse_arguments, run); }

@@ -1,0 +1,87 @@
+#include "daemon/trackerd/outbox.hpp"
+
+#include <opencv2/core.hpp>
+
+namespace cvo::daemon::trackerd {
+
+Outbox::Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t graph_capacity)
+    : events_(capacity), keyframes_(pool_size), keyframe_used_(pool_size, 0), graph_used_(pool_size, 0) {
+  for (auto& k : keyframes_) {  // full-size images now, so that copies into them never allocate
+    k.frame.bgr.create(height, width, CV_8UC3);
+    k.frame.depth.create(height, width, CV_16UC1);
+  }
+  graphs_.reserve(pool_size);
+  for (std::size_t i = 0; i < pool_size; ++i) graphs_.push_back({0, odometry::LocalGraph(graph_capacity)});
+}
+
+int Outbox::acquire(std::vector<char>& used) {
+  const std::lock_guard lock(mutex_);
+  for (std::size_t i = 0; i < used.size(); ++i)
+    if (used[i] == 0) {
+      used[i] = 1;
+      return static_cast<int>(i);
+    }
+  return -1;
+}
+
+int Outbox::acquire_keyframe_slot() { return acquire(keyframe_used_); }
+int Outbox::acquire_graph_slot() { return acquire(graph_used_); }
+
+bool Outbox::push(const Event& event, bool wait) {
+  std::unique_lock lock(mutex_);
+  if (wait) room_.wait(lock, [&] { return closed_ || count_ < events_.size(); });
+  if (closed_ || count_ == events_.size()) {
+    ++dropped_;
+    if (event.keyframe_slot >= 0) keyframe_used_[static_cast<std::size_t>(event.keyframe_slot)] = 0;
+    if (event.graph_slot >= 0) graph_used_[static_cast<std::size_t>(event.graph_slot)] = 0;
+    return false;
+  }
+  events_[(head_ + count_) % events_.size()] = event;
+  ++count_;
+  lock.unlock();
+  ready_.notify_one();
+  return true;
+}
+
+void Outbox::close() {
+  {
+    const std::lock_guard lock(mutex_);
+    closed_ = true;
+  }
+  ready_.notify_all();
+  room_.notify_all();
+}
+
+bool Outbox::pop(Event& event, std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (!ready_.wait_for(lock, timeout, [&] { return count_ > 0 || closed_; }) || count_ == 0) return false;
+  event = events_[head_];
+  head_ = (head_ + 1) % events_.size();
+  --count_;
+  lock.unlock();
+  room_.notify_one();
+  return true;
+}
+
+void Outbox::release(const Event& event) {
+  const std::lock_guard lock(mutex_);
+  if (event.keyframe_slot >= 0) keyframe_used_[static_cast<std::size_t>(event.keyframe_slot)] = 0;
+  if (event.graph_slot >= 0) graph_used_[static_cast<std::size_t>(event.graph_slot)] = 0;
+}
+
+bool Outbox::finished() const {
+  const std::lock_guard lock(mutex_);
+  return closed_ && count_ == 0;
+}
+
+std::int64_t Outbox::dropped() const {
+  const std::lock_guard lock(mutex_);
+  return dropped_;
+}
+
+std::size_t Outbox::waiting() const {
+  const std::lock_guard lock(mutex_);
+  return count_;
+}
+
+}  // namespace cvo::daemon::trackerd

@@ -1,0 +1,91 @@
+#pragma once
+// What the tracking thread hands to the publisher thread, one event per tracked frame: the pose,
+// and when the frame closed a local graph or made a keyframe, a slot of the matching pool. All
+// storage is preallocated; the tracking thread only copies into it (cv::Mat::copyTo into a
+// same-sized image and vector assignment within capacity do not allocate).
+//
+// The tracking thread never waits on the publisher unless asked to (deterministic replay): when
+// the outbox is full the event is dropped and counted, the frame's pose is still tracked.
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/odometry/track_result.hpp"
+
+namespace cvo::daemon::trackerd {
+
+struct PoseEvent {
+  std::int64_t frame_index = 0;
+  std::int64_t keyframe_id = -1;
+  double timestamp = 0;  // the frame's colour stamp
+  core::SE3 odom_pose, map_pose;
+  core::Matrix6d covariance = core::Matrix6d::Identity();
+  odometry::TrackStatus status = odometry::TrackStatus::kOk;
+  bool is_keyframe = false;
+  double inner_product = 0, gamma_keyframe = 0;
+  int iterations = 0, points = 0;
+  std::chrono::steady_clock::time_point received;
+};
+
+struct KeyframeSlot {
+  std::int64_t id = 0;
+  core::SE3 pose;
+  core::RgbdFrame frame;
+};
+
+struct LocalGraphSlot {
+  std::int64_t keyframe_id = 0;
+  odometry::LocalGraph graph;
+};
+
+struct Event {
+  PoseEvent pose;
+  int keyframe_slot = -1;  // index into keyframes(), or -1
+  int graph_slot = -1;     // index into graphs(), or -1
+};
+
+class Outbox {
+ public:
+  /// capacity events; pool_size keyframe and local-graph slots, images width x height, local
+  /// graphs of graph_capacity nodes.
+  Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t graph_capacity);
+
+  // Tracking thread: reserve pool slots (nullptr-free: -1 when the pool is exhausted), fill
+  // them, then push the event. push() returns false (counted in dropped()) when full, unless
+  // `wait` is set: then it waits for room.
+  int acquire_keyframe_slot();
+  int acquire_graph_slot();
+  [[nodiscard]] KeyframeSlot& keyframe(int slot) { return keyframes_[static_cast<std::size_t>(slot)]; }
+  [[nodiscard]] LocalGraphSlot& graph(int slot) { return graphs_[static_cast<std::size_t>(slot)]; }
+  bool push(const Event& event, bool wait);
+  void close();  // no more events: pop() returns false once the outbox is empty
+
+  // Publisher thread: the oldest event, waiting up to `timeout`. Release its slots when done.
+  bool pop(Event& event, std::chrono::milliseconds timeout);
+  void release(const Event& event);
+
+  [[nodiscard]] bool finished() const;  // closed and empty
+  [[nodiscard]] std::int64_t dropped() const;
+  [[nodiscard]] std::size_t waiting() const;
+
+ private:
+  int acquire(std::vector<char>& used);
+
+  std::vector<Event> events_;  // circular
+  std::size_t head_ = 0, count_ = 0;
+  std::vector<KeyframeSlot> keyframes_;
+  std::vector<LocalGraphSlot> graphs_;
+  std::vector<char> keyframe_used_, graph_used_;
+  bool closed_ = false;
+  std::int64_t dropped_ = 0;
+  mutable std::mutex mutex_;
+  std::condition_variable ready_, room_;
+};
+
+}  // namespace cvo::daemon::trackerd

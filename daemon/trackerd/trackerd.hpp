@@ -1,0 +1,84 @@
+#pragma once
+// cvo-trackerd's wiring: three named threads around libcvo's KF-CVO tracker.
+//
+//   cvo-acquire   frame source (drivers/) -> FrameRing          re-opens a lost device with back-off
+//   cvo-track     FrameRing -> KeyframeOdometry -> Outbox        SCHED_FIFO, pinned, no allocation
+//   cvo-publish   Outbox -> LCM CVO_POSE / CVO_KEYFRAME / CVO_LOCAL_GRAPH, 1 Hz CVO_STATUS;
+//                 CVO_MAP in -> MapCorrection (read by cvo-track for the map pose)
+//
+// The caller's thread (run()) waits for SIGTERM/SIGINT or the end of a finite source, pets the
+// systemd watchdog while the workers are alive, and shuts down in order: acquisition stops, the
+// tracker finishes the frames already in the ring, the publisher flushes, then run() returns 0.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "daemon/common/systemd_notify.hpp"
+#include "daemon/trackerd/frame_ring.hpp"
+#include "daemon/trackerd/map_correction.hpp"
+#include "libcvo/config/config.hpp"
+
+namespace cvo::daemon::trackerd {
+
+/// Counters shared by the threads; each is written by one thread and read by the publisher.
+struct Counters {
+  std::atomic<std::int64_t> frames_tracked{0};
+  std::atomic<std::int64_t> keyframes{0};
+  std::atomic<std::int64_t> failed_frames{0};
+  std::atomic<std::int64_t> source_gaps{0};
+  std::atomic<std::int64_t> source_lost_frames{0};  // frames the source saw missing (FrameSource::lost_frames)
+  std::atomic<std::int64_t> allocations_after_warmup{0};
+  std::atomic<std::int64_t> bad_messages[5]{};  // cvo_lcm::status_t BAD_* (frames and CVO_MAP)
+  std::atomic<bool> source_connected{false};
+  std::atomic<bool> source_ended{false};
+};
+
+class Trackerd {
+ public:
+  /// Checks the configuration and opens the LCM output; throws io::InputError (with a message
+  /// that names the key or URL) when that cannot work. The frame source is opened by the
+  /// acquisition thread, so a camera that is not plugged in yet is waited for, not fatal.
+  explicit Trackerd(config::Config config);
+  ~Trackerd();
+  Trackerd(const Trackerd&) = delete;
+  Trackerd& operator=(const Trackerd&) = delete;
+
+  /// Runs until SIGTERM/SIGINT, or the source's end with trackerd.exit_on_eof; returns the exit
+  /// status (0 clean, 1 when the source could not be opened at all in exit-on-eof mode).
+  /// The caller must have called block_stop_signals() before any thread was started.
+  int run();
+
+ private:
+  void acquire_loop();
+  void track_loop();
+  void publish_loop();
+  void note(const std::string& detail);  // logs to stderr, and CVO_STATUS.detail
+
+  config::Config config_;
+  SystemdNotifier systemd_;
+  Counters counters_;
+  std::unique_ptr<FrameRing> ring_;
+  MapCorrection correction_;
+
+  std::atomic<bool> stop_{false};          // asks acquisition to stop
+  std::atomic<bool> tracker_done_{false};  // the tracker drained the ring and closed the outbox
+  std::atomic<bool> publisher_done_{false};
+  std::atomic<bool> fatal_{false};         // the source could not be opened (exit-on-eof mode)
+  std::atomic<std::int64_t> track_heartbeat_ns_{0}, publish_heartbeat_ns_{0};
+
+  // Created by the tracking thread on the first frame (its size fixes every buffer); the
+  // publisher waits for it.
+  struct Pipeline;
+  std::unique_ptr<Pipeline> pipeline_;
+  std::mutex pipeline_mutex_;
+  std::atomic<bool> pipeline_ready_{false};
+
+  std::mutex detail_mutex_;
+  std::string detail_;
+};
+
+}  // namespace cvo::daemon::trackerd

@@ -1,0 +1,94 @@
+#pragma once
+// The one small interface every frame source implements: timestamped colour + registered depth
+// with intrinsics (core::RgbdFrame), read one at a time by the daemon's acquisition thread.
+//
+// Sources are named by a spec, the `--source` contract of cvo-trackerd:
+//   tum:DIR          a TUM RGB-D folder, at the recorded rate or as fast as possible
+//   lcm:URL          CVO_RGBD messages from an LCM provider: live (udpm://...) or a log (file://...)
+//   openni2:URI      an OpenNI2 device URI, "" / "any" for the first device, or an .oni recording
+//   v4l2:COLOUR,DEPTH  V4L2 device nodes (mmap streaming; YUYV/MJPEG colour, Z16 depth)
+//
+// A read never throws on bad data: the result says what happened, so the caller can count it
+// and go on. Only open_source() throws, on a spec it cannot understand or a source that cannot be
+// opened (the caller retries with back-off for devices that may come back).
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "libcvo/core/camera.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/io/input_error.hpp"
+
+namespace cvo::drivers {
+
+enum class ReadStatus {
+  kFrame,         // `frame` holds the next frame
+  kTimeout,       // nothing within the timeout; try again
+  kEndOfStream,   // a finite source (folder, log file, .oni) has no more frames
+  kBadInput,      // one message or frame was unusable and skipped (see bad_input, message)
+  kDisconnected,  // the device or stream went away; close this source and open it again
+};
+
+/// Why a message or frame was refused; values match cvo_lcm::status_t's BAD_* indices, so the
+/// daemon counts them straight into CVO_STATUS.
+enum class BadInput : std::int32_t {
+  kTooShort = 0,     // shorter than an LCM fingerprint
+  kFingerprint = 1,  // another message type or schema
+  kBody = 2,         // truncated, oversized or corrupt body
+  kVersion = 3,      // another schema version of our type
+  kContent = 4,      // decodes, but the frame is unusable (wrong sizes, undecodable image, ...)
+};
+
+struct ReadResult {
+  ReadStatus status = ReadStatus::kTimeout;
+  BadInput bad_input = BadInput::kContent;  // when status == kBadInput
+  std::string message;                      // why, for kBadInput and kDisconnected
+};
+
+struct SourceOptions {
+  bool realtime = true;               // tum: pace frames at their recorded rate (else as fast as possible)
+  std::string lcm_channel = "CVO_RGBD";
+  // Intrinsics for sources that do not carry them (v4l2; TUM folders without camera.yaml and
+  // with an unrecognised name). nullopt: the source's own, or its best guess.
+  std::optional<core::Intrinsics> intrinsics;
+  int width = 640, height = 480, fps = 30;  // requested mode of devices (openni2, v4l2)
+};
+
+/// The spec did not name a known source, or the source could not be opened (missing folder,
+/// no device, bad LCM URL). The message says which and why.
+class SourceError : public io::InputError {
+ public:
+  using io::InputError::InputError;
+  /// The same error (file, line, message) as a SourceError, e.g. a TUM folder's InputError.
+  explicit SourceError(const io::InputError& error) : io::InputError(error) {}
+};
+
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+
+  /// Waits up to `timeout` for the next frame and writes it into `frame`, reusing its image
+  /// buffers when the size and type match (so a steady stream does not allocate images anew).
+  virtual ReadResult read(core::RgbdFrame& frame, std::chrono::milliseconds timeout) = 0;
+
+  /// One line for logs and CVO_STATUS, e.g. "tum:/data/fr1_rpy (475 frames, realtime)".
+  [[nodiscard]] virtual std::string describe() const = 0;
+
+  /// Frames this source knows were lost before read() could return them (gaps in the sender's
+  /// frame numbers, frames a device overwrote, unpaired colour or depth images), so that no loss
+  /// goes uncounted. Refused input is not included: read() reports each one as kBadInput.
+  [[nodiscard]] virtual std::uint64_t lost_frames() const { return 0; }
+};
+
+/// "frame", "timeout", "end of stream", "bad input", "disconnected".
+const char* to_string(ReadStatus status);
+/// "too short", "fingerprint", "body", "version", "content".
+const char* to_string(BadInput kind);
+
+/// Opens the source a spec names (see the top of this file). Throws SourceError.
+std::unique_ptr<FrameSource> open_source(std::string_view spec, const SourceOptions& options = {});
+
+}  // namespace cvo::drivers

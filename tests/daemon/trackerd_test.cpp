@@ -1,0 +1,315 @@
+// cvo-trackerd end to end, as systemd and scripts run it: the real executable, real LCM (file://
+// providers here, so no packet leaves the process; the UDP multicast replay is in
+// trackerd_netns_test.cpp), real recordings made by tum2lcm or written event by event.
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "libcvo/eval/ate.hpp"
+#include "libcvo/eval/rpe.hpp"
+#include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/lcm/pose_conversion.hpp"
+#include "libcvo/lcm/rgbd_conversion.hpp"
+#include "tests/daemon/daemon_process.hpp"
+#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace cvo::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using cvo::testing::DaemonProcess;
+
+const fs::path kTrackerd = fs::path(CVO_TOOLS_DIR) / "cvo-trackerd";
+const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
+
+// Settings every test uses: no realtime priority or locked memory (tests share a small machine),
+// results into an LCM log file.
+std::vector<std::string> base_args(const fs::path& out_log) {
+  return {"--lcm-url", "file://" + out_log.string() + "?mode=w", "--set", "trackerd.realtime_priority=0",
+          "--set", "trackerd.lock_memory=false", "--set", "trackerd.paced=false"};
+}
+
+std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+core::Trajectory odom_trajectory(const std::vector<cvo_lcm::pose_t>& poses) {
+  core::Trajectory t;
+  for (const auto& p : poses) t.push_back({lcm::from_utime(p.utime), *lcm::from_message(p.odom_pose, nullptr)});
+  return t;
+}
+
+// The clip as a CVO_RGBD recording, as a camera's would be.
+fs::path record_clip(const fs::path& dir) {
+  const auto log = dir / "clip.lcmlog";
+  const auto r = cvo::testing::run_tool("tum2lcm", cvo::testing::quoted(kClip) + " " + cvo::testing::quoted(log), dir);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return log;
+}
+
+TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
+  cvo::test::TempDir dir;
+  const auto out = dir.path() / "out.lcmlog";
+  DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic"}),
+                  dir.path() / "stderr.txt");
+  const auto code = d.wait_for(120s);
+  ASSERT_TRUE(code) << "still running";
+  EXPECT_EQ(*code, 0) << cvo::testing::slurp(dir.path() / "stderr.txt");
+
+  const auto log = cvo::testing::read_published(out);
+  ASSERT_EQ(log.poses.size(), 50u) << "every frame of the clip gets a pose";
+  for (std::size_t i = 0; i < log.poses.size(); ++i) {
+    EXPECT_EQ(log.poses[i].frame_index, static_cast<std::int64_t>(i));
+    EXPECT_TRUE(log.poses[i].status == cvo_lcm::pose_t::STATUS_OK || log.poses[i].status == cvo_lcm::pose_t::STATUS_FIRST_FRAME)
+        << "frame " << i;
+    EXPECT_GE(log.poses[i].latency_ms, 0);
+  }
+  // Keyframes: one per is_keyframe pose, each with its images and cloud; every closed local graph
+  // starts at its keyframe.
+  const auto flagged = std::count_if(log.poses.begin(), log.poses.end(), [](const auto& p) { return p.is_keyframe; });
+  EXPECT_GE(log.keyframes.size(), 2u) << "50 frames of fr1/rpy rotate past the keyframe thresholds";
+  EXPECT_EQ(static_cast<std::size_t>(flagged), log.keyframes.size());
+  for (const auto& k : log.keyframes) {
+    EXPECT_GT(k.num_points, 1000);
+    EXPECT_GT(k.colour_size, 0);
+  }
+  EXPECT_EQ(log.local_graphs.size(), log.keyframes.size() - 1);
+  for (std::size_t i = 0; i < log.local_graphs.size(); ++i) {
+    EXPECT_EQ(log.local_graphs[i].keyframe_id, log.keyframes[i].id);
+    EXPECT_EQ(log.local_graphs[i].nodes.front().frame_index, log.keyframes[i].frame_index);
+  }
+
+  // The last status is the stopping one; the tracking thread did not allocate after warm-up.
+  ASSERT_FALSE(log.statuses.empty());
+  const auto& last = log.statuses.back();
+  EXPECT_EQ(last.state, +cvo_lcm::status_t::STATE_STOPPING);
+  EXPECT_EQ(last.process, "cvo-trackerd");
+  EXPECT_EQ(last.allocations_after_warmup, 0);
+  EXPECT_EQ(last.dropped_frames, 0) << "deterministic mode never drops";
+  EXPECT_GT(last.latency_median_ms, 0);
+  EXPECT_GT(last.rss_bytes, 0);
+
+  // The daemon runs KF-CVO: same bounds as the library's KF-CVO test on this clip
+  // (tests/odometry/keyframe_odometry_test.cpp, measured 0.055 m/s and 3.8-4.3 deg/s there).
+  const auto groundtruth = io::TumSequence::open(kClip).groundtruth();
+  const auto rpe = eval::relative_pose_error(groundtruth, odom_trajectory(log.poses));
+  const auto ate = eval::absolute_trajectory_error(groundtruth, odom_trajectory(log.poses));
+  std::printf("cvo-trackerd on fr1_rpy_50: RPE %.4f m/s %.3f deg/s, ATE %.4f m, latency median %.1f ms p99 %.1f ms\n",
+              rpe.translation.rmse, rpe.rotation_deg.rmse, ate.error.rmse, last.latency_median_ms, last.latency_p99_ms);
+  EXPECT_LT(rpe.translation.rmse, 0.10);
+  EXPECT_LT(rpe.rotation_deg.rmse, 8.0);
+  EXPECT_LT(ate.error.rmse, 0.06);
+}
+
+TEST(Trackerd, ReplayingALogTwiceGivesIdenticalPoses) {
+  cvo::test::TempDir dir;
+  const auto recording = record_clip(dir.path());
+  std::vector<std::vector<cvo_lcm::pose_t>> runs;
+  for (int run = 0; run < 2; ++run) {
+    const auto out = dir.path() / ("out" + std::to_string(run) + ".lcmlog");
+    DaemonProcess d(kTrackerd,
+                    with(base_args(out), {"--source", "lcm:file://" + recording.string() + "?speed=0", "--exit-on-eof",
+                                          "--deterministic", "--set", "trackerd.ring_slots=1"}),
+                    dir.path() / "stderr.txt");
+    const auto code = d.wait_for(120s);
+    ASSERT_TRUE(code);
+    ASSERT_EQ(*code, 0) << cvo::testing::slurp(dir.path() / "stderr.txt");
+    runs.push_back(cvo::testing::read_published(out).poses);
+  }
+  ASSERT_EQ(runs[0].size(), 50u);
+  ASSERT_EQ(runs[1].size(), runs[0].size());
+  for (std::size_t i = 0; i < runs[0].size(); ++i) {
+    const auto& a = runs[0][i].odom_pose;
+    const auto& b = runs[1][i].odom_pose;
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a.position[k], b.position[k]) << "frame " << i;
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(a.orientation[k], b.orientation[k]) << "frame " << i;
+    EXPECT_EQ(runs[0][i].is_keyframe, runs[1][i].is_keyframe);
+  }
+}
+
+// A recording with garbage between good frames: each bad message is counted by kind in
+// CVO_STATUS and skipped; the good frames are tracked; the daemon exits cleanly.
+TEST(Trackerd, BadMessagesAreCountedAndSkipped) {
+  cvo::test::TempDir dir;
+  auto sequence = io::TumSequence::open(kClip);
+  const auto log_path = dir.path() / "bad.lcmlog";
+  {
+    ::lcm::LogFile log(log_path.string(), "w");
+    ASSERT_TRUE(log.good());
+    std::int64_t t = 0;
+    const auto write = [&](const std::vector<std::uint8_t>& bytes) {
+      ::lcm::LogEvent e{};
+      e.timestamp = t += 33000;
+      e.channel = "CVO_RGBD";
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = const_cast<std::uint8_t*>(bytes.data());
+      ASSERT_EQ(log.writeEvent(&e), 0);
+    };
+    const lcm::RgbdEncoding png{lcm::ColourEncoding::kPng, lcm::DepthEncoding::kPng};
+    for (int i = 0; i < 12; ++i) {
+      auto frame = sequence.read(static_cast<std::size_t>(i));
+      const auto good = lcm::encode(*lcm::to_message(frame, png, nullptr));
+      write(good);
+      switch (i) {
+        case 2: write({1, 2, 3}); break;                                         // too short
+        case 3: write(std::vector<std::uint8_t>(good.begin(), good.begin() + static_cast<long>(good.size() / 2))); break;  // truncated
+        case 4: {                                                                // oversized: trailing bytes
+          auto big = good;
+          big.resize(big.size() + 100, 0);
+          write(big);
+          break;
+        }
+        case 5: {                                                                // a foreign type
+          cvo_lcm::pose3d_t p{};
+          p.orientation[0] = 1;
+          write(lcm::encode(p));
+          break;
+        }
+        case 6: {                                                                // another schema version
+          auto m = *lcm::to_message(frame, png, nullptr);
+          m.version = 99;
+          write(lcm::encode(m));
+          break;
+        }
+        case 7: {                                                                // raw colour of the wrong size
+          auto m = *lcm::to_message(frame, lcm::RgbdEncoding{lcm::ColourEncoding::kRawBgr8, lcm::DepthEncoding::kPng}, nullptr);
+          m.colour.resize(m.colour.size() - 30);
+          m.colour_size = static_cast<std::int32_t>(m.colour.size());
+          write(lcm::encode(m));
+          break;
+        }
+        default: break;
+      }
+    }
+    // Frames without a single depth measurement (a covered camera): tracked as failures.
+    for (int i = 12; i < 15; ++i) {
+      auto frame = sequence.read(static_cast<std::size_t>(i));
+      frame.depth.setTo(0);
+      write(lcm::encode(*lcm::to_message(frame, png, nullptr)));
+    }
+  }
+
+  const auto out = dir.path() / "out.lcmlog";
+  DaemonProcess d(kTrackerd,
+                  with(base_args(out), {"--source", "lcm:file://" + log_path.string() + "?speed=0", "--exit-on-eof", "--deterministic"}),
+                  dir.path() / "stderr.txt");
+  const auto code = d.wait_for(60s);
+  ASSERT_TRUE(code);
+  const auto err = cvo::testing::slurp(dir.path() / "stderr.txt");
+  EXPECT_EQ(*code, 0) << err;
+  const auto log = cvo::testing::read_published(out);
+  EXPECT_EQ(log.poses.size(), 15u) << "12 good frames and 3 without depth";
+  ASSERT_FALSE(log.statuses.empty());
+  const auto& s = log.statuses.back();
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_TOO_SHORT], 1);
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_FINGERPRINT], 1);
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_BODY], 2);
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_VERSION], 1);
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_CONTENT], 1);
+  EXPECT_EQ(s.failed_frames, 3);
+  EXPECT_NE(err.find("skipped bad input"), std::string::npos) << err;
+}
+
+// A tiny ring and a source much faster than tracking: the oldest frames are dropped and counted,
+// and SIGTERM in the middle of it stops the daemon cleanly within a second.
+TEST(Trackerd, ShutdownUnderLoadIsCleanAndFastAndDropsAreCounted) {
+  cvo::test::TempDir dir;
+  const auto recording = record_clip(dir.path());
+  const auto out = dir.path() / "out.lcmlog";
+  DaemonProcess d(kTrackerd,
+                  with(base_args(out), {"--source", "lcm:file://" + recording.string() + "?speed=0", "--set",
+                                        "trackerd.ring_slots=1"}),
+                  dir.path() / "stderr.txt");
+  std::this_thread::sleep_for(1500ms);
+  ASSERT_TRUE(d.running()) << cvo::testing::slurp(dir.path() / "stderr.txt");
+  d.signal(SIGTERM);
+  const auto code = d.wait_for(1000ms);
+  ASSERT_TRUE(code) << "not stopped within a second of SIGTERM";
+  const auto err = cvo::testing::slurp(dir.path() / "stderr.txt");
+  EXPECT_EQ(*code, 0) << err;
+  EXPECT_NE(err.find("stopping on SIGTERM"), std::string::npos) << err;
+  const auto log = cvo::testing::read_published(out);
+  ASSERT_FALSE(log.statuses.empty());
+  EXPECT_GT(log.statuses.back().dropped_frames, 0) << err;
+  // Frames still unread at SIGTERM are neither: the recording simply stopped being played.
+  EXPECT_LE(log.poses.size() + static_cast<std::size_t>(log.statuses.back().dropped_frames), 50u);
+  EXPECT_NE(err.find("tracked " + std::to_string(log.poses.size()) + " frames"), std::string::npos)
+      << "every tracked frame's pose was flushed before exit\n" << err;
+}
+
+// Under systemd: READY=1 once running, WATCHDOG=1 at half WATCHDOG_USEC, STATUS=..., STOPPING=1.
+TEST(Trackerd, NotifiesSystemd) {
+  cvo::test::TempDir dir;
+  const auto socket_path = dir.path() / "notify.sock";
+  const int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", socket_path.c_str());
+  ASSERT_EQ(bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  timeval tv{0, 100000};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+
+  const auto out = dir.path() / "out.lcmlog";
+  DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string()}), dir.path() / "stderr.txt",
+                  {{"NOTIFY_SOCKET", socket_path.string()}, {"WATCHDOG_USEC", "200000"}});
+  std::string received;
+  const auto deadline = std::chrono::steady_clock::now() + 3s;
+  char buffer[4096];
+  while (std::chrono::steady_clock::now() < deadline) {
+    const auto n = recv(fd, buffer, sizeof buffer, 0);
+    if (n > 0) received.append(buffer, static_cast<std::size_t>(n)).append("\n");
+  }
+  d.signal(SIGTERM);
+  const auto code = d.wait_for(2000ms);
+  for (int i = 0; i < 10; ++i) {
+    const auto n = recv(fd, buffer, sizeof buffer, 0);
+    if (n > 0) received.append(buffer, static_cast<std::size_t>(n)).append("\n");
+  }
+  close(fd);
+  ASSERT_TRUE(code);
+  EXPECT_EQ(*code, 0);
+  EXPECT_NE(received.find("READY=1"), std::string::npos) << received;
+  EXPECT_NE(received.find("WATCHDOG=1"), std::string::npos) << received;
+  EXPECT_NE(received.find("STATUS="), std::string::npos) << received;
+  EXPECT_NE(received.find("STOPPING=1"), std::string::npos) << received;
+}
+
+TEST(Trackerd, UnusableSourceOrSettingsFailWithAMessage) {
+  cvo::test::TempDir dir;
+  const auto out = dir.path() / "out.lcmlog";
+  {
+    DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:/nonexistent/folder", "--exit-on-eof"}),
+                    dir.path() / "stderr.txt");
+    const auto code = d.wait_for(10s);
+    ASSERT_TRUE(code);
+    EXPECT_EQ(*code, 1);
+    EXPECT_NE(cvo::testing::slurp(dir.path() / "stderr.txt").find("/nonexistent/folder"), std::string::npos);
+  }
+  const auto r = cvo::testing::run_tool("cvo-trackerd", "--set trackerd.ring_slots=0", dir.path());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("trackerd.ring_slots"), std::string::npos) << r.err;
+  EXPECT_EQ(cvo::testing::run_tool("cvo-trackerd", "--bogus", dir.path()).exit_code, 2);
+  const auto help = cvo::testing::run_tool("cvo-trackerd", "--help", dir.path());
+  EXPECT_EQ(help.exit_code, 0);
+  for (const char* option : {"--config", "--source", "--lcm-url", "--exit-on-eof"})
+    EXPECT_NE(help.out.find(option), std::string::npos) << option;
+}
+
+}  // namespace
+}  // namespace cvo::daemon
