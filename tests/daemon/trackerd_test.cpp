@@ -269,6 +269,13 @@ TEST(Trackerd, NotifiesSystemd) {
   DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string()}), dir.path() / "stderr.txt",
                   {{"NOTIFY_SOCKET", socket_path.string()}, {"WATCHDOG_USEC", "200000"}});
   std::string received;
+  std::this_thread::sleep_for(500ms);
+  // Profilers and allocation counters attribute work by thread name.
+  std::string threads;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(d.pid()) + "/task"))
+    threads += cvo::testing::slurp(task.path() / "comm");
+  for (const char* name : {"cvo-acquire", "cvo-track", "cvo-publish"})
+    EXPECT_NE(threads.find(name), std::string::npos) << name << " in\n" << threads;
   const auto deadline = std::chrono::steady_clock::now() + 3s;
   char buffer[4096];
   while (std::chrono::steady_clock::now() < deadline) {
@@ -288,6 +295,28 @@ TEST(Trackerd, NotifiesSystemd) {
   EXPECT_NE(received.find("WATCHDOG=1"), std::string::npos) << received;
   EXPECT_NE(received.find("STATUS="), std::string::npos) << received;
   EXPECT_NE(received.find("STOPPING=1"), std::string::npos) << received;
+}
+
+// With the production defaults (SCHED_FIFO 40, mlockall) the daemon either gets them or says once
+// why not, and tracks either way.
+TEST(Trackerd, RealtimeSettingsAreAppliedOrWarnedAboutOnce) {
+  cvo::test::TempDir dir;
+  const auto out = dir.path() / "out.lcmlog";
+  DaemonProcess d(kTrackerd,
+                  {"--lcm-url", "file://" + out.string() + "?mode=w", "--source", "tum:" + kClip.string(), "--set",
+                   "trackerd.paced=false", "--exit-on-eof", "--deterministic", "--set", "trackerd.cpu=0"},
+                  dir.path() / "stderr.txt");
+  const auto code = d.wait_for(120s);
+  ASSERT_TRUE(code);
+  const auto err = cvo::testing::slurp(dir.path() / "stderr.txt");
+  EXPECT_EQ(*code, 0) << err;
+  for (const char* what : {"SCHED_FIFO", "mlockall", "affinity"}) {
+    const auto first = err.find(what);
+    if (first != std::string::npos) {
+      EXPECT_EQ(err.find(what, first + 1), std::string::npos) << what << " warned twice:\n" << err;
+    }
+  }
+  EXPECT_EQ(cvo::testing::read_published(out).poses.size(), 50u) << err;
 }
 
 TEST(Trackerd, UnusableSourceOrSettingsFailWithAMessage) {
