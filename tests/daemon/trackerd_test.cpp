@@ -18,6 +18,7 @@
 
 #include "libcvo/eval/ate.hpp"
 #include "libcvo/eval/rpe.hpp"
+#include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
@@ -114,6 +115,18 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   EXPECT_LT(rpe.translation.rmse, 0.10);
   EXPECT_LT(rpe.rotation_deg.rmse, 8.0);
   EXPECT_LT(ate.error.rmse, 0.06);
+
+  // cvo-log turns the recording into what scripts use: a TUM trajectory and the last status.
+  const auto poses = cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(out) + " --out " +
+                                                           cvo::testing::quoted(dir.path() / "t.txt"), dir.path());
+  ASSERT_EQ(poses.exit_code, 0) << poses.err;
+  EXPECT_EQ(io::read_tum_trajectory(dir.path() / "t.txt").size(), 50u);
+  const auto status = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(out) + " --json", dir.path());
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_NE(status.out.find("\"cvo-trackerd\":{"), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("\"allocations_after_warmup\":0"), std::string::npos) << status.out;
+  EXPECT_EQ(cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(dir.path() / "missing.lcm") + " --out x", dir.path()).exit_code, 1);
+  EXPECT_EQ(cvo::testing::run_tool("cvo-log", "frobnicate", dir.path()).exit_code, 2);
 }
 
 TEST(Trackerd, ReplayingALogTwiceGivesIdenticalPoses) {
