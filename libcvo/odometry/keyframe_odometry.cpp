@@ -1,8 +1,11 @@
 #include "libcvo/odometry/keyframe_odometry.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numbers>
+
+#include <Eigen/Cholesky>
 
 namespace cvo::odometry {
 namespace {
@@ -72,6 +75,30 @@ double KeyframeOdometry::gamma_inner_product(const registration::PointCloud& key
   return gamma_registration_.inner_product(keyframe, clouds_[current_], T_mn, parameters_.gamma_ell);
 }
 
+// The one-node local graph: minimise |log(T T_kf^-1)|²_{H_kf} + w |log(T C^-1)|²_{H_c} over T, with
+// left perturbations in the keyframe's frame (the solver's convention, registration.hpp). The
+// chain C = T_m^{n-1} T_{n-1}^n with T_{n-1}^n = exp(η) T̂ has C = exp(Ad(T_m^{n-1}) η) Ĉ, so its
+// information there is H_c = Ad⁻ᵀ H_f2f Ad⁻¹. One Gauss-Newton step from T_kf is exact for the
+// linearised problem: ξ = (H_kf + w H_c)⁻¹ w H_c log(C T_kf⁻¹), T = exp(ξ) T_kf. Fixed-size 6x6
+// algebra: no allocation.
+core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResult& kf,
+                                            const registration::RegistrationResult& f2f, const core::SE3& chain) const {
+  double w = parameters_.chain_weight;
+  if (parameters_.chain_full_weight_deg > 0) {
+    const double ramp = chain.angle() * 180.0 / std::numbers::pi / parameters_.chain_full_weight_deg;
+    w *= std::min(1.0, ramp * ramp);
+  }
+  if (!(w > 0)) return kf.transform;
+  const core::Matrix6d Ad_inv = T_m_previous_.inverse().adjoint();
+  const core::Matrix6d H_chain = w * (Ad_inv.transpose() * f2f.hessian * Ad_inv);
+  const core::Vector6d d = (chain * kf.transform.inverse()).log();
+  const core::Matrix6d H = kf.hessian + H_chain;
+  const core::Vector6d xi = H.ldlt().solve(H_chain * d);
+  if (!xi.allFinite()) return kf.transform;
+  const core::SE3 fused = core::SE3::exp(xi) * kf.transform;
+  return fused.is_finite() ? fused : kf.transform;
+}
+
 bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
   const auto& k = parameters_.keyframe;
   if (gamma < k.inner_product_ratio_threshold) reason_ = KeyframeReason::kGamma;
@@ -119,19 +146,21 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
     const auto f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_);
     const bool f2f_ok = f2f.converged;
     registration::RegistrationResult kf = f2f;  // the keyframe is the previous frame: one registration
-    if (keyframe_ != previous_)
-      kf = registration_.align(clouds_[keyframe_], clouds_[current_], T_m_previous_ * (f2f_ok ? f2f.transform : velocity_));
+    const core::SE3 chain = T_m_previous_ * (f2f_ok ? f2f.transform : velocity_);
+    if (keyframe_ != previous_) kf = registration_.align(clouds_[keyframe_], clouds_[current_], chain);
     const bool kf_ok = kf.converged;
+    // T̄_m^n: the keyframe result fused with the chain (see the header); the raw one goes to the graph.
+    const core::SE3 T_mn = kf_ok && f2f_ok && keyframe_ != previous_ ? fuse_with_chain(kf, f2f, chain) : kf.transform;
     result.registration_ms = ms_since(registration_start);
     result.iterations = f2f.iterations + (keyframe_ != previous_ ? kf.iterations : 0);
     result.registration_status = kf_ok ? f2f.status : kf.status;
 
     bool trip = false;
     if (kf_ok) {
-      const double ip = gamma_inner_product(clouds_[keyframe_], kf.transform);
+      const double ip = gamma_inner_product(clouds_[keyframe_], T_mn);
       if (gamma_reference_ <= 0) gamma_reference_ = ip;  // this is frame m+1
       gamma_ = ip / gamma_reference_;
-      trip = trips_threshold(kf.transform, gamma_);
+      trip = trips_threshold(T_mn, gamma_);
     }
     // A trip at frame m+1 cannot move the keyframe to n-1 = m: track it against m all the same.
     if (trip && keyframe_ == previous_) {
@@ -139,7 +168,7 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
       reason_ = KeyframeReason::kNone;
     }
     if (kf_ok && !trip) {
-      pose = keyframe_pose_ * kf.transform;
+      pose = keyframe_pose_ * T_mn;
       result.status = TrackStatus::kOk;
       result.inner_product = kf.inner_product;
       auto& graph = graphs_[graph_];

@@ -139,6 +139,40 @@ TEST(KeyframeOdometry, TracksConstantMotionAndClosesLocalGraphs) {
   EXPECT_GE(closed, 2);
 }
 
+// Past chain_full_weight_deg of rotation from the keyframe the published pose is the keyframe
+// result fused with the frame-to-frame chain; it stays accurate, the graph keeps the raw keyframe
+// edge, and chain_weight = 0 publishes exactly that edge (the paper's pure keyframe-to-frame).
+TEST(KeyframeOdometry, ChainFusionStaysAccurateAndZeroWeightPublishesTheKeyframeEdge) {
+  const core::SE3 step = core::SE3::exp((core::Vector6d() << 0.005, 0.0, 0.005, 0.0, 0.02, 0.01).finished());
+  const auto frames = constant_motion(step, 12);
+  for (const double weight : {0.0, 2.0}) {
+    auto p = only(0.0, 1.0, 180.0);
+    p.chain_weight = weight;
+    KeyframeOdometry odometry(320, 240, p);
+    core::SE3 first;
+    for (const auto& f : frames) {
+      const auto r = odometry.track(f);
+      ASSERT_TRUE(r.tracked()) << "weight " << weight << " frame " << f.index;
+      if (f.index == 0) first = r.pose;
+      core::SE3 truth;
+      for (std::uint64_t i = 0; i < f.index; ++i) truth = truth * step;
+      const auto e = testing::motion_error(truth, first.inverse() * r.pose);
+      EXPECT_LT(e.translation_mm, 3.0) << "weight " << weight << " frame " << f.index;
+      EXPECT_LT(e.rotation_deg, 0.2) << "weight " << weight << " frame " << f.index;
+      if (weight == 0.0 && f.index >= 2) {
+        const auto& g = odometry.current_local_graph();
+        const LocalGraphEdge* edge = nullptr;
+        for (const auto& candidate : g.edges())
+          if (candidate.from == g.keyframe().frame_index && candidate.to == f.index) edge = &candidate;
+        ASSERT_NE(edge, nullptr) << "frame " << f.index;
+        const auto d = testing::motion_error(g.keyframe().pose * edge->measurement, r.pose);
+        EXPECT_LT(d.translation_mm, 1e-6) << "frame " << f.index;
+        EXPECT_LT(d.rotation_deg, 1e-6) << "frame " << f.index;
+      }
+    }
+  }
+}
+
 TEST(KeyframeOdometry, FailuresPredictAndRestart) {
   const auto frames = constant_motion(core::SE3::from_translation({0.0, 0.0, 0.01}), 6);
   KeyframeOdometry odometry(320, 240, KeyframeOdometryParameters{});
