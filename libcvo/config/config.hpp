@@ -37,6 +37,14 @@ struct TrackerdParameters {
   double status_period_s = 1.0;
 };
 
+/// cvo-backendd's own settings (daemon/backendd).
+struct BackenddParameters {
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+  std::string store = "/var/lib/cvo-slam/keyframes.store";
+  std::string vocabulary = "default";  // the installed default (share/cvo-slam/orb_k10_l4.voc), or a file
+  double status_period_s = 1.0;
+};
+
 struct Config {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
@@ -45,6 +53,7 @@ struct Config {
   core::PoseGraphParameters pose_graph;
   core::DatasetParameters dataset;
   TrackerdParameters trackerd;
+  BackenddParameters backendd;
   std::string camera = "tum_fr1";  // a preset name or a path to an intrinsics file (io::load_camera)
 };
 
