@@ -1,6 +1,13 @@
 #pragma once
-// Pinhole intrinsics of an RGB-D camera whose depth is registered to colour.
-//   u = fx * x / z + cx,  v = fy * y / z + cy,  depth_metres = raw_depth / depth_scale.
+// Intrinsics of an RGB-D camera whose depth is registered to colour: a pinhole with Brown–Conrady
+// lens distortion, as OpenCV models it (cv::projectPoints, cv::undistortPoints):
+//   x' = x / z,  y' = y / z,  r² = x'² + y'²
+//   x'' = x' (1 + k1 r² + k2 r⁴ + k3 r⁶) + 2 p1 x'y' + p2 (r² + 2 x'²)
+//   y'' = y' (1 + k1 r² + k2 r⁴ + k3 r⁶) + p1 (r² + 2 y'²) + 2 p2 x'y'
+//   u = fx x'' + cx,  v = fy y'' + cy,  depth_metres = raw_depth / depth_scale.
+// All coefficients zero is the plain pinhole u = fx x / z + cx. Depth is registered in the same
+// (distorted) colour image, and its value is z, the distance along the optical axis.
+#include <array>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -12,14 +19,23 @@ struct Intrinsics {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   int width = 0, height = 0;
   double depth_scale = 5000.0;  // raw 16-bit depth units per metre (TUM: 5000)
+  // k1, k2, p1, p2, k3 in OpenCV's order (its distCoeffs for 5 coefficients); zeros: none.
+  std::array<double, 5> distortion{};
+
+  [[nodiscard]] bool has_distortion() const {
+    for (const double c : distortion)
+      if (c != 0) return true;
+    return false;
+  }
 
   /// Empty when valid, else a message naming the bad field.
   [[nodiscard]] std::string validate() const;
 };
 
 /// Named presets: "tum_fr1", "tum_fr2", "tum_fr3" (TUM RGB-D benchmark calibrations, 640x480,
-/// 5000 units/m; distortion is ignored as the benchmark's own tools do) and "synthetic" (the
-/// renderer's default camera).
+/// 5000 units/m, with the published distortion of fr1 and fr2, whose images are distorted; fr3's
+/// images were undistorted before release, so its coefficients are zero) and "synthetic" (the
+/// renderer's default camera, distortion-free).
 std::optional<Intrinsics> camera_preset(std::string_view name);
 std::vector<std::string> camera_preset_names();
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -16,8 +17,18 @@
 namespace cvo::io {
 namespace {
 
-constexpr std::array<std::string_view, 7> kKeys{"fx", "fy", "cx", "cy", "width", "height", "depth_scale"};
-constexpr std::string_view kExpected = "fx, fy, cx, cy, width, height, depth_scale";
+constexpr std::array<std::string_view, 12> kKeys{"fx",          "fy", "cx", "cy", "width", "height",
+                                                 "depth_scale", "k1", "k2", "p1", "p2",    "k3"};
+constexpr std::size_t kRequiredKeys = 6;  // fx .. height; the rest default
+constexpr std::string_view kExpected = "fx, fy, cx, cy, width, height, depth_scale, k1, k2, p1, p2, k3";
+constexpr std::array<std::string_view, 5> kDistortionKeys{"k1", "k2", "p1", "p2", "k3"};  // OpenCV's order
+
+// Shortest text that reads back as the same double.
+std::string exact(double v) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return {buffer, result.ptr};
+}
 
 std::size_t line_of(const YAML::Node& node) {
   const int line = node.Mark().line;
@@ -86,10 +97,12 @@ core::Intrinsics parse_yaml(std::string_view text, const std::filesystem::path& 
       if (key == "cx") k.cx = *v;
       if (key == "cy") k.cy = *v;
       if (key == "depth_scale") k.depth_scale = *v;
+      for (std::size_t i = 0; i < kDistortionKeys.size(); ++i)
+        if (key == kDistortionKeys[i]) k.distortion[i] = *v;
     }
   }
-  for (const auto key : kKeys)
-    if (key != "depth_scale" && !seen.contains(key)) throw InputError(name, "missing key '" + std::string(key) + "'");
+  for (std::size_t i = 0; i < kRequiredKeys; ++i)
+    if (!seen.contains(kKeys[i])) throw InputError(name, "missing key '" + std::string(kKeys[i]) + "'");
   if (const auto error = k.validate(); !error.empty()) {
     const auto it = seen.find(key_in(error));
     throw InputError(name, it != seen.end() ? it->second : 0, error);
@@ -104,6 +117,17 @@ std::string validate_allowing_unknown_size(const core::Intrinsics& intrinsics) {
   auto sized = intrinsics;
   sized.width = sized.height = 1;
   return sized.validate();
+}
+
+std::string format_intrinsics_yaml(const core::Intrinsics& k, std::string_view comment) {
+  std::string text = "# " + std::string(comment) + "\n";
+  text += "fx: " + exact(k.fx) + "\nfy: " + exact(k.fy) + "\ncx: " + exact(k.cx) + "\ncy: " + exact(k.cy) +
+          "\nwidth: " + std::to_string(k.width) + "\nheight: " + std::to_string(k.height) +
+          "\ndepth_scale: " + exact(k.depth_scale) + "\n";
+  if (k.has_distortion())
+    for (std::size_t i = 0; i < kDistortionKeys.size(); ++i)
+      text.append(kDistortionKeys[i]).append(": ").append(exact(k.distortion[i])).append("\n");
+  return text;
 }
 
 core::Intrinsics parse_intrinsics(std::string_view text, const std::filesystem::path& name) {

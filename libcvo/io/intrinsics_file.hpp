@@ -2,14 +2,17 @@
 // Camera intrinsics from a file, or by preset name.
 //
 // Two file formats are accepted, told apart by their content:
-//   - YAML, a mapping with keys fx, fy, cx, cy, width, height (required) and depth_scale
-//     (optional, raw depth units per metre, default 5000 as TUM):
+//   - YAML, a mapping with keys fx, fy, cx, cy, width, height (required), depth_scale
+//     (optional, raw depth units per metre, default 5000 as TUM) and k1, k2, p1, p2, k3
+//     (optional, each absent one 0: OpenCV's Brown–Conrady lens distortion, core/camera.hpp):
 //         fx: 517.3
 //         fy: 516.5
 //         ...
+//         k1: 0.2624
 //   - ETH3D's calibration.txt: a single line "fx fy cx cy". It gives no image size, so width and
 //     height are returned as 0, meaning "take them from the images" (TumSequence does).
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 #include "libcvo/core/camera.hpp"
@@ -20,6 +23,11 @@ namespace cvo::io {
 /// known, and the offending key (unknown key, missing key, duplicate key, bad value).
 core::Intrinsics read_intrinsics_file(const std::filesystem::path& file);
 core::Intrinsics parse_intrinsics(std::string_view text, const std::filesystem::path& name_for_errors);
+
+/// The YAML form of `intrinsics`, each number in its shortest exact text, after a "# comment"
+/// line. The distortion keys are written only for a distorted camera, so files of distortion-free
+/// cameras read the same by older versions.
+std::string format_intrinsics_yaml(const core::Intrinsics& intrinsics, std::string_view comment);
 
 /// A camera given as a preset name (core::camera_preset_names()) or else a path to an intrinsics
 /// file; throws InputError when it is neither.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "libcvo/lcm/pose_conversion.hpp"
 
@@ -31,6 +32,7 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
   m.width = frame->width;
   m.height = frame->height;
   m.depth_scale = frame->depth_scale;
+  std::copy(std::begin(frame->distortion), std::end(frame->distortion), m.distortion);
   m.colour_encoding = frame->colour_encoding;
   m.depth_encoding = frame->depth_encoding;
   const auto& cloud = keyframe.cloud;
@@ -68,6 +70,7 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   frame.width = m.width;
   frame.height = m.height;
   frame.depth_scale = m.depth_scale;
+  std::copy(std::begin(m.distortion), std::end(m.distortion), frame.distortion);
   frame.colour_encoding = m.colour_encoding;
   frame.depth_encoding = m.depth_encoding;
   frame.colour = m.colour;

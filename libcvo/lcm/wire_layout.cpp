@@ -11,12 +11,13 @@ constexpr int kGraphNode = 8 + 8 + kPose3d;          // frame_index, utime, pose
 constexpr int kGraphEdge = 8 + 8 + kPose3d + 36 * 8;  // from, to, measurement, information
 
 // rgbd_frame_t: version, utime, depth_utime, frame_index (28), fx fy cx cy (60), width height (68),
-// depth_scale (76), two encodings (78), then the counts.
-constexpr std::array kRgbdCounts{CountField{"colour_size", 78, 1}, CountField{"depth_size", 82, 1}};
+// depth_scale (76), distortion[5] (116), two encodings (118), then the counts.
+constexpr std::array kRgbdCounts{CountField{"colour_size", 118, 1}, CountField{"depth_size", 122, 1}};
 // keyframe_t: version, id, frame_index, utime (28), pose (84), fx..cy (116), width height (124),
-// depth_scale (132), two encodings (134), then the counts; a point is xyz[3] + labels[5] floats.
-constexpr std::array kKeyframeCounts{CountField{"num_points", 134, 8 * 4}, CountField{"colour_size", 138, 1},
-                                     CountField{"depth_size", 142, 1}};
+// depth_scale (132), distortion[5] (172), two encodings (174), then the counts; a point is xyz[3] +
+// labels[5] floats.
+constexpr std::array kKeyframeCounts{CountField{"num_points", 174, 8 * 4}, CountField{"colour_size", 178, 1},
+                                     CountField{"depth_size", 182, 1}};
 // local_graph_t: version, keyframe_id, utime (20), then the counts.
 constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 20, kGraphNode},
                                        CountField{"num_edges", 24, kGraphEdge}};
@@ -31,8 +32,8 @@ std::int32_t read_be32(const std::uint8_t* p) {
 }  // namespace
 
 WireLayout wire_layout(std::string_view type_name) {
-  if (type_name == "rgbd_frame_t") return {86, kRgbdCounts};
-  if (type_name == "keyframe_t") return {146, kKeyframeCounts};
+  if (type_name == "rgbd_frame_t") return {126, kRgbdCounts};
+  if (type_name == "keyframe_t") return {186, kKeyframeCounts};
   if (type_name == "local_graph_t") return {28, kLocalGraphCounts};
   if (type_name == "map_t") return {28, kMapCounts};
   // status_t: version, utime, pid, state (17), 3 doubles (41), 5 int64 (81), queue_depth (85),

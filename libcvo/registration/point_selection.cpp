@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include <opencv2/calib3d.hpp>
+
 namespace cvo::registration {
 namespace {
 
@@ -11,6 +13,11 @@ constexpr int kRegion = 32;           // DSO's threshold region size (pixels)
 constexpr int kHistogramBins = 50;    // |g| on the 0-255 scale, clipped
 constexpr float kThresholdOffset = 7.0f / 255.0f;  // DSO's constant above the median
 constexpr int kMaxCellSize = 64;
+
+// The fields the ray table depends on.
+bool same_rays(const core::Intrinsics& a, const core::Intrinsics& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.distortion == b.distortion;
+}
 
 }  // namespace
 
@@ -58,6 +65,22 @@ std::size_t PointSelector::count_for_cell_size(int s) {
   std::size_t count = 0;
   for (int c = 0; c < cells_x * cells_y; ++c) count += cell_best_[static_cast<std::size_t>(c)] >= 0;
   return count;
+}
+
+void PointSelector::build_ray_table(const core::Intrinsics& K) {
+  const auto n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
+  cv::Mat pixels(static_cast<int>(n), 1, CV_32FC2);
+  auto* p = pixels.ptr<cv::Vec2f>();
+  for (int v = 0; v < height_; ++v)
+    for (int u = 0; u < width_; ++u) *p++ = {static_cast<float>(u), static_cast<float>(v)};
+  const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
+  // OpenCV's default is 5 fixed-point iterations, a few tenths of a pixel short in the corners for
+  // fr1's strong barrel distortion; iterate until the reprojection is within 1e-4 px instead.
+  rays_.resize(2 * n);
+  cv::Mat rays(static_cast<int>(n), 1, CV_32FC2, rays_.data());  // written in place
+  cv::undistortPoints(pixels, rays, camera, K.distortion, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-4));
+  ray_intrinsics_ = K;
 }
 
 SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud) {
@@ -177,6 +200,8 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   result.cell_size = s;
 
   // 4. Back-project the winners, in row-major order of their cells (deterministic).
+  const bool distorted = K.has_distortion();
+  if (distorted && (rays_.empty() || !same_rays(K, ray_intrinsics_))) build_ray_table(K);
   const int cells = ((width_ + s - 1) / s) * ((height_ + s - 1) / s);
   const float fx_inv = static_cast<float>(1.0 / K.fx), fy_inv = static_cast<float>(1.0 / K.fy);
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
@@ -192,7 +217,10 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
     const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
                     gradient_weight * (grey_[p + W] - grey_[p - W])};
-    cloud.push_back({(static_cast<float>(u) - cx) * z * fx_inv, (static_cast<float>(v) - cy) * z * fy_inv, z}, f);
+    if (distorted)
+      cloud.push_back({rays_[2 * p] * z, rays_[2 * p + 1] * z, z}, f);
+    else
+      cloud.push_back({(static_cast<float>(u) - cx) * z * fx_inv, (static_cast<float>(v) - cy) * z * fy_inv, z}, f);
   }
   result.selected = cloud.size();
   if (cloud.overflowed() > 0) result.status = SelectionStatus::kCapacityClamped;

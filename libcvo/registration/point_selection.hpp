@@ -11,14 +11,22 @@
 //     [min_depth, max_depth]. The image is tiled by s x s cells and each cell keeps its strongest
 //     candidate; s is adapted (a few passes) so about `target_points` survive, spreading points
 //     over the whole image.
-//  4. Each point is back-projected with the intrinsics and labelled with its RGB and gradient.
+//  4. Each point is back-projected with the intrinsics and labelled with its RGB and gradient:
+//     X = z · (x', y', 1) with z = raw_depth / depth_scale. Without lens distortion the ray is
+//     x' = (u - cx) / fx, y' = (v - cy) / fy. With distortion (core::Intrinsics::distortion) it
+//     is the undistorted ray of pixel (u, v), read from a per-pixel table that cv::undistortPoints
+//     fills once per intrinsics. This assumes, as for TUM fr1/fr2, that depth is registered in the
+//     same distorted colour image and holds z along the optical axis (not the range |X|), so the
+//     depth needs no correction of its own.
 //
-// Deterministic, and after construction select() performs no heap allocation.
+// Deterministic, and after construction select() performs no heap allocation, except on the
+// first frame of a distorted camera (or when its intrinsics change), which builds the ray table.
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "libcvo/core/camera.hpp"
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/registration/point_cloud.hpp"
@@ -54,6 +62,7 @@ class PointSelector {
 
  private:
   std::size_t count_for_cell_size(int s);
+  void build_ray_table(const core::Intrinsics& intrinsics);
 
   int width_, height_;
   core::SelectionParameters parameters_;
@@ -63,6 +72,9 @@ class PointSelector {
   std::vector<float> region_threshold_, smoothed_threshold_;
   std::vector<std::uint32_t> candidates_;   // pixel indices, row-major order
   std::vector<std::int32_t> cell_best_;     // per cell: best candidate index or -1
+  // Distorted cameras only: undistorted (x/z, y/z) per pixel, row-major, for ray_intrinsics_.
+  std::vector<float> rays_;
+  core::Intrinsics ray_intrinsics_{};
 };
 
 }  // namespace cvo::registration

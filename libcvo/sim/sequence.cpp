@@ -1,6 +1,5 @@
 #include "libcvo/sim/sequence.hpp"
 
-#include <charconv>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -11,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libcvo/io/input_error.hpp"
+#include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/sim/random.hpp"
 
@@ -42,20 +42,6 @@ void write_text(const std::filesystem::path& file, const std::string& text) {
   if (!out) throw io::InputError(file, "write failed");
 }
 
-// Shortest text that reads back as the same double.
-std::string number(double v) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return {buffer, result.ptr};
-}
-
-std::string camera_yaml(const core::Intrinsics& k) {
-  return "# Pinhole camera of a cvo-render sequence; depth is registered to colour.\n"
-         "fx: " + number(k.fx) + "\nfy: " + number(k.fy) + "\ncx: " + number(k.cx) + "\ncy: " + number(k.cy) +
-         "\nwidth: " + std::to_string(k.width) + "\nheight: " + std::to_string(k.height) +
-         "\ndepth_scale: " + number(k.depth_scale) + "\n";
-}
-
 }  // namespace
 
 std::string stamp_string(double seconds) {
@@ -67,6 +53,8 @@ std::string stamp_string(double seconds) {
 SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceOptions& options) {
   if (const std::string problem = options.intrinsics.validate(); !problem.empty())
     throw std::invalid_argument("write_sequence: " + problem);
+  if (options.intrinsics.has_distortion())  // the renderer casts pinhole rays (render.hpp)
+    throw std::invalid_argument("write_sequence: the renderer has no lens distortion; give zero coefficients");
   make_directory(dir / "rgb");
   make_directory(dir / "depth");
 
@@ -93,7 +81,8 @@ SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceO
   }
   write_text(dir / "rgb.txt", rgb_list);
   write_text(dir / "depth.txt", depth_list);
-  write_text(dir / "camera.yaml", camera_yaml(options.intrinsics));
+  write_text(dir / "camera.yaml",
+             io::format_intrinsics_yaml(options.intrinsics, "Camera of a cvo-render sequence; depth is registered to colour."));
   io::write_tum_trajectory(dir / "groundtruth.txt", truth);
 
   summary.frames = truth.size();

@@ -88,7 +88,7 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
   Bytes oversized = good;
   oversized.insert(oversized.end(), {1, 2, 3});
   auto other_version = message_of(first);
-  other_version.version = 2;
+  other_version.version = cvo_lcm::rgbd_frame_t::SCHEMA_VERSION + 1;
   auto short_raw = message_of(first);  // consistent counts, but 3 bytes short of 8x6 BGR
   short_raw.colour.resize(short_raw.colour.size() - 3);
   short_raw.colour_size = static_cast<std::int32_t>(short_raw.colour.size());
@@ -117,7 +117,7 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
                                                               {BadInput::kFingerprint, "fingerprint"},
                                                               {BadInput::kBody, "truncated"},
                                                               {BadInput::kBody, "trailing bytes"},
-                                                              {BadInput::kVersion, "schema version 2"},
+                                                              {BadInput::kVersion, "schema version 3"},
                                                               {BadInput::kContent, "raw colour needs"}};
   for (const auto& [kind, words] : refused) {
     r = source->read(frame, milliseconds(2000));

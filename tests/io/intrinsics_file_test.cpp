@@ -1,5 +1,8 @@
 #include "libcvo/io/intrinsics_file.hpp"
 
+#include <array>
+#include <string>
+
 #include <gtest/gtest.h>
 
 #include "tests/support/temp_dir.hpp"
@@ -26,6 +29,7 @@ TEST(IntrinsicsFile, ReadsYaml) {
 TEST(IntrinsicsFile, DepthScaleDefaultsToTums) {
   const auto k = parse_intrinsics("{fx: 500, fy: 500, cx: 320, cy: 240, width: 640, height: 480}", "cam.yaml");
   EXPECT_DOUBLE_EQ(k.depth_scale, 5000.0);
+  EXPECT_FALSE(k.has_distortion());  // absent coefficients are zero
 }
 
 void expect_error(const std::string& text, std::size_t line, const std::string& fragment) {
@@ -49,6 +53,38 @@ TEST(IntrinsicsFile, YamlErrorsNameTheKey) {
   expect_error("fx: 1\nfy: 1\ncx: 1\ncy: 1\nwidth: 640\n", 0, "missing key 'height'");
   expect_error("fx: 1\nfy: -1\ncx: 1\ncy: 1\nwidth: 640\nheight: 480\n", 2, "fy must be a positive number");
   expect_error("fx: [1\n", 2, "YAML:");
+}
+
+TEST(IntrinsicsFile, ReadsDistortionInOpenCvOrderAbsentOnesZero) {
+  const auto k = parse_intrinsics(std::string(kValid) + "k1: 0.2624\nk2: -0.9531\np1: -0.0054\np2: 0.0026\nk3: 1.1633\n",
+                                  "cam.yaml");
+  EXPECT_EQ(k.distortion, (std::array{0.2624, -0.9531, -0.0054, 0.0026, 1.1633}));
+  const auto radial = parse_intrinsics(std::string(kValid) + "k1: 0.1\nk3: -0.5\n", "cam.yaml");
+  EXPECT_EQ(radial.distortion, (std::array{0.1, 0.0, 0.0, 0.0, -0.5}));
+  expect_error(std::string(kValid) + "p2: inf\n", 9, "p2: not a finite number");
+  expect_error(std::string(kValid) + "k1: 1\nk1: 2\n", 10, "duplicate key 'k1'");
+  expect_error(std::string(kValid) + "k4: 1\n", 9, "unknown key 'k4'");
+}
+
+TEST(IntrinsicsFile, FormattedYamlReadsBackExactly) {
+  for (const char* preset : {"tum_fr1", "tum_fr2", "tum_fr3", "synthetic"}) {
+    SCOPED_TRACE(preset);
+    auto k = load_camera(preset);
+    k.depth_scale = 1000.0 / 3.0;  // no short decimal: the text must still be exact
+    const std::string text = format_intrinsics_yaml(k, "a test camera");
+    EXPECT_EQ(text.rfind("# a test camera\n", 0), 0u) << text;
+    // Distortion keys only when there is distortion: old readers keep reading pinhole files.
+    EXPECT_EQ(text.find("k1:") != std::string::npos, k.has_distortion()) << text;
+    const auto back = parse_intrinsics(text, "cam.yaml");
+    EXPECT_EQ(back.fx, k.fx);
+    EXPECT_EQ(back.fy, k.fy);
+    EXPECT_EQ(back.cx, k.cx);
+    EXPECT_EQ(back.cy, k.cy);
+    EXPECT_EQ(back.width, k.width);
+    EXPECT_EQ(back.height, k.height);
+    EXPECT_EQ(back.depth_scale, k.depth_scale);
+    EXPECT_EQ(back.distortion, k.distortion);
+  }
 }
 
 TEST(IntrinsicsFile, ReadsEth3dOneLiner) {

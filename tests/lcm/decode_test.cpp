@@ -78,7 +78,7 @@ void set_be32(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t v)
 
 TEST(Decode, HugeOrNegativeCountsAreRefusedBeforeAllocating) {
   auto bytes = encode(test::sample_keyframe());
-  const std::size_t num_points = 8 + 134;  // fingerprint + offset in wire_layout.cpp
+  const std::size_t num_points = 8 + 174;  // fingerprint + offset in wire_layout.cpp
   std::string error;
   set_be32(bytes, num_points, 0x7fffffff);
   EXPECT_FALSE(decode<cvo_lcm::keyframe_t>(bytes.data(), static_cast<int>(bytes.size()), &error));

@@ -45,6 +45,8 @@ TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
   EXPECT_EQ(back->id, 7);
   EXPECT_EQ(back->frame.index, k.frame.index);
   EXPECT_EQ(back->frame.timestamp, k.frame.timestamp);
+  ASSERT_TRUE(k.frame.intrinsics.has_distortion());  // tum_fr1
+  EXPECT_EQ(back->frame.intrinsics.distortion, k.frame.intrinsics.distortion);
   EXPECT_EQ(cv::norm(back->frame.bgr, k.frame.bgr, cv::NORM_INF), 0);
   EXPECT_EQ(cv::norm(back->frame.depth, k.frame.depth, cv::NORM_INF), 0);
   EXPECT_LT((back->pose.matrix() - k.pose.matrix()).cwiseAbs().maxCoeff(), 1e-12);

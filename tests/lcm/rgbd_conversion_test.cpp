@@ -40,10 +40,12 @@ void expect_same_metadata(const core::RgbdFrame& a, const core::RgbdFrame& b) {
   EXPECT_EQ(a.intrinsics.cy, b.intrinsics.cy);
   EXPECT_EQ(a.intrinsics.width, b.intrinsics.width);
   EXPECT_EQ(a.intrinsics.depth_scale, b.intrinsics.depth_scale);
+  EXPECT_EQ(a.intrinsics.distortion, b.intrinsics.distortion);
 }
 
 TEST(RgbdConversion, LosslessEncodingsAreExact) {
   const auto frame = tum_frame();
+  ASSERT_TRUE(frame.intrinsics.has_distortion()) << "tum_fr1: the lens coefficients must travel too";
   for (auto colour : {ColourEncoding::kRawBgr8, ColourEncoding::kPng})
     for (auto depth : {DepthEncoding::kRawU16Le, DepthEncoding::kPng}) {
       SCOPED_TRACE(std::string(to_string(colour)) + "/" + to_string(depth));

@@ -46,6 +46,7 @@ inline cvo_lcm::rgbd_frame_t sample_rgbd() {
   m.width = 4;
   m.height = 2;
   m.depth_scale = 5000;
+  for (int i = 0; i < 5; ++i) m.distortion[i] = 0.25 - 0.125 * i;  // fr1-like magnitudes, exact in binary
   m.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_RAW_BGR8;
   m.depth_encoding = cvo_lcm::rgbd_frame_t::DEPTH_RAW_U16LE;
   for (int i = 0; i < 4 * 2 * 3; ++i) m.colour.push_back(static_cast<std::uint8_t>(7 * i));
@@ -89,6 +90,7 @@ inline cvo_lcm::keyframe_t sample_keyframe() {
   m.width = 640;
   m.height = 480;
   m.depth_scale = 5000;
+  for (int i = 0; i < 5; ++i) m.distortion[i] = 0.5 - 0.25 * i;
   m.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_JPEG;
   m.depth_encoding = cvo_lcm::rgbd_frame_t::DEPTH_PNG;
   m.num_points = 3;

@@ -108,6 +108,8 @@ TEST(Tum2Lcm, ToTumRoundTripIsExactForLosslessEncodings) {
     ASSERT_EQ(back.size(), 5u);
     EXPECT_EQ(back.intrinsics().fx, original.intrinsics().fx);
     EXPECT_EQ(back.intrinsics().depth_scale, original.intrinsics().depth_scale);
+    EXPECT_TRUE(original.intrinsics().has_distortion());  // tum_fr1, through CVO_RGBD and camera.yaml
+    EXPECT_EQ(back.intrinsics().distortion, original.intrinsics().distortion);
     for (std::size_t i = 0; i < back.size(); ++i) {
       const auto a = original.read(i), b = back.read(i);
       EXPECT_EQ(a.timestamp, b.timestamp);

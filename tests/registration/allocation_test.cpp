@@ -60,5 +60,26 @@ TEST(Allocation, SelectAlignAndInnerProductAllocateNothingAfterWarmUp) {
   EXPECT_EQ(inner_product, 0) << "heap allocations in inner_product()";
 }
 
+TEST(Allocation, DistortedSelectionAllocatesNothingAfterTheFirstFrame) {
+  // A distorted camera builds its ray table on its first frame; later frames only read it.
+  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  auto K = *core::camera_preset("synthetic");
+  const auto pose = testing::camera_looking_north();
+  auto frame_a = sim::render(scene, K, pose);
+  auto frame_b = sim::render(scene, K, pose * testing::motion({0, 1, 0}, 2.0, {0.01, 0, 0.01}));
+  frame_a.intrinsics.distortion = frame_b.intrinsics.distortion = core::camera_preset("tum_fr1")->distortion;
+
+  PointSelector selector(K.width, K.height, core::SelectionParameters{});
+  PointCloud cloud(8192);
+  selector.select(frame_a, cloud);  // warm-up: builds the table
+  const long before = allocation_count();
+  for (int k = 0; k < 3; ++k) {
+    selector.select(frame_a, cloud);
+    selector.select(frame_b, cloud);
+  }
+  EXPECT_EQ(allocation_count() - before, 0) << "heap allocations in distorted point selection";
+  EXPECT_GT(cloud.size(), 2000u);
+}
+
 }  // namespace
 }  // namespace cvo::registration

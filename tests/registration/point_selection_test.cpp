@@ -1,8 +1,11 @@
 #include "libcvo/registration/point_selection.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
 
 #include "tests/registration/registration_fixtures.hpp"
 
@@ -112,6 +115,64 @@ TEST(PointSelection, BadFramesGiveAStatusNotACrash) {
   const auto r = selector.select(no_depth, cloud);
   EXPECT_EQ(r.status, SelectionStatus::kNoValidDepth);
   EXPECT_EQ(cloud.size(), 0u);
+}
+
+// The pixels of `plain` (a distortion-free selection) by pinhole projection, rounded.
+std::vector<cv::Point2d> pinhole_pixels(const PointCloud& plain, const core::Intrinsics& K) {
+  std::vector<cv::Point2d> pixels;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    const Eigen::Vector3d p = plain.position(i).cast<double>();  // a value: position() is one
+    pixels.emplace_back(std::round(K.fx * p.x() / p.z() + K.cx), std::round(K.fy * p.y() / p.z() + K.cy));
+  }
+  return pixels;
+}
+
+// Each point of `distorted` must project, through the lens model, onto the pixel it came from.
+void expect_rays_through_pixels(const PointCloud& distorted, const core::Intrinsics& K,
+                                const std::vector<cv::Point2d>& pixels) {
+  ASSERT_EQ(distorted.size(), pixels.size());
+  std::vector<cv::Point3d> points;
+  for (std::size_t i = 0; i < distorted.size(); ++i) {
+    const Eigen::Vector3d p = distorted.position(i).cast<double>();
+    points.emplace_back(p.x(), p.y(), p.z());
+  }
+  std::vector<cv::Point2d> projected;
+  const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
+  cv::projectPoints(points, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), camera, K.distortion, projected);
+  double worst = 0;
+  for (std::size_t i = 0; i < pixels.size(); ++i) worst = std::max(worst, cv::norm(projected[i] - pixels[i]));
+  EXPECT_LT(worst, 2e-3) << "pixels";  // float rays; OpenCV iterates to 1e-4 px
+}
+
+TEST(PointSelection, DistortedCameraBackProjectsThroughTheLensModel) {
+  const auto frame = rendered(sim::SceneKind::textured_room);
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  PointCloud plain(8192), distorted(8192);
+  selector.select(frame, plain);
+  const auto pixels = pinhole_pixels(plain, frame.intrinsics);
+
+  // The same images seen as from a TUM fr1 lens: the same pixels and depths are selected (the
+  // selection never looks at the intrinsics), only their rays change.
+  auto fr1 = frame;
+  fr1.intrinsics.distortion = core::camera_preset("tum_fr1")->distortion;
+  selector.select(fr1, distorted);
+  ASSERT_EQ(distorted.size(), plain.size());
+  double largest_shift = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    ASSERT_EQ(distorted.position(i).z(), plain.position(i).z()) << "z is the measured depth, unchanged";
+    ASSERT_EQ(distorted.feature(i), plain.feature(i));
+    largest_shift = std::max(largest_shift, static_cast<double>((distorted.position(i) - plain.position(i)).norm()));
+  }
+  EXPECT_GT(largest_shift, 0.01) << "fr1's lens moves corner rays by centimetres at a metre or more";
+  expect_rays_through_pixels(distorted, fr1.intrinsics, pixels);
+
+  // Changed intrinsics rebuild the table; back to zero distortion is the pinhole division again.
+  auto fr2 = frame;
+  fr2.intrinsics.distortion = core::camera_preset("tum_fr2")->distortion;
+  selector.select(fr2, distorted);
+  expect_rays_through_pixels(distorted, fr2.intrinsics, pixels);
+  selector.select(frame, distorted);
+  for (std::size_t i = 0; i < plain.size(); ++i) ASSERT_EQ(distorted.position(i), plain.position(i));
 }
 
 TEST(PointSelection, CapacityIsClampedAndReported) {

@@ -1,6 +1,5 @@
 #include "log_to_tum.hpp"
 
-#include <charconv>
 #include <cstdint>
 #include <fstream>
 #include <optional>
@@ -10,6 +9,7 @@
 
 #include "libcvo/core/camera.hpp"
 #include "libcvo/io/input_error.hpp"
+#include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
@@ -25,16 +25,9 @@ std::string tum_timestamp(std::int64_t utime) {
   return std::to_string(seconds) + "." + std::string(6 - frac.size(), '0') + frac;
 }
 
-// Shortest text that reads back as the same double.
-std::string exact(double v) {
-  char buf[32];
-  const auto result = std::to_chars(buf, buf + sizeof buf, v);
-  return {buf, result.ptr};
-}
-
 bool same(const core::Intrinsics& a, const core::Intrinsics& b) {
   return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
-         a.height == b.height && a.depth_scale == b.depth_scale;
+         a.height == b.height && a.depth_scale == b.depth_scale && a.distortion == b.distortion;
 }
 
 void write_image(const fs::path& file, const cv::Mat& image) {
@@ -92,10 +85,7 @@ LogToTumSummary log_to_tum(const fs::path& log, const fs::path& out_dir, const s
   if (summary.frames == 0) throw io::InputError(log, "no " + channel + " frames in the log");
 
   std::ofstream camera(out_dir / "camera.yaml");
-  camera << "# written by tum2lcm --to-tum from " << log.filename().string() << "\n"
-         << "fx: " << exact(intrinsics->fx) << "\nfy: " << exact(intrinsics->fy) << "\ncx: " << exact(intrinsics->cx)
-         << "\ncy: " << exact(intrinsics->cy) << "\nwidth: " << intrinsics->width << "\nheight: " << intrinsics->height
-         << "\ndepth_scale: " << exact(intrinsics->depth_scale) << "\n";
+  camera << io::format_intrinsics_yaml(*intrinsics, "written by tum2lcm --to-tum from " + log.filename().string());
   rgb_txt.flush();
   depth_txt.flush();
   if (!camera || !rgb_txt || !depth_txt) throw io::InputError(out_dir, "writing the index files failed");
