@@ -3,7 +3,7 @@
 //
 // A contract that scripts rely on (extras may be added, nothing here changed):
 //   cvo-run SEQUENCE --out TRAJ.txt [--mode cvo] [--max-frames N] [--groundtruth GT] [--plot PNG]
-//           [--json] [--config FILE] [--set key=value]...
+//           [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]
 //   --json prints one JSON object on stdout (keys in report.cpp; the human summary then goes to
 //   stderr); exit status 0 ok, 1 bad input (the message names the file), 2 usage error.
 #include <unistd.h>
@@ -32,11 +32,14 @@
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/loop_closure/vocabulary.hpp"
 #include "libcvo/odometry/frame_to_frame.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/opencv_odometry.hpp"
+#include "libcvo/slam/trajectory_correction.hpp"
 #include "progress.hpp"
 #include "report.hpp"
+#include "slam_pipeline.hpp"
 #include "tools/common/cli.hpp"
 
 namespace {
@@ -46,7 +49,7 @@ using namespace cvo;
 
 constexpr std::string_view kUsage =
     R"(usage: cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]
-               [--plot PNG] [--json] [--config FILE] [--set key=value]...
+               [--plot PNG] [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]
 
 Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
 groundtruth.txt), and writes the estimated poses T_world_camera as a TUM trajectory, stamped with
@@ -57,6 +60,9 @@ options:
   --out TRAJ.txt     the trajectory to write (required)
   --mode MODE        cvo: frame-to-frame CVO, the paper's baseline (default)
                      kf-cvo: keyframe-based CVO (paper section 4; keyframes by γ, t, θ)
+                     slam: CVO SLAM, kf-cvo with loop closure and the robust pose graph
+                     (paper sections 5-6); the trajectory written is the final global
+                     optimisation's, and the report also gives kf-cvo's own ATE
                      opencv-rgbd: OpenCV contrib's dense photometric RGB-D odometry
                      opencv-rgbd-icp: OpenCV's photometric + point-to-plane ICP odometry
                      (both frame to frame with the same motion model; depth 0.1-5 m, from
@@ -67,6 +73,9 @@ options:
   --json             print one JSON object on stdout; the summary then goes to stderr
   --config FILE      parameters (YAML, see libcvo/config/default.yaml)
   --set KEY=VALUE    override one parameter, e.g. --set cvo.ell_init=0.12 (repeatable)
+  --vocabulary FILE  the ORB vocabulary of --mode slam (default: the build tree's
+                     )" CVO_DEFAULT_VOCABULARY R"(,
+                     else )" CVO_INSTALLED_VOCABULARY R"()
   --help             this text
 
 camera: --set camera=PRESET|FILE, else the config file's camera if it differs from the default,
@@ -85,13 +94,13 @@ struct ModeInfo {
   bool implemented;
 };
 constexpr ModeInfo kModes[] = {
-    {"cvo", true}, {"kf-cvo", true}, {"opencv-rgbd", true}, {"opencv-rgbd-icp", true}};
+    {"cvo", true}, {"kf-cvo", true}, {"slam", true}, {"opencv-rgbd", true}, {"opencv-rgbd-icp", true}};
 
 struct Arguments {
   fs::path sequence, out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
-  std::optional<fs::path> groundtruth, plot, config;
+  std::optional<fs::path> groundtruth, plot, config, vocabulary;
   std::vector<std::string> sets;
   bool json = false;
   bool help = false;
@@ -129,6 +138,8 @@ Arguments parse_arguments(int argc, char** argv) {
       args.config = fs::path(value());
     } else if (arg == "--set") {
       args.sets.emplace_back(value());
+    } else if (arg == "--vocabulary") {
+      args.vocabulary = fs::path(value());
     } else if (arg.size() > 1 && arg.front() == '-') {
       throw UsageError("unknown option '" + std::string(arg) + "'");
     } else {
@@ -145,7 +156,7 @@ Arguments parse_arguments(int argc, char** argv) {
   for (const auto& m : kModes)
     if (m.name == args.mode) mode = &m;
   if (mode == nullptr)
-    throw UsageError("unknown mode '" + args.mode + "' (cvo, kf-cvo, opencv-rgbd or opencv-rgbd-icp)");
+    throw UsageError("unknown mode '" + args.mode + "' (cvo, kf-cvo, slam, opencv-rgbd or opencv-rgbd-icp)");
   if (!mode->implemented) {
     std::string implemented;
     for (const auto& m : kModes)
@@ -177,10 +188,20 @@ std::optional<core::Intrinsics> choose_camera(const Arguments& args, const confi
   return std::nullopt;
 }
 
-// One tracker per mode; a mode is one more alternative and one more branch.
-using Tracker = std::variant<odometry::FrameToFrameOdometry, odometry::KeyframeOdometry, odometry::OpenCvOdometry>;
+// --vocabulary, else the build tree's default, else the installed one (an InputError when the
+// chosen file is missing or bad).
+loop_closure::Vocabulary load_vocabulary(const Arguments& args) {
+  if (args.vocabulary) return loop_closure::Vocabulary::load(*args.vocabulary);
+  const fs::path build_tree = CVO_DEFAULT_VOCABULARY;
+  return loop_closure::Vocabulary::load(fs::is_regular_file(build_tree) ? build_tree : fs::path(CVO_INSTALLED_VOCABULARY));
+}
 
-Tracker make_tracker(std::string_view mode, const config::Config& config, const core::Intrinsics& camera) {
+// One tracker per mode; a mode is one more alternative and one more branch.
+using Tracker = std::variant<odometry::FrameToFrameOdometry, odometry::KeyframeOdometry, odometry::OpenCvOdometry,
+                             tools::SlamPipeline>;
+
+Tracker make_tracker(const Arguments& args, const config::Config& config, const core::Intrinsics& camera) {
+  const std::string_view mode = args.mode;
   if (mode == "cvo") {
     odometry::FrameToFrameParameters parameters;
     parameters.selection = config.selection;
@@ -194,6 +215,8 @@ Tracker make_tracker(std::string_view mode, const config::Config& config, const 
     parameters.keyframe = config.keyframe;
     return odometry::KeyframeOdometry(camera.width, camera.height, parameters);
   }
+  if (mode == "slam")
+    return Tracker(std::in_place_type<tools::SlamPipeline>, camera.width, camera.height, config, load_vocabulary(args));
   if (mode == "opencv-rgbd" || mode == "opencv-rgbd-icp") {
     odometry::OpenCvOdometryParameters parameters;
     parameters.variant = mode == "opencv-rgbd" ? odometry::OpenCvVariant::rgbd : odometry::OpenCvVariant::rgbd_icp;
@@ -237,7 +260,7 @@ int run(const Arguments& args) {
   if (!groundtruth.empty())
     report.groundtruth = args.groundtruth ? args.groundtruth->string() : (args.sequence / "groundtruth.txt").string();
 
-  Tracker tracker = make_tracker(args.mode, config, sequence.intrinsics());
+  Tracker tracker = make_tracker(args, config, sequence.intrinsics());
   core::Trajectory trajectory;
   trajectory.reserve(sequence.size());
   {
@@ -271,9 +294,28 @@ int run(const Arguments& args) {
     }
     report.wall_s = std::chrono::duration<double>(Clock::now() - run_start).count();
   }
+  if (trajectory.empty()) {
+    io::write_tum_trajectory(args.out, trajectory);
+    throw io::InputError(args.sequence, "no frame could be read");
+  }
+  if (auto* slam = std::get_if<tools::SlamPipeline>(&tracker)) {
+    // The trajectory written and evaluated is the back end's; kf-cvo's own is evaluated beside it.
+    const core::Trajectory odometry = std::move(trajectory);
+    trajectory = slam::correct_trajectory(odometry, slam->finish());
+    const auto& s = slam->statistics();
+    report.slam = tools::SlamReport{s.loops_accepted, s.loops_tried, s.backend_ms, s.final_ms, std::nullopt, {}};
+    for (const auto& l : slam->backend().loops())
+      report.slam->loops.push_back({l.loop.from, l.loop.to, l.chi2, l.weight});
+    if (!groundtruth.empty()) {
+      try {
+        report.slam->ate_odometry = eval::absolute_trajectory_error(groundtruth, odometry);
+      } catch (const std::invalid_argument&) {
+        // As for the main ATE below, which says why.
+      }
+    }
+  }
   report.poses = trajectory.size();
   io::write_tum_trajectory(args.out, trajectory);
-  if (trajectory.empty()) throw io::InputError(args.sequence, "no frame could be read");
 
   if (!groundtruth.empty()) {
     // A short run may have an ATE but no 1 s RPE pairs: report what exists instead of failing.

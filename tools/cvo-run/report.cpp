@@ -24,6 +24,20 @@ double median(const std::vector<double>& v) { return percentile(v, 50); }
 
 double fps(const RunReport& r) { return r.wall_s > 0 ? static_cast<double>(r.frames) / r.wall_s : 0.0; }
 
+// [{"from": j, "to": i, "chi2": s, "weight": w}, ...] one loop a line; null outside slam mode.
+std::string loop_list(const RunReport& r) {
+  if (!r.slam) return "null";
+  if (r.slam->loops.empty()) return "[]";
+  std::string out = "[";
+  for (std::size_t k = 0; k < r.slam->loops.size(); ++k) {
+    const auto& l = r.slam->loops[k];
+    out.append(k ? ",\n    " : "\n    ")
+        .append("{\"from\": " + std::to_string(l.from) + ", \"to\": " + std::to_string(l.to))
+        .append(", \"chi2\": " + io::json_number(l.chi2) + ", \"weight\": " + io::json_number(l.weight) + "}");
+  }
+  return out + "\n  ]";
+}
+
 }  // namespace
 
 void print_text(std::FILE* out, const RunReport& r) {
@@ -35,11 +49,19 @@ void print_text(std::FILE* out, const RunReport& r) {
     std::fprintf(out, "  frame %zu (t = %.6f, %s): %s\n", f.index, f.timestamp, f.stage.c_str(), f.reason.c_str());
   std::fprintf(out, "keyframes   %zu%s\n", r.keyframes, r.mode == "cvo" ? " (frame-to-frame: no keyframes)" : "");
   if (!r.track_ms.empty())
-    std::fprintf(out, "ms/frame    median %.2f  p90 %.2f  p99 %.2f  max %.2f  (track(): selection + registration)\n",
-                 median(r.track_ms), percentile(r.track_ms, 90), percentile(r.track_ms, 99),
-                 percentile(r.track_ms, 100));
+    std::fprintf(out, "ms/frame    median %.2f  p90 %.2f  p99 %.2f  max %.2f  (%s)\n", median(r.track_ms),
+                 percentile(r.track_ms, 90), percentile(r.track_ms, 99), percentile(r.track_ms, 100),
+                 r.slam ? "tracking and the back end's work in that frame" : "track(): selection + registration");
   if (!r.points.empty()) std::fprintf(out, "points      median %.0f per frame\n", median(r.points));
   if (!r.iterations.empty()) std::fprintf(out, "iterations  median %.0f per registration\n", median(r.iterations));
+  if (r.slam) {
+    const auto outliers = std::count_if(r.slam->loops.begin(), r.slam->loops.end(),
+                                        [](const LoopEntry& l) { return l.weight < 0.1; });
+    std::fprintf(out, "loops       %zu accepted of %zu tried, %td down-weighted (Cauchy weight < 0.1)\n",
+                 r.slam->loops_accepted, r.slam->loops_tried, outliers);
+    std::fprintf(out, "back end    %.0f ms in the run (local graphs, loop detection, keyframe optimisations), final %.0f ms\n",
+                 r.slam->backend_ms, r.slam->final_optimisation_ms);
+  }
   if (r.groundtruth.empty()) {
     std::fprintf(out, "evaluation  none (no ground truth)\n");
     return;
@@ -50,6 +72,9 @@ void print_text(std::FILE* out, const RunReport& r) {
                  r.ate->error.mean, r.ate->error.median, r.ate->error.max, r.ate->pairs.size());
   else
     std::fprintf(out, "ATE         n/a (too few poses associate with the ground truth)\n");
+  if (r.slam && r.slam->ate_odometry)
+    std::fprintf(out, "ATE kf-cvo  rmse %.4f m  (the tracker's own poses, before the back end)\n",
+                 r.slam->ate_odometry->error.rmse);
   if (r.rpe)
     std::fprintf(out, "RPE         rmse %.4f m/s  %.3f deg/s  (delta 1 s, %zu pairs)\n", r.rpe->translation.rmse,
                  r.rpe->rotation_deg.rmse, r.rpe->pairs.size());
@@ -67,6 +92,10 @@ std::string to_json(const RunReport& r) {
   const auto rpe = [&](auto get) -> std::optional<double> {
     if (!r.rpe) return std::nullopt;
     return get(*r.rpe);
+  };
+  const auto slam = [&](auto get) -> std::optional<double> {
+    if (!r.slam) return std::nullopt;
+    return get(*r.slam);
   };
   std::ostringstream o;
   o << "{\n"
@@ -99,7 +128,17 @@ std::string to_json(const RunReport& r) {
     << "  \"ate_max_m\": " << json_number(ate([](const auto& a) { return a.error.max; })) << ",\n"
     << "  \"rpe_pairs\": " << (r.rpe ? r.rpe->pairs.size() : 0) << ",\n"
     << "  \"rpe_trans_m_s\": " << json_number(rpe([](const auto& p) { return p.translation.rmse; })) << ",\n"
-    << "  \"rpe_rot_deg_s\": " << json_number(rpe([](const auto& p) { return p.rotation_deg.rmse; })) << "\n"
+    << "  \"rpe_rot_deg_s\": " << json_number(rpe([](const auto& p) { return p.rotation_deg.rmse; })) << ",\n"
+    << "  \"loops_accepted\": " << (r.slam ? std::to_string(r.slam->loops_accepted) : "null") << ",\n"
+    << "  \"loops_tried\": " << (r.slam ? std::to_string(r.slam->loops_tried) : "null") << ",\n"
+    << "  \"loop_list\": " << loop_list(r) << ",\n"
+    << "  \"backend_ms_total\": " << json_number(slam([](const auto& s) { return s.backend_ms; })) << ",\n"
+    << "  \"final_optimisation_ms\": " << json_number(slam([](const auto& s) { return s.final_optimisation_ms; }))
+    << ",\n"
+    << "  \"ate_rmse_m_odometry\": " << json_number(slam([](const auto& s) -> std::optional<double> {
+         if (!s.ate_odometry) return std::nullopt;
+         return s.ate_odometry->error.rmse;
+       })) << "\n"
     << "}\n";
   return o.str();
 }

@@ -2,6 +2,7 @@
 // What cvo-run measured over a run, and its two renderings: a human summary and one JSON object
 // (the contract scripts read; see main.cpp).
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -19,6 +20,23 @@ struct FailedFrame {
   std::string reason;
 };
 
+/// An accepted loop after the final optimisation: its keyframes (frame indices), χ² and the
+/// Cauchy kernel's weight (1: fully trusted; near 0: treated as an outlier).
+struct LoopEntry {
+  std::int64_t from = 0, to = 0;
+  double chi2 = 0, weight = 1;
+};
+
+/// What --mode slam adds: loops, the back end's time, and kf-cvo's own ATE on the same run.
+struct SlamReport {
+  std::size_t loops_accepted = 0;
+  std::size_t loops_tried = 0;              // candidates verified (matches, RANSAC, CVO, α)
+  double backend_ms = 0;                    // local graphs, loop detection, keyframe optimisations
+  double final_optimisation_ms = 0;         // the last local graph and the global optimisation
+  std::optional<eval::AteResult> ate_odometry;  // of the tracker's poses, before the back end
+  std::vector<LoopEntry> loops;             // in acceptance order
+};
+
 struct RunReport {
   std::string mode;
   std::string sequence, trajectory;
@@ -33,6 +51,7 @@ struct RunReport {
   double wall_s = 0;                    // the whole loop, reading images included
   std::optional<eval::AteResult> ate;   // with ground truth (and >= 3 associated poses)
   std::optional<eval::RpeResult> rpe;   // with ground truth (and >= 2 pairs 1 s apart)
+  std::optional<SlamReport> slam;       // --mode slam only
 };
 
 /// The p-th percentile (0..100) with linear interpolation between order statistics, numpy's

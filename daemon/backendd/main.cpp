@@ -1,0 +1,83 @@
+// cvo-backendd: loop closure and pose-graph optimisation as a separate process
+// (daemon/backendd/backendd.hpp for its threads).
+//
+// A contract that scripts and the systemd unit rely on (extras may be added, nothing changed):
+//   cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]...
+//   exit status 0 after SIGTERM/SIGINT; 1 when the configuration, the store or the vocabulary is
+//   unusable (the message says which); 2 on a usage error.
+#include <iostream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "daemon/backendd/backendd.hpp"
+#include "daemon/common/signals.hpp"
+#include "libcvo/config/config.hpp"
+#include "tools/common/cli.hpp"
+
+namespace {
+
+using namespace cvo;
+
+constexpr std::string_view kUsage =
+    R"(usage: cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]... [--print-config]
+
+Receives CVO_KEYFRAME and CVO_LOCAL_GRAPH from cvo-trackerd, stores them durably (a restart
+resumes with every keyframe received), detects and verifies loop closures (ORB bag of words,
+RANSAC + SVD, CVO refinement, the alpha test), optimises the keyframe pose graph with a Cauchy
+kernel on loops, and publishes the optimised keyframe poses and accepted loops on CVO_MAP, with
+a CVO_STATUS heartbeat. On SIGTERM/SIGINT it runs a final global optimisation, publishes the
+final map and exits 0. Under systemd it sends READY, STATUS and WATCHDOG notifications.
+
+options:
+  --config FILE      YAML configuration (the backendd section; every key: libcvo/config/default.yaml)
+  --lcm-url URL      LCM provider (backendd.lcm_url)
+  --store FILE       the keyframe store (backendd.store)
+  --set key=value    override one configuration key (repeatable)
+  --print-config     print the effective configuration as YAML and exit
+  --help             this text
+)";
+
+struct Arguments {
+  bool help = false, print_config = false;
+  std::optional<std::string> config_file, lcm_url, store;
+  std::vector<std::string> sets;
+};
+
+Arguments parse_arguments(int argc, char** argv) {
+  Arguments args;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view a = argv[i];
+    const auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw tools::UsageError(std::string(a) + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--help" || a == "-h") args.help = true;
+    else if (a == "--config") args.config_file = value();
+    else if (a == "--lcm-url") args.lcm_url = value();
+    else if (a == "--store") args.store = value();
+    else if (a == "--set") args.sets.push_back(value());
+    else if (a == "--print-config") args.print_config = true;
+    else throw tools::UsageError("unknown argument '" + std::string(a) + "'");
+  }
+  return args;
+}
+
+int run(const Arguments& args) {
+  config::Config config = args.config_file ? config::load_config(*args.config_file) : config::Config{};
+  for (const auto& s : args.sets) config::apply_override(config, s);
+  if (args.lcm_url) config::apply_override(config, "backendd.lcm_url=" + *args.lcm_url);
+  if (args.store) config::apply_override(config, "backendd.store=" + *args.store);
+  if (args.print_config) {
+    std::cout << config::dump_config(config);
+    return 0;
+  }
+  daemon::block_stop_signals();
+  daemon::backendd::Backendd backendd(std::move(config));
+  return backendd.run();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return tools::cli_main("cvo-backendd", kUsage, argc, argv, parse_arguments, run); }

@@ -1,0 +1,47 @@
+#include "libcvo/loop_closure/loop_detector.hpp"
+
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace cvo::loop_closure {
+
+LoopDetector::LoopDetector(Vocabulary vocabulary, const LoopDetectorParameters& parameters)
+    : vocabulary_(std::move(vocabulary)), parameters_(parameters),
+      registration_(registration::Capacities{parameters.max_points}, parameters.cvo) {}
+
+std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
+                                                    const registration::PointCloud& cloud, const core::SE3& pose) {
+  if (previous_ && id <= *previous_)
+    throw std::invalid_argument("LoopDetector::add_keyframe: id " + std::to_string(id) + " is not above " +
+                                std::to_string(*previous_));
+  attempts_.clear();
+  const OrbFeatures features = extract_orb(frame.bgr, parameters_.orb);
+  LoopKeyframe keyframe = make_loop_keyframe(id, features, frame, cloud, pose, parameters_);
+  BowVector bow = vocabulary_.transform(features.descriptors);
+
+  std::vector<LoopClosure> loops;
+  if (previous_) {
+    const auto candidates = database_.candidates(id, bow, *previous_, parameters_.loop.similarity_threshold);
+    for (const auto& c : candidates) {  // best η first
+      auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
+      v.attempt.eta = c.eta;
+      attempts_.push_back(v.attempt);
+      if (v.closure) {
+        v.closure->eta = c.eta;
+        loops.push_back(*v.closure);
+      }
+    }
+  }
+  database_.add(id, std::move(bow));
+  keyframes_.emplace(id, std::move(keyframe));
+  previous_ = id;
+  return loops;
+}
+
+void LoopDetector::update_poses(const std::map<std::int64_t, core::SE3>& poses) {
+  for (const auto& [id, pose] : poses)
+    if (const auto it = keyframes_.find(id); it != keyframes_.end()) it->second.pose = pose;
+}
+
+}  // namespace cvo::loop_closure

@@ -1,0 +1,67 @@
+#pragma once
+// Loop closure between keyframes (paper section 5), end to end:
+//   1. detection: the keyframe's ORB bag-of-words vector against every earlier keyframe but the
+//      previous one; candidates with η = s(v_i, v_j) / s(v_i, v_{i-1}) > η_thres (0.3);
+//   2. initial pose: ORB matches (ratio test 0.7, at least min_matches), their 3-D points from
+//      depth, RANSAC over minimal sets with the SVD (Umeyama) rigid fit, refit on the inliers:
+//      T_i^j, keyframe i's camera in keyframe j's frame;
+//   3. refinement: CVO from h_0 = T_i^j (eq. 11), giving T_CVO and its Hessian;
+//   4. the α test (eq. 12): accept only if
+//        α = <f_Xi, T_CVO^-1.f_Xj> - max(<f_Xi, f_Xj>, <f_Xi, T_i^j.f_Xj>, <f_Xi, T_rel^-1.f_Xj>) > 0
+//      with T_rel from the current global estimates of the two keyframes (h.f is the paper's
+//      action, h.f_Z = f_{h^-1 Z}).
+// Steps 2-4, the exact directions of the transforms, the length-scale of the α inner products and
+// why the CVO Hessian is the edge's information as it comes: loop_verification.hpp.
+//
+// The BoW vector uses all of a keyframe's ORB descriptors (appearance); matching uses only the
+// keypoints with depth in the selection's range (only they give 3-D correspondences).
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/loop_closure/keyframe_database.hpp"
+#include "libcvo/loop_closure/loop_verification.hpp"
+#include "libcvo/loop_closure/orb_features.hpp"
+#include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/registration/point_cloud.hpp"
+#include "libcvo/registration/registration.hpp"
+
+namespace cvo::loop_closure {
+
+// LoopDetectorParameters, LoopClosure and LoopAttempt: loop_verification.hpp.
+
+class LoopDetector {
+ public:
+  LoopDetector(Vocabulary vocabulary, const LoopDetectorParameters& parameters);
+
+  /// Stores keyframe `id` (ids increase; `pose` is its current global estimate T_world_keyframe,
+  /// `cloud` its CVO points in its camera frame) and returns the loops accepted between it and
+  /// earlier keyframes, best η first. Every candidate tried is recorded in last_attempts().
+  /// Throws std::invalid_argument when id is not above every earlier id, and as extract_orb and
+  /// keypoints_with_depth do on a bad frame (wrong image types or sizes, bad intrinsics).
+  std::vector<LoopClosure> add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
+                                        const registration::PointCloud& cloud, const core::SE3& pose);
+
+  /// New global estimates after an optimisation (used for T_rel in the α test). Ids that are not
+  /// stored keyframes (e.g. ordinary frames of the graph) are ignored.
+  void update_poses(const std::map<std::int64_t, core::SE3>& poses);
+
+  [[nodiscard]] const std::vector<LoopAttempt>& last_attempts() const { return attempts_; }
+  [[nodiscard]] std::size_t size() const { return keyframes_.size(); }
+  [[nodiscard]] const LoopDetectorParameters& parameters() const { return parameters_; }
+
+ private:
+  Vocabulary vocabulary_;
+  LoopDetectorParameters parameters_;
+  KeyframeDatabase database_;
+  registration::Registration registration_;
+  std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
+  std::optional<std::int64_t> previous_;             // the last keyframe added
+  std::vector<LoopAttempt> attempts_;
+};
+
+}  // namespace cvo::loop_closure

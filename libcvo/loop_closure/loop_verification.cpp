@@ -1,0 +1,94 @@
+#include "libcvo/loop_closure/loop_verification.hpp"
+
+#include <algorithm>
+
+#include "libcvo/loop_closure/feature_matching.hpp"
+#include "libcvo/loop_closure/rigid_ransac.hpp"
+
+namespace cvo::loop_closure {
+namespace {
+
+registration::PointCloud copy_cloud(const registration::PointCloud& cloud, std::size_t max_points) {
+  const std::size_t n = std::min(cloud.size(), max_points);
+  registration::PointCloud copy(n);  // sized to the points, not to max_points: keyframes add up
+  for (std::size_t k = 0; k < n; ++k) copy.push_back(cloud.position(k), cloud.feature(k));
+  return copy;
+}
+
+bool converged(const registration::RegistrationResult& r) {
+  return r.converged && (r.status == registration::RegistrationStatus::kOk ||
+                         r.status == registration::RegistrationStatus::kCapacityExceeded);
+}
+
+}  // namespace
+
+LoopKeyframe make_loop_keyframe(std::int64_t id, const OrbFeatures& features, const core::RgbdFrame& frame,
+                                const registration::PointCloud& cloud, const core::SE3& pose,
+                                const LoopDetectorParameters& p) {
+  return {id, keypoints_with_depth(features, frame, p.selection.min_depth_m, p.selection.max_depth_m),
+          copy_cloud(cloud, p.max_points), pose};
+}
+
+double AlphaInnerProducts::alpha() const { return cvo - std::max({identity, initial, estimate}); }
+
+LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const LoopDetectorParameters& p,
+                             registration::Registration& registration) {
+  LoopVerification v;
+  v.attempt.candidate = j.id;
+
+  // 1. Matches of i's keypoints (query) to j's (train), as 3-D correspondences p_i -> p_j.
+  const auto matches = ratio_matches(i.keypoints.descriptors, j.keypoints.descriptors, p.loop.match_ratio);
+  v.attempt.matches = static_cast<int>(matches.size());
+  if (v.attempt.matches < std::max(3, p.loop.min_matches)) {
+    v.attempt.verdict = "too few matches";
+    return v;
+  }
+  std::vector<Eigen::Vector3d> src, dst;
+  src.reserve(matches.size());
+  dst.reserve(matches.size());
+  for (const auto& m : matches) {
+    src.push_back(i.keypoints.points[static_cast<std::size_t>(m.query)]);
+    dst.push_back(j.keypoints.points[static_cast<std::size_t>(m.train)]);
+  }
+
+  // 2. Initial pose T_ji^0: p_j ≈ T_ji^0 p_i.
+  const RansacParameters ransac{p.ransac_iterations, p.ransac_inlier_m,
+                                static_cast<std::size_t>(std::max(p.min_inliers, 0)), p.ransac_seed};
+  const RigidFit fit = ransac_rigid(src, dst, ransac);
+  v.attempt.inliers = static_cast<int>(fit.inliers.size());
+  if (!fit.found) {
+    v.attempt.verdict = "RANSAC failed";
+    return v;
+  }
+  v.initial = fit.transform;
+
+  // 3. Eq. 11: X_i fixed, X_j moving, from h_0 = (T_ji^0)^-1; the result maps j into i.
+  v.refinement = registration.align(i.cloud, j.cloud, v.initial.inverse());
+  if (!converged(v.refinement)) {
+    v.attempt.verdict = "CVO failed";
+    return v;
+  }
+
+  // 4. Eq. 12, all four at ℓ_min (where align() converged): comparable numbers.
+  const auto& cvo = registration.parameters();
+  auto& ip = v.inner_products;
+  ip.ell = std::min(cvo.ell_min, cvo.ell_init);
+  ip.cvo = registration.inner_product(i.cloud, j.cloud, v.refinement.transform, ip.ell);
+  ip.identity = registration.inner_product(i.cloud, j.cloud, core::SE3(), ip.ell);
+  ip.initial = registration.inner_product(i.cloud, j.cloud, v.initial.inverse(), ip.ell);
+  ip.estimate = registration.inner_product(i.cloud, j.cloud, i.pose.inverse() * j.pose, ip.ell);
+  v.attempt.alpha = ip.alpha();
+  if (!(v.attempt.alpha > 0)) {
+    v.attempt.verdict = "alpha <= 0";
+    return v;
+  }
+
+  v.attempt.accepted = true;
+  v.attempt.verdict = "accepted";
+  // Ω = H as the solver reports it: see the header for why no adjoint is needed.
+  v.closure = LoopClosure{j.id, i.id, v.refinement.transform.inverse(), v.refinement.hessian, 0.0, v.attempt.alpha,
+                          v.attempt.inliers};
+  return v;
+}
+
+}  // namespace cvo::loop_closure

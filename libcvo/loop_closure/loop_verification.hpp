@@ -1,0 +1,115 @@
+#pragma once
+// Verifying one loop candidate: keyframe i (the new one) against an earlier keyframe j that the
+// bag-of-words test proposed (paper section 5, steps 2-4 of loop_detector.hpp).
+//
+//   1. matches: ratio-test ORB matches of i's keypoints with depth to j's (feature_matching.hpp);
+//      fewer than max(3, min_matches): "too few matches".
+//   2. initial pose: RANSAC + Umeyama on the matched 3-D points p_i -> p_j (rigid_ransac.hpp),
+//      T_ji^0 = T_i^j with p_j ≈ T_ji^0 p_i, keyframe i's camera in j's frame; fewer than
+//      min_inliers inliers: "RANSAC failed".
+//   3. refinement, eq. 11 in the paper's direction: CVO with X_i fixed and X_j moving. Here
+//      (registration.hpp) T maps the moving cloud into the fixed one, the inverse of the paper's
+//      h (h.f_Z = f_{h^-1 Z}), so the start h_0 = T_ji^0 becomes (T_ji^0)^-1 and the result is
+//      T_ij, j's points into i's frame. The measurement is Z = T_ij^-1 = T_j^-1 T_i. Not converged
+//      (or no overlap): "CVO failed".
+//   4. α (eq. 12), every inner product <f_Xi, T.f_Xj> with X_i fixed, X_j moving, T mapping j's
+//      frame into i's, and all at ONE length-scale: ℓ_min (min(ell_min, ell_init) of the CVO
+//      parameters, where align() converges), so the four numbers are comparable:
+//        α = <X_i, T_ij X_j> - max(<X_i, X_j>, <X_i, (T_ji^0)^-1 X_j>, <X_i, T_rel X_j>),
+//      T_rel = T_i^-1 T_j from the current global estimates of the two keyframes. α <= 0:
+//      "alpha <= 0" (the CVO pose aligns no better than identity, the RANSAC pose, or what the
+//      trajectory already says: such a loop would add nothing or harm). When RANSAC's pose is
+//      already at the optimum (exact rendered depth), CVO can only tie with it: α is then at the
+//      noise level of the sparsified kernel (±0.2 % of the inner product, measured), and such a
+//      loop may be refused although it is right.
+//
+// Information of the loop edge. The solver's Hessian H (registration.hpp: H/ℓ² at ℓ_min, order
+// [translation, rotation]) is the information of a LEFT perturbation T_ij <- exp(ξ) T_ij, ξ in
+// i's frame. Then Z = T_ij^-1 <- T_ij^-1 exp(-ξ) = Z exp(-ξ): a RIGHT perturbation of Z, which is
+// the pose graph's residual e = log(Z^-1 T_j^-1 T_i) (posegraph/residual.hpp, right perturbation
+// in the `to` node's frame) up to sign. So Ω = H as it comes, because CVO runs with the new
+// keyframe i, the edge's `to`, fixed. (Run the other way, X_j fixed, the solver's H' would be for
+// a left perturbation of Z in j's frame, and Ω = Ad(Z)ᵀ H' Ad(Z); the tests check the two agree.)
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+
+#include "libcvo/core/parameters.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/loop_closure/keypoints_3d.hpp"
+#include "libcvo/loop_closure/orb_features.hpp"
+#include "libcvo/registration/point_cloud.hpp"
+#include "libcvo/registration/registration.hpp"
+
+namespace cvo::loop_closure {
+
+struct LoopDetectorParameters {
+  core::LoopClosureParameters loop;  // η_thres, ratio, min_matches (Table 1)
+  core::CvoParameters cvo;           // of the refinement
+  OrbParameters orb;
+  int ransac_iterations = 300;
+  double ransac_inlier_m = 0.03;     // 3-D distance for a match to count as an inlier
+  int min_inliers = 12;              // fewer after RANSAC: no initial pose, no loop
+  std::size_t max_points = 8192;     // capacity of the stored clouds
+  core::SelectionParameters selection;  // min_depth_m / max_depth_m: the keypoints' depth range
+  std::uint32_t ransac_seed = 0;        // RANSAC's std::mt19937
+};
+
+/// An accepted loop: an edge of the keyframe pose graph, in posegraph::Edge's convention.
+struct LoopClosure {
+  std::int64_t from = 0;  // j, the earlier keyframe
+  std::int64_t to = 0;    // i, the new keyframe
+  core::SE3 measurement;  // T_from_to = T_j^-1 T_i (keyframe i's camera in keyframe j's frame)
+  core::Matrix6d information = core::Matrix6d::Identity();  // CVO Hessian, [translation, rotation]
+  double eta = 0;    // normalised bag-of-words score of the candidate
+  double alpha = 0;  // eq. 12, > 0
+  int inliers = 0;   // RANSAC inliers of the initial pose
+};
+
+/// Why each candidate was refused, for logs and tests.
+struct LoopAttempt {
+  std::int64_t candidate = 0;
+  double eta = 0;
+  int matches = 0, inliers = 0;
+  double alpha = 0;
+  bool accepted = false;
+  const char* verdict = "";  // "accepted", "too few matches", "RANSAC failed", "CVO failed", "alpha <= 0"
+};
+
+/// What verification needs of a keyframe. Copies share the descriptor matrix (cv::Mat), which
+/// nothing modifies.
+struct LoopKeyframe {
+  std::int64_t id = 0;
+  Keypoints3d keypoints;           // ORB keypoints with depth, camera frame
+  registration::PointCloud cloud;  // CVO points, camera frame (a copy)
+  core::SE3 pose;                  // current global estimate T_world_keyframe
+};
+
+/// The keyframe's keypoints with depth (selection's depth range) and a copy of the first
+/// max_points points of `cloud`.
+LoopKeyframe make_loop_keyframe(std::int64_t id, const OrbFeatures& features, const core::RgbdFrame& frame,
+                                const registration::PointCloud& cloud, const core::SE3& pose,
+                                const LoopDetectorParameters& parameters);
+
+/// The inner products of the α test (step 4), at length-scale ell.
+struct AlphaInnerProducts {
+  double cvo = 0, identity = 0, initial = 0, estimate = 0;
+  double ell = 0;
+  [[nodiscard]] double alpha() const;  // cvo - max(identity, initial, estimate)
+};
+
+struct LoopVerification {
+  LoopAttempt attempt;                 // eta is the caller's (0 here)
+  std::optional<LoopClosure> closure;  // when accepted (eta 0 here too)
+  core::SE3 initial;                   // T_ji^0, RANSAC (identity when it failed)
+  registration::RegistrationResult refinement;  // CVO's T_ij and Hessian (default when not run)
+  AlphaInnerProducts inner_products;   // when CVO converged
+};
+
+/// Steps 1-4 for new keyframe i and earlier keyframe j. `registration` must have been built with
+/// parameters.cvo and capacity max_points (LoopDetector owns one).
+LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const LoopDetectorParameters& parameters,
+                             registration::Registration& registration);
+
+}  // namespace cvo::loop_closure
