@@ -17,6 +17,7 @@
 
 #include "tests/daemon/daemon_process.hpp"
 #include "tests/daemon/lcm_log.hpp"
+#include "tests/daemon/private_network.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -26,15 +27,10 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using cvo::testing::DaemonProcess;
+using cvo::testing::which;
 
-constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+constexpr const char* kUrl = cvo::testing::kPrivateLcmUrl;
 const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
-
-fs::path which(const std::string& tool) {
-  for (const char* dir : {"/usr/bin", "/usr/local/bin", "/bin"})
-    if (fs::exists(fs::path(dir) / tool)) return fs::path(dir) / tool;
-  return {};
-}
 
 // The tracker's output on the clip, split into two logs of its keyframes and local graphs.
 std::vector<std::int64_t> tracker_recording(const fs::path& dir, fs::path& first, fs::path& second) {
@@ -72,8 +68,7 @@ std::vector<std::int64_t> tracker_recording(const fs::path& dir, fs::path& first
 }
 
 TEST(BackenddNetns, KilledAndRestartedMidReplayLosesNoKeyframe) {
-  const char* ns = std::getenv("CVO_PRIVATE_NETNS");
-  if (ns == nullptr || std::string(ns) != "1") GTEST_SKIP() << "runs only in a private network namespace (tests/support/in-private-netns)";
+  if (!cvo::testing::in_private_network_namespace()) GTEST_SKIP() << "runs only in a private network namespace (tests/support/in-private-netns)";
   if (which("lcm-logger").empty() || which("lcm-logplayer").empty()) GTEST_SKIP() << "lcm-logger/lcm-logplayer missing (liblcm-bin)";
   cvo::test::TempDir dir;
   fs::path first, second;

@@ -21,6 +21,7 @@
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "tests/daemon/daemon_process.hpp"
 #include "tests/daemon/lcm_log.hpp"
+#include "tests/daemon/private_network.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -30,22 +31,10 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using cvo::testing::DaemonProcess;
+using cvo::testing::which;
 
-// recv_buf_size: a 640x480 frame is a burst of ~100 fragments; the kernel's default socket buffer
-// overflows (LCM warns) and frames are lost. Capped by net.core.rmem_max.
-constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+constexpr const char* kUrl = cvo::testing::kPrivateLcmUrl;
 const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
-
-bool in_private_namespace() {
-  const char* v = std::getenv("CVO_PRIVATE_NETNS");
-  return v != nullptr && std::string(v) == "1";
-}
-
-fs::path which(const std::string& tool) {
-  for (const char* dir : {"/usr/bin", "/usr/local/bin", "/bin"})
-    if (fs::exists(fs::path(dir) / tool)) return fs::path(dir) / tool;
-  return {};
-}
 
 struct Replay {
   cvo::testing::PublishedLog published;
@@ -86,7 +75,7 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
 }
 
 TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
-  if (!in_private_namespace()) GTEST_SKIP() << "runs only in a private network namespace (tests/support/in-private-netns)";
+  if (!cvo::testing::in_private_network_namespace()) GTEST_SKIP() << "runs only in a private network namespace (tests/support/in-private-netns)";
   if (which("lcm-logger").empty() || which("lcm-logplayer").empty()) GTEST_SKIP() << "lcm-logger/lcm-logplayer missing (liblcm-bin)";
   cvo::test::TempDir dir;
   const auto recording = dir.path() / "clip.lcmlog";
