@@ -161,7 +161,6 @@ void Backendd::receive_loop() {
       } catch (const std::exception& e) {
         self->note(std::string("warning: not stored (will be lost on restart): ") + e.what());
       }
-      ++self->received_;
       {
         const std::lock_guard lock(self->queue_mutex_);
         self->queue_.push_back(std::move(record));
@@ -317,7 +316,6 @@ void Backendd::work_loop() {
   note(std::to_string(w.keyframes) + " keyframes, " + std::to_string(w.local_graphs) + " local graphs, " +
        std::to_string(w.loops.size()) + " loops accepted of " + std::to_string(w.loops_tried) + " tried");
   publish_status(cvo_lcm::status_t::STATE_STOPPING);
-  worker_done_ = true;
 }
 
 }  // namespace cvo::daemon::backendd

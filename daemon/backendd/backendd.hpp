@@ -61,8 +61,8 @@ class Backendd {
   std::mutex queue_mutex_;
   std::condition_variable queue_ready_;
   std::deque<StoredRecord> queue_;
-  std::atomic<bool> stop_{false}, receiver_done_{false}, worker_done_{false};
-  std::atomic<std::int64_t> received_{0}, bad_messages_[5]{};
+  std::atomic<bool> stop_{false}, receiver_done_{false};
+  std::atomic<std::int64_t> bad_messages_[5]{};
   std::atomic<std::int64_t> receive_heartbeat_ns_{0}, work_heartbeat_ns_{0};
 
   std::mutex detail_mutex_;

@@ -9,7 +9,6 @@ namespace cvo::daemon {
 
 struct LatencySummary {
   double median_ms = 0, p99_ms = 0;
-  std::size_t samples = 0;
 };
 
 class LatencyWindow {
@@ -25,7 +24,6 @@ class LatencyWindow {
   /// Nearest-rank percentiles of the samples held; all zero when there are none.
   LatencySummary summary() {
     LatencySummary s;
-    s.samples = count_;
     if (count_ == 0) return s;
     std::copy_n(samples_.begin(), count_, scratch_.begin());
     const auto rank = [&](double q) {

@@ -4,7 +4,6 @@
 // keyframe the map and this tracker both know: T_map_odom = P_map(k) · P_odom(k)^-1); the
 // tracking thread reads it for every frame. A plain mutex: the critical sections are a copy of
 // 7 doubles, and the reader never waits for a computation.
-#include <cstdint>
 #include <mutex>
 
 #include "libcvo/core/se3.hpp"
@@ -13,24 +12,18 @@ namespace cvo::daemon::trackerd {
 
 class MapCorrection {
  public:
-  void set(const core::SE3& T_map_odom, std::int64_t revision) {
+  void set(const core::SE3& T_map_odom) {
     const std::lock_guard lock(mutex_);
     T_map_odom_ = T_map_odom;
-    revision_ = revision;
   }
   [[nodiscard]] core::SE3 get() const {
     const std::lock_guard lock(mutex_);
     return T_map_odom_;
   }
-  [[nodiscard]] std::int64_t revision() const {
-    const std::lock_guard lock(mutex_);
-    return revision_;
-  }
 
  private:
   mutable std::mutex mutex_;
-  core::SE3 T_map_odom_;       // identity until the first map
-  std::int64_t revision_ = -1;  // of the map it came from
+  core::SE3 T_map_odom_;  // identity until the first map
 };
 
 }  // namespace cvo::daemon::trackerd

@@ -4,11 +4,13 @@
 
 namespace cvo::daemon::trackerd {
 
-Outbox::Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t graph_capacity)
+Outbox::Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t cloud_capacity,
+               std::size_t graph_capacity)
     : events_(capacity), keyframes_(pool_size), keyframe_used_(pool_size, 0), graph_used_(pool_size, 0) {
-  for (auto& k : keyframes_) {  // full-size images now, so that copies into them never allocate
+  for (auto& k : keyframes_) {  // full-size images and clouds now, so that copies into them never allocate
     k.frame.bgr.create(height, width, CV_8UC3);
     k.frame.depth.create(height, width, CV_16UC1);
+    k.cloud = registration::PointCloud(cloud_capacity);
   }
   graphs_.reserve(pool_size);
   for (std::size_t i = 0; i < pool_size; ++i) graphs_.push_back({0, odometry::LocalGraph(graph_capacity)});
@@ -77,11 +79,6 @@ bool Outbox::finished() const {
 std::int64_t Outbox::dropped() const {
   const std::lock_guard lock(mutex_);
   return dropped_;
-}
-
-std::size_t Outbox::waiting() const {
-  const std::lock_guard lock(mutex_);
-  return count_;
 }
 
 }  // namespace cvo::daemon::trackerd

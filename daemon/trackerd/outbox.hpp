@@ -17,6 +17,7 @@
 #include "libcvo/core/se3.hpp"
 #include "libcvo/odometry/local_graph.hpp"
 #include "libcvo/odometry/track_result.hpp"
+#include "libcvo/registration/point_cloud.hpp"
 
 namespace cvo::daemon::trackerd {
 
@@ -37,6 +38,7 @@ struct KeyframeSlot {
   std::int64_t id = 0;
   core::SE3 pose;
   core::RgbdFrame frame;
+  registration::PointCloud cloud;  // the tracker's own points of the keyframe
 };
 
 struct LocalGraphSlot {
@@ -52,9 +54,10 @@ struct Event {
 
 class Outbox {
  public:
-  /// capacity events; pool_size keyframe and local-graph slots, images width x height, local
-  /// graphs of graph_capacity nodes.
-  Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t graph_capacity);
+  /// capacity events; pool_size keyframe and local-graph slots, images width x height, clouds of
+  /// cloud_capacity points, local graphs of graph_capacity nodes.
+  Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t cloud_capacity,
+         std::size_t graph_capacity);
 
   // Tracking thread: reserve pool slots (nullptr-free: -1 when the pool is exhausted), fill
   // them, then push the event. push() returns false (counted in dropped()) when full, unless
@@ -72,7 +75,6 @@ class Outbox {
 
   [[nodiscard]] bool finished() const;  // closed and empty
   [[nodiscard]] std::int64_t dropped() const;
-  [[nodiscard]] std::size_t waiting() const;
 
  private:
   int acquire(std::vector<char>& used);

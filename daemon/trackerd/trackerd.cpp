@@ -31,7 +31,6 @@
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
-#include "libcvo/registration/point_selection.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {
@@ -75,15 +74,13 @@ drivers::SourceOptions source_options(const config::Config& config) {
 }  // namespace
 
 // Everything sized by the first frame. Owned by Trackerd; the tracking thread uses the tracker
-// and the frame copy, the publisher the selector and cloud, both the outbox (thread-safe).
+// and the frame copy, both threads the outbox (thread-safe).
 struct Trackerd::Pipeline {
-  Pipeline(int w, int h, const config::Config& config, const odometry::KeyframeOdometryParameters& parameters)
+  Pipeline(int w, int h, const odometry::KeyframeOdometryParameters& parameters)
       : width(w),
         height(h),
         tracker(w, h, parameters),
-        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.local_graph_capacity),
-        keyframe_selector(w, h, config.selection),
-        keyframe_cloud(parameters.max_points) {
+        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.max_points, parameters.local_graph_capacity) {
     previous.bgr.create(h, w, CV_8UC3);
     previous.depth.create(h, w, CV_16UC1);
   }
@@ -91,8 +88,6 @@ struct Trackerd::Pipeline {
   odometry::KeyframeOdometry tracker;
   core::RgbdFrame previous;  // frame n-1: it becomes the keyframe when one is made at frame n
   Outbox outbox;
-  registration::PointSelector keyframe_selector;  // publisher: the keyframe's cloud for CVO_KEYFRAME
-  registration::PointCloud keyframe_cloud;
 };
 
 Trackerd::Trackerd(config::Config config) : config_(std::move(config)) {
@@ -212,7 +207,6 @@ void Trackerd::acquire_loop() {
         break;
       case drivers::ReadStatus::kEndOfStream:
         ring_->abort_write();
-        counters_.source_ended = true;
         note("end of " + source->describe());
         if (t.exit_on_eof) {
           ring_->close();
@@ -260,11 +254,8 @@ void Trackerd::track_loop() {
         ring_->end_read();
         continue;
       }
-      {
-        const std::lock_guard lock(pipeline_mutex_);
-        pipeline_ = std::make_unique<Pipeline>(k.width, k.height, config_, parameters);
-        p = pipeline_.get();
-      }
+      pipeline_ = std::make_unique<Pipeline>(k.width, k.height, parameters);
+      p = pipeline_.get();
       pipeline_ready_ = true;
     }
     if (frame.bgr.cols != p->width || frame.bgr.rows != p->height || frame.depth.cols != p->width ||
@@ -313,6 +304,7 @@ void Trackerd::track_loop() {
         k.frame.intrinsics = source.intrinsics;
         source.bgr.copyTo(k.frame.bgr);
         source.depth.copyTo(k.frame.depth);
+        k.cloud = p->tracker.keyframe_cloud();  // same capacity: copies points, no allocation
       }
     }
     e.keyframe_id = keyframe_id;
@@ -376,7 +368,7 @@ void Trackerd::publish_loop() {
           self->note("skipped CVO_MAP: " + error);
           return;
         }
-        self->correction_.set(*map_pose * it->second.inverse(), map->revision);
+        self->correction_.set(*map_pose * it->second.inverse());
         return;
       }
     }
@@ -441,9 +433,8 @@ void Trackerd::publish_loop() {
     }
     if (event.keyframe_slot >= 0) {
       const auto& k = p.outbox.keyframe(event.keyframe_slot);
-      p.keyframe_selector.select(k.frame, p.keyframe_cloud);  // the same points the tracker chose
       std::string error;
-      lcm::Keyframe keyframe{k.id, k.frame, k.pose, p.keyframe_cloud};
+      lcm::Keyframe keyframe{k.id, k.frame, k.pose, k.cloud};
       if (const auto message = lcm::to_message(keyframe, encoding, &error)) {
         lcm.publish("CVO_KEYFRAME", &*message);
         keyframe_odom_poses[k.id] = k.pose;

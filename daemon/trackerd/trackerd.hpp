@@ -34,7 +34,6 @@ struct Counters {
   std::atomic<std::int64_t> allocations_after_warmup{0};
   std::atomic<std::int64_t> bad_messages[5]{};  // cvo_lcm::status_t BAD_* (frames and CVO_MAP)
   std::atomic<bool> source_connected{false};
-  std::atomic<bool> source_ended{false};
 };
 
 class Trackerd {
@@ -71,10 +70,9 @@ class Trackerd {
   std::atomic<std::int64_t> track_heartbeat_ns_{0}, publish_heartbeat_ns_{0};
 
   // Created by the tracking thread on the first frame (its size fixes every buffer); the
-  // publisher waits for it.
+  // publisher uses it once pipeline_ready_ is set (release/acquire of the atomic).
   struct Pipeline;
   std::unique_ptr<Pipeline> pipeline_;
-  std::mutex pipeline_mutex_;
   std::atomic<bool> pipeline_ready_{false};
 
   std::mutex detail_mutex_;

@@ -78,6 +78,8 @@ class KeyframeOdometry {
   [[nodiscard]] bool local_graph_closed() const { return graph_closed_; }
   [[nodiscard]] const LocalGraph& closed_local_graph() const { return graphs_[1 - graph_]; }
   [[nodiscard]] const LocalGraph& current_local_graph() const { return graphs_[graph_]; }
+  /// The current keyframe's CVO points (its camera frame), e.g. for CVO_KEYFRAME.
+  [[nodiscard]] const registration::PointCloud& keyframe_cloud() const { return clouds_[keyframe_]; }
   [[nodiscard]] const KeyframeOdometryParameters& parameters() const { return parameters_; }
 
  private:
