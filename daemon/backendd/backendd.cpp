@@ -43,11 +43,7 @@ std::int64_t wall_utime() {
 }  // namespace
 
 std::filesystem::path resolve_vocabulary(const std::string& setting) {
-  if (setting != "default") return setting;
-  for (const std::filesystem::path& candidate : {std::filesystem::path(CVO_INSTALLED_VOCABULARY),
-                                                std::filesystem::path(CVO_SOURCE_VOCABULARY)})
-    if (std::filesystem::is_regular_file(candidate)) return candidate;
-  throw io::InputError(CVO_INSTALLED_VOCABULARY, "default ORB vocabulary not found (install cvo-slam, or set backendd.vocabulary)");
+  return setting == "default" ? loop_closure::default_vocabulary_file() : std::filesystem::path(setting);
 }
 
 // Everything the cvo-backend thread owns.

@@ -29,8 +29,8 @@
 
 namespace cvo::daemon::backendd {
 
-/// The vocabulary a config names: "default" is the installed one (or, in a build tree, the
-/// committed one); anything else a file. Throws io::InputError when it cannot be loaded.
+/// The vocabulary file a config names: "default" is loop_closure::default_vocabulary_file();
+/// anything else a path.
 std::filesystem::path resolve_vocabulary(const std::string& setting);
 
 class Backendd {

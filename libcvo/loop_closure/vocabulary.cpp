@@ -45,6 +45,14 @@ double score(const BowVector& a, const BowVector& b) {
   return std::clamp(common, 0.0, 1.0);  // rounding must not leave [0, 1]
 }
 
+std::filesystem::path default_vocabulary_file() {
+  const std::filesystem::path committed = CVO_COMMITTED_VOCABULARY, installed = CVO_INSTALLED_VOCABULARY;
+  if (std::filesystem::is_regular_file(committed)) return committed;
+  if (std::filesystem::is_regular_file(installed)) return installed;
+  throw io::InputError(installed, "default ORB vocabulary not found (nor " + committed.string() +
+                                      "): install cvo-slam, or name a vocabulary file");
+}
+
 std::uint64_t fnv1a64(std::string_view bytes) {
   std::uint64_t h = 0xcbf29ce484222325ULL;
   for (const char c : bytes) h = (h ^ static_cast<unsigned char>(c)) * 0x100000001b3ULL;

@@ -146,4 +146,9 @@ class Vocabulary {
 /// FNV-1a 64 of a byte string (the file checksum).
 std::uint64_t fnv1a64(std::string_view bytes);
 
+/// The default vocabulary file: the committed one of the source tree this was built from while
+/// it is there (a developer's build, the tests), else the copy `cmake --install` put in
+/// share/cvo-slam. Throws io::InputError naming both when neither exists.
+std::filesystem::path default_vocabulary_file();
+
 }  // namespace cvo::loop_closure

@@ -73,9 +73,8 @@ options:
   --json             print one JSON object on stdout; the summary then goes to stderr
   --config FILE      parameters (YAML, see libcvo/config/default.yaml)
   --set KEY=VALUE    override one parameter, e.g. --set cvo.ell_init=0.12 (repeatable)
-  --vocabulary FILE  the ORB vocabulary of --mode slam (default: the build tree's
-                     )" CVO_DEFAULT_VOCABULARY R"(,
-                     else )" CVO_INSTALLED_VOCABULARY R"()
+  --vocabulary FILE  the ORB vocabulary of --mode slam (default: the committed one of the
+                     source tree it was built from, else the installed share/cvo-slam copy)
   --help             this text
 
 camera: --set camera=PRESET|FILE, else the config file's camera if it differs from the default,
@@ -188,12 +187,9 @@ std::optional<core::Intrinsics> choose_camera(const Arguments& args, const confi
   return std::nullopt;
 }
 
-// --vocabulary, else the build tree's default, else the installed one (an InputError when the
-// chosen file is missing or bad).
+// --vocabulary, else the default (an InputError when the file is missing or bad).
 loop_closure::Vocabulary load_vocabulary(const Arguments& args) {
-  if (args.vocabulary) return loop_closure::Vocabulary::load(*args.vocabulary);
-  const fs::path build_tree = CVO_DEFAULT_VOCABULARY;
-  return loop_closure::Vocabulary::load(fs::is_regular_file(build_tree) ? build_tree : fs::path(CVO_INSTALLED_VOCABULARY));
+  return loop_closure::Vocabulary::load(args.vocabulary ? fs::path(*args.vocabulary) : loop_closure::default_vocabulary_file());
 }
 
 // One tracker per mode; a mode is one more alternative and one more branch.
