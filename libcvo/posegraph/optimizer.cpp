@@ -229,7 +229,7 @@ OptimizationReport Optimizer::optimize(PoseGraph& graph) {
         break;
       }
       for (std::size_t k = 0; k < poses.size(); ++k)
-        candidate[k] = problem.var[k] < 0 ? poses[k] : poses[k] * SE3::exp(delta.segment<6>(6 * problem.var[k]));
+        candidate[k] = problem.var[k] < 0 ? poses[k] : retract(poses[k], delta.segment<6>(6 * problem.var[k]));
       const double new_cost = problem_cost(problem, candidate, kernel);
       const double predicted = 0.5 * delta.dot(lambda * D.cwiseProduct(delta) - g);
       const double gain = predicted > 0 ? (cost - new_cost) / predicted : -1.0;

@@ -1,12 +1,12 @@
 #pragma once
 // Levenberg-Marquardt on SE(3)^n for a PoseGraph, sparse normal equations solved by CHOLMOD.
 //
-// Each iteration linearises every edge (right perturbation T <- T exp(delta), exact Jacobians, see
-// residual.hpp), weights it by IRLS (w = rho'(chi^2), see cost.hpp) and assembles
+// Each iteration linearises every edge (residual [t; log R] of Z^-1 T_i^-1 T_j, update T (+) delta =
+// (R exp(phi), t + R rho), exact Jacobians: residual.hpp), weights it by IRLS (w = rho'(chi^2), see cost.hpp) and assembles
 //   H = sum w J^T Omega J,  g = sum w J^T Omega e
 // over the free nodes only: fixed nodes are removed from the system, and when no node is fixed
 // the first (lowest id) is held, which fixes the gauge. It then solves (H + lambda D) delta = -g,
-// D = diag(H) (clamped below, Marquardt's scaling), applies T_k <- T_k exp(delta_k) and keeps the
+// D = diag(H) (clamped below, Marquardt's scaling), applies T_k <- T_k (+) delta_k and keeps the
 // step if the cost went down; lambda follows Nielsen's rule (gain ratio r: lambda *= max(1/3,
 // 1 - (2r - 1)^3) on success, lambda *= nu, nu *= 2 on failure).
 //

@@ -2,9 +2,9 @@
 // A 3-D pose graph as a plain value: nodes are poses T_world_node, edges are relative-pose
 // measurements between two nodes.
 //
-// An edge (i, j) measures T_ij = T_i^-1 T_j. Its residual is the tangent vector
-//   e_ij = log(T_ij^-1 T_i^-1 T_j)   in R^6, [translation; rotation] (core::SE3's order),
-// and its information matrix Omega (6x6, symmetric positive semi-definite) is in that same order.
+// An edge (i, j) measures T_ij = T_i^-1 T_j. Its residual is, with E = T_ij^-1 T_i^-1 T_j,
+//   e_ij = [t_E; 2 vec(q_E)]   in R^6, [translation; rotation] (core::SE3's order),
+// equal to log(E) to first order (residual.hpp says why not log(E) itself), and its information matrix Omega (6x6, symmetric positive semi-definite) is in that same order.
 // The cost of the graph is  F = 1/2 sum_edges rho(e^T Omega e)  with rho the identity, or the
 // Cauchy kernel on edges marked robust (see cost.hpp).
 #include <cstdint>

@@ -6,9 +6,10 @@
 // formulation of Ceres' examples/slam/pose_graph_3d (quaternion + translation blocks,
 // EigenQuaternionManifold, SPARSE_NORMAL_CHOLESKY, LM), written out below.
 //
-// The two solvers minimise slightly different residuals (Ceres' example: [R_a^T (p_b - p_a) -
-// p_ab; 2 vec(q_ab q_est^-1)]; ours: log(T_ab^-1 T_a^-1 T_b)), so their own final costs are not
-// comparable. Every cost this tool prints is therefore posegraph::cost() evaluated on each
+// The two solvers minimise nearly the same residual (Ceres' example: [R_a^T (p_b - p_a) - p_ab;
+// 2 vec(q_ab q_est^-1)], error in a's frame; ours, posegraph/residual.hpp: [t_E; 2 vec(q_E)] of
+// E = T_ab^-1 T_a^-1 T_b, error in the measured b's frame). With an anisotropic information matrix
+// the two frames weigh differently, so their own final costs are not exactly comparable. Every cost this tool prints is therefore posegraph::cost() evaluated on each
 // solver's final poses: 1/2 sum rho(e^T Omega e) with our residual. Ceres' own figure is in the
 // JSON as solver_cost. --robust puts a Cauchy kernel (delta = 2, Ceres' CauchyLoss(2)) on every
 // edge in both.
@@ -145,7 +146,7 @@ constexpr std::string_view kUsage =
 Optimises the pose graph of FILE.g2o (VERTEX_SE3:QUAT / EDGE_SE3:QUAT) twice from the same initial
 guess, first pose fixed: with cvo::posegraph (Levenberg-Marquardt on SE(3), CHOLMOD) and with Ceres
 Solver (quaternion + translation blocks, sparse normal Cholesky). Both final costs are computed by
-one function, 1/2 sum rho(e' Omega e) with e = log(Z^-1 Ti^-1 Tj).
+one function, 1/2 sum rho(e' Omega e) with e = [t_E; 2 vec(q_E)], E = Z^-1 Ti^-1 Tj.
 
   --json              one JSON object: per solver initial_cost, final_cost, iterations, seconds
   --max-iterations N  iteration cap of both solvers (default 100)
