@@ -69,6 +69,17 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
     return v;
   }
 
+  // 3b. The refined pose must still explain the matches RANSAC found: CVO started inside the
+  // basin of the right pose, and one that slid out of it (to a wrong local optimum of similar
+  // inner product) moves the inliers far off. α alone cannot tell, see the header.
+  const core::SE3 refined_ji = v.refinement.transform.inverse();
+  for (const std::size_t k : fit.inliers)
+    if ((dst[k] - refined_ji * src[k]).norm() < p.ransac_inlier_m) ++v.attempt.inliers_kept;
+  if (v.attempt.inliers_kept < p.min_inlier_retention * static_cast<double>(fit.inliers.size())) {
+    v.attempt.verdict = "CVO left the matches";
+    return v;
+  }
+
   // 4. Eq. 12, all four at ℓ_min (where align() converged): comparable numbers.
   const auto& cvo = registration.parameters();
   auto& ip = v.inner_products;

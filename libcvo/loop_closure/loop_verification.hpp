@@ -12,6 +12,11 @@
 //      h (h.f_Z = f_{h^-1 Z}), so the start h_0 = T_ji^0 becomes (T_ji^0)^-1 and the result is
 //      T_ij, j's points into i's frame. The measurement is Z = T_ij^-1 = T_j^-1 T_i. Not converged
 //      (or no overlap): "CVO failed".
+//   3b. not in the paper: the CVO pose must keep min_inlier_retention of RANSAC's inliers within
+//      ransac_inlier_m, else "CVO left the matches". On fr1/rpy, pairs 17-23 degrees apart, CVO
+//      sometimes slid 5-12 degrees away from a RANSAC pose within about 1 degree of the truth
+//      and α still came out above 0 (the wrong pose overlaps the clouds about as well); such a
+//      pose moves the matched keypoints tens of centimetres, a right one keeps them.
 //   4. α (eq. 12), every inner product <f_Xi, T.f_Xj> with X_i fixed, X_j moving, T mapping j's
 //      frame into i's, and all at ONE length-scale: ℓ_min (min(ell_min, ell_init) of the CVO
 //      parameters, where align() converges), so the four numbers are comparable:
@@ -26,7 +31,7 @@
 // Information of the loop edge. The solver's Hessian H (registration.hpp: H/ℓ² at ℓ_min, order
 // [translation, rotation]) is the information of a LEFT perturbation T_ij <- exp(ξ) T_ij, ξ in
 // i's frame. Then Z = T_ij^-1 <- T_ij^-1 exp(-ξ) = Z exp(-ξ): a RIGHT perturbation of Z, which is
-// the pose graph's residual e = log(Z^-1 T_j^-1 T_i) (posegraph/residual.hpp, right perturbation
+// the pose graph's residual e ≈ log(Z^-1 T_j^-1 T_i) (posegraph/residual.hpp, right perturbation
 // in the `to` node's frame) up to sign. So Ω = H as it comes, because CVO runs with the new
 // keyframe i, the edge's `to`, fixed. (Run the other way, X_j fixed, the solver's H' would be for
 // a left perturbation of Z in j's frame, and Ω = Ad(Z)ᵀ H' Ad(Z); the tests check the two agree.)
@@ -51,6 +56,7 @@ struct LoopDetectorParameters {
   int ransac_iterations = 300;
   double ransac_inlier_m = 0.03;     // 3-D distance for a match to count as an inlier
   int min_inliers = 12;              // fewer after RANSAC: no initial pose, no loop
+  double min_inlier_retention = 0.5; // share of RANSAC's inliers the CVO pose must keep (step 3b)
   std::size_t max_points = 8192;     // capacity of the stored clouds
   core::SelectionParameters selection;  // min_depth_m / max_depth_m: the keypoints' depth range
   std::uint32_t ransac_seed = 0;        // RANSAC's std::mt19937
@@ -72,9 +78,11 @@ struct LoopAttempt {
   std::int64_t candidate = 0;
   double eta = 0;
   int matches = 0, inliers = 0;
+  int inliers_kept = 0;  // RANSAC inliers still within ransac_inlier_m under the CVO pose
   double alpha = 0;
   bool accepted = false;
-  const char* verdict = "";  // "accepted", "too few matches", "RANSAC failed", "CVO failed", "alpha <= 0"
+  const char* verdict = "";  // "accepted", "too few matches", "RANSAC failed", "CVO failed",
+                             // "CVO left the matches", "alpha <= 0"
 };
 
 /// What verification needs of a keyframe. Copies share the descriptor matrix (cv::Mat), which

@@ -136,6 +136,39 @@ TEST(LoopVerification, AlphaComparesInnerProductsAtOneLengthScaleIncludingTheCur
   }
 }
 
+// The clouds and the keypoints of a pair disagree by S (j's cloud moved by S, its keypoints not):
+// CVO, started at RANSAC's pose, converges to the pose of the clouds, which aligns them better than
+// identity, RANSAC's pose or the estimate, so α > 0. Only the matches tell that this pose is not the
+// one the keypoints were seen from: the CVO pose must keep RANSAC's inliers (step 3b).
+TEST(LoopVerification, ACvoPoseThatLeavesTheMatchesIsRefused) {
+  const LoopDetectorParameters parameters;
+  auto registration = make_registration(parameters);
+  RealPair p = real_pair(20, 25);
+  const auto right = verify_loop(p.i, p.j, parameters, registration);
+  print("frames 25 -> 20", right);
+  ASSERT_TRUE(right.closure.has_value()) << right.attempt.verdict;
+  EXPECT_GE(right.attempt.inliers_kept, 0.8 * right.attempt.inliers);
+
+  const core::SE3 S = core::SE3::exp((core::Vector6d() << 0.04, -0.02, 0.03, 0.0, 0.1, 0.03).finished());
+  registration::PointCloud moved(p.j.cloud.size());
+  for (std::size_t k = 0; k < p.j.cloud.size(); ++k)
+    moved.push_back((S.rotation().cast<float>() * p.j.cloud.position(k) + S.translation().cast<float>()),
+                    p.j.cloud.feature(k));
+  p.j.cloud = std::move(moved);
+  const auto wrong = verify_loop(p.i, p.j, parameters, registration);
+  print("frames 25 -> 20, j's cloud moved 6 degrees", wrong);
+  EXPECT_STREQ(wrong.attempt.verdict, "CVO left the matches");
+  EXPECT_FALSE(wrong.closure.has_value());
+  EXPECT_LT(wrong.attempt.inliers_kept, wrong.attempt.inliers / 2);
+  // Without step 3b the loop would have gone in: CVO found the clouds' pose, and α was positive.
+  LoopDetectorParameters unguarded = parameters;
+  unguarded.min_inlier_retention = 0;
+  const auto accepted = verify_loop(p.i, p.j, unguarded, registration);
+  ASSERT_TRUE(accepted.closure.has_value()) << accepted.attempt.verdict;
+  const auto error = testing::pose_error(accepted.closure->measurement, S * p.truth);
+  EXPECT_LT(error.rotation_deg, 1.5);
+}
+
 // Colour pixels in a random order (fixed seed): the same statistics, no structure.
 core::RgbdFrame shuffled(const core::RgbdFrame& frame) {
   core::RgbdFrame out = frame;
@@ -168,7 +201,7 @@ TEST(LoopVerification, UnrelatedImagesAreRefusedWithAVerdict) {
       EXPECT_FALSE(v.closure.has_value());
       const std::string verdict = v.attempt.verdict;
       EXPECT_TRUE(verdict == "too few matches" || verdict == "RANSAC failed" || verdict == "CVO failed" ||
-                  verdict == "alpha <= 0")
+                  verdict == "CVO left the matches" || verdict == "alpha <= 0")
           << verdict;
     }
   }
