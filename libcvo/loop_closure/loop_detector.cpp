@@ -23,8 +23,11 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core:
   std::vector<LoopClosure> loops;
   if (previous_) {
     const auto candidates = database_.candidates(id, bow, *previous_, parameters_.loop.similarity_threshold);
+    int refinements = 0;
     for (const auto& c : candidates) {  // best η first
+      if (parameters_.max_refinements > 0 && refinements == parameters_.max_refinements) break;
       auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
+      if (v.refinement.iterations > 0) ++refinements;
       v.attempt.eta = c.eta;
       attempts_.push_back(v.attempt);
       if (v.closure) {

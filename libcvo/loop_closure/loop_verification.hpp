@@ -57,6 +57,7 @@ struct LoopDetectorParameters {
   double ransac_inlier_m = 0.03;     // 3-D distance for a match to count as an inlier
   int min_inliers = 12;              // fewer after RANSAC: no initial pose, no loop
   double min_inlier_retention = 0.5; // share of RANSAC's inliers the CVO pose must keep (step 3b)
+  int max_refinements = 3;           // CVO refinements per new keyframe (best η first); 0: no limit
   std::size_t max_points = 8192;     // capacity of the stored clouds
   core::SelectionParameters selection;  // min_depth_m / max_depth_m: the keypoints' depth range
   std::uint32_t ransac_seed = 0;        // RANSAC's std::mt19937

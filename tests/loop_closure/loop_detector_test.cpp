@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -90,6 +91,41 @@ TEST_F(LoopDetectorTest, FindsARevisitedRealViewAmongEarlierKeyframes) {
   EXPECT_EQ(none.size(), again.last_attempts().front().accepted ? 1u : 0u);
 
   EXPECT_THROW(d.add_keyframe(2, k[0].frame, k[0].cloud, pose(0)), std::invalid_argument);  // ids must increase
+}
+
+// max_refinements caps the CVO refinements (the back end's main cost) per new keyframe; candidates
+// refused before CVO (matches, RANSAC) do not count, and the best η go first.
+TEST_F(LoopDetectorTest, RefinesAtMostMaxRefinementsCandidatesBestEtaFirst) {
+  const std::vector<std::size_t> frames{10, 13, 16, 19, 22, 40, 14};
+  std::vector<testing::TestKeyframe> k;
+  for (const auto f : frames) k.push_back(testing::real_keyframe(f));
+  const auto refined = [](const LoopAttempt& a) {
+    const std::string verdict = a.verdict;
+    return verdict != "too few matches" && verdict != "RANSAC failed";
+  };
+  const auto run = [&](int max_refinements) {
+    LoopDetectorParameters parameters;
+    parameters.max_refinements = max_refinements;
+    LoopDetector d(Vocabulary::load(CVO_DEFAULT_VOCABULARY), parameters);
+    for (std::size_t n = 0; n < k.size(); ++n) d.add_keyframe(static_cast<std::int64_t>(n), k[n].frame, k[n].cloud, k[n].truth);
+    print_attempts(static_cast<std::int64_t>(k.size() - 1), d);
+    return d.last_attempts();
+  };
+  const auto all = run(0);
+  const auto capped = run(2);
+  const auto count = [&](const std::vector<LoopAttempt>& attempts) { return std::count_if(attempts.begin(), attempts.end(), refined); };
+  ASSERT_GT(count(all), 2);  // frame 14 overlaps 10-22: more than two candidates reach CVO
+  EXPECT_EQ(count(capped), 2);
+  // The capped run tried the uncapped one's attempts in the same order, up to its second refinement.
+  ASSERT_LE(capped.size(), all.size());
+  for (std::size_t n = 0; n < capped.size(); ++n) {
+    EXPECT_EQ(capped[n].candidate, all[n].candidate);
+    EXPECT_STREQ(capped[n].verdict, all[n].verdict);
+    if (n > 0) {
+      EXPECT_GE(capped[n - 1].eta, capped[n].eta);
+    }
+  }
+  EXPECT_TRUE(refined(capped.back()));
 }
 
 // The textured room's orbit turns the camera a full 360° in 12 s and returns to its start pose.
