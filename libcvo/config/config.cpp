@@ -81,6 +81,8 @@ const std::vector<Field>& table() {
           "farthest depth used (m)"),
       row("selection.gradient_weight", &Config::selection, &SelectionParameters::gradient_weight, kNonNegative,
           "scale of the gradient part of a point's label (0: RGB only)"),
+      row("selection.depth_time_offset_s", &Config::selection, &SelectionParameters::depth_time_offset_s, kAny,
+          "depth taken at its stamp plus this, relative to colour stamps (s); KF-CVO depth-time compensation"),
       row("cvo.ell_init", &Config::cvo, &CvoParameters::ell_init, kPositive,
           "ℓ_init, initial spatial kernel length-scale (m)"),
       row("cvo.ell_min", &Config::cvo, &CvoParameters::ell_min, kPositive,

@@ -99,6 +99,23 @@ core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResu
   return fused.is_finite() ? fused : kf.transform;
 }
 
+// The camera's motion from the colour image's time to the depth image's, at the last measured
+// velocity: identity before there is one, when the stamps are missing or implausible, and when
+// they are equal (the source declares the two images simultaneous: rendered frames, synchronised
+// sensors; depth_time_offset_s describes how a Kinect's depth stamps lag). Capped at
+// kMaxCompensationDeg: a wrong compensation corrupts the next velocity, which would feed back.
+core::SE3 KeyframeOdometry::colour_T_depth(const core::RgbdFrame& frame) const {
+  constexpr double kMaxDt = 0.05, kMaxCompensationDeg = 5.0;
+  if (!have_previous_ || !(velocity_dt_ > 0) || !(frame.depth_timestamp > 0) ||
+      frame.depth_timestamp == frame.timestamp)
+    return {};
+  const double dt = frame.depth_timestamp - frame.timestamp + parameters_.selection.depth_time_offset_s;
+  if (!(std::abs(dt) <= kMaxDt) || dt == 0) return {};
+  const core::SE3 motion = core::SE3::exp((dt / velocity_dt_) * velocity_.log());
+  if (!motion.is_finite() || motion.angle() * 180.0 / std::numbers::pi > kMaxCompensationDeg) return {};
+  return motion;
+}
+
 bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
   const auto& k = parameters_.keyframe;
   if (gamma < k.inner_product_ratio_threshold) reason_ = KeyframeReason::kGamma;
@@ -117,7 +134,7 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
   const core::SE3 predicted = have_frame_ ? last_pose_ * velocity_ : parameters_.initial_pose;
 
   const auto selection_start = Clock::now();
-  const auto selection = selector_.select(frame, clouds_[current_]);
+  const auto selection = selector_.select(frame, clouds_[current_], colour_T_depth(frame));
   result.selection_ms = ms_since(selection_start);
   result.selection_status = selection.status;
   result.points = clouds_[current_].size();
@@ -197,6 +214,7 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
       result.keyframe = true;
     }
     result.motion = previous_pose_.inverse() * pose;
+    if (f2f_ok || result.status == TrackStatus::kOk) velocity_dt_ = frame.timestamp - previous_timestamp_;
     if (f2f_ok) velocity_ = f2f.transform;
     else if (result.status == TrackStatus::kOk) velocity_ = result.motion;
   }

@@ -83,7 +83,7 @@ void PointSelector::build_ray_table(const core::Intrinsics& K) {
   ray_intrinsics_ = K;
 }
 
-SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud) {
+SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth) {
   cloud.clear();
   SelectionResult result;
   if (frame.bgr.empty() || frame.depth.empty() || frame.bgr.cols != width_ || frame.bgr.rows != height_ ||
@@ -207,6 +207,15 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
   const float depth_inv = static_cast<float>(1.0 / K.depth_scale);
   const auto gradient_weight = static_cast<float>(parameters_.gradient_weight);
+  // Depth-time compensation (see the header).
+  const bool compensate = colour_T_depth.angle() > 0 || colour_T_depth.translation().squaredNorm() > 0;
+  const Eigen::Matrix3f R_cd = colour_T_depth.rotation_matrix().cast<float>();
+  const Eigen::Matrix3f R_dc = R_cd.transpose();
+  const Eigen::Vector3f t_cd = colour_T_depth.translation().cast<float>();
+  const auto& dist = K.distortion;
+  const float k1 = static_cast<float>(dist[0]), k2 = static_cast<float>(dist[1]), p1 = static_cast<float>(dist[2]),
+              p2 = static_cast<float>(dist[3]), k3 = static_cast<float>(dist[4]);
+  const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
     if (best < 0) continue;
@@ -217,10 +226,29 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
     const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
                     gradient_weight * (grey_[p + W] - grey_[p - W])};
-    if (distorted)
-      cloud.push_back({rays_[2 * p] * z, rays_[2 * p + 1] * z, z}, f);
-    else
-      cloud.push_back({(static_cast<float>(u) - cx) * z * fx_inv, (static_cast<float>(v) - cy) * z * fy_inv, z}, f);
+    const float rx = distorted ? rays_[2 * p] : (static_cast<float>(u) - cx) * fx_inv;
+    const float ry = distorted ? rays_[2 * p + 1] : (static_cast<float>(v) - cy) * fy_inv;
+    if (!compensate) {
+      cloud.push_back({rx * z, ry * z, z}, f);
+      continue;
+    }
+    // The ray at the depth time, projected through the lens into the depth image (registered to
+    // the colour image, so the same distortion); its depth there scales that ray.
+    const Eigen::Vector3f P_d = R_dc * (Eigen::Vector3f(rx * z, ry * z, z) - t_cd);
+    if (!(P_d.z() > 0)) continue;
+    const float x = P_d.x() / P_d.z(), y = P_d.y() / P_d.z();
+    float xd = x, yd = y;
+    if (distorted) {
+      const float r2 = x * x + y * y, radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+      xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+      yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+    }
+    const auto ud = std::lround(fx * xd + cx), vd = std::lround(fy * yd + cy);
+    if (ud < 0 || vd < 0 || ud >= width_ || vd >= height_) continue;
+    const auto raw = static_cast<float>(frame.depth.at<std::uint16_t>(static_cast<int>(vd), static_cast<int>(ud)));
+    if (raw <= 0 || raw < min_raw || raw > max_raw) continue;
+    const Eigen::Vector3f P_c = R_cd * (P_d * (raw * depth_inv / P_d.z())) + t_cd;
+    cloud.push_back({P_c.x(), P_c.y(), P_c.z()}, f);
   }
   result.selected = cloud.size();
   if (cloud.overflowed() > 0) result.status = SelectionStatus::kCapacityClamped;

@@ -29,6 +29,7 @@
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 
 namespace cvo::registration {
@@ -55,7 +56,16 @@ class PointSelector {
   PointSelector(int width, int height, const core::SelectionParameters& parameters);
 
   /// Fills `cloud` (cleared first) with the selected points of `frame` in its camera frame.
-  SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud);
+  ///
+  /// `colour_T_depth`: the camera at the depth image's time in its frame at the colour image's time
+  /// (identity: simultaneous images). Otherwise each point's depth is read where its colour pixel's
+  /// ray was at the depth time, P_d = R^T (P_c - t) with the pixel's own depth as the guess for the
+  /// small translation, and the point is moved back to the colour time, P_c = R P_d + t, keeping the
+  /// colour pixel's ray. Selected points are colour edges, often at depth discontinuities, where a
+  /// few pixels of rotation between the two images read the other side's depth. A point whose
+  /// compensated depth is missing or out of range is dropped.
+  SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud,
+                         const core::SE3& colour_T_depth = core::SE3());
 
   [[nodiscard]] int width() const { return width_; }
   [[nodiscard]] int height() const { return height_; }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -74,13 +75,46 @@ TEST(PointSelection, DeterministicAndBackProjectsToTheScene) {
   }
 }
 
+// Depth taken after the colour image, the camera having moved by M in between (2 cm along the
+// view, 1 cm sideways, 1°): read at the colour pixels as they are, every depth is off by about
+// the 2 cm; with colour_T_depth = M each point is looked up where its ray was at the depth time
+// and lands back on the surface.
+TEST(PointSelection, DepthTimeCompensationPutsPointsBackOnTheSurface) {
+  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  const auto K = *core::camera_preset("synthetic");
+  const auto pose = testing::camera_looking_north();
+  const core::SE3 M(core::so3_exp(Eigen::Vector3d(0.0, 1.0 * M_PI / 180.0, 0.0)), Eigen::Vector3d(0.01, 0.0, 0.02));
+  core::RgbdFrame frame = sim::render(scene, K, pose);
+  frame.depth = sim::render(scene, K, pose * M).depth;
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  const auto surface_errors = [&](const core::SE3& colour_T_depth) {
+    PointCloud cloud(8192);
+    EXPECT_EQ(selector.select(frame, cloud, colour_T_depth).status, SelectionStatus::kOk);
+    std::vector<double> d;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      d.push_back(sim::distance_to_surface(scene, pose * cloud.position(i).cast<double>()));
+    std::sort(d.begin(), d.end());
+    EXPECT_GT(d.size(), 2000u);
+    return d;
+  };
+  const auto plain = surface_errors(core::SE3());
+  const auto compensated = surface_errors(M);
+  const auto at = [](const std::vector<double>& d, double q) { return d[static_cast<std::size_t>(q * (d.size() - 1))]; };
+  std::printf("distance to the surface, median / p90: as read %.1f / %.1f mm, compensated %.1f / %.1f mm\n",
+              1e3 * at(plain, 0.5), 1e3 * at(plain, 0.9), 1e3 * at(compensated, 0.5), 1e3 * at(compensated, 0.9));
+  EXPECT_GT(at(plain, 0.5), 0.01);
+  EXPECT_LT(at(compensated, 0.5), 0.002);
+  EXPECT_LT(at(compensated, 0.9), 0.01);
+}
+
 TEST(PointSelection, GradientWeightScalesTheGradientLabel) {
   const auto frame = rendered(sim::SceneKind::textured_room);
-  core::SelectionParameters half, none;
+  core::SelectionParameters full, half, none;
+  full.gradient_weight = 1.0;
   half.gradient_weight = 0.5;
   none.gradient_weight = 0.0;
   PointCloud full_cloud(8192), half_cloud(8192), none_cloud(8192);
-  PointSelector(640, 480, core::SelectionParameters{}).select(frame, full_cloud);
+  PointSelector(640, 480, full).select(frame, full_cloud);
   PointSelector(640, 480, half).select(frame, half_cloud);
   PointSelector(640, 480, none).select(frame, none_cloud);
   ASSERT_EQ(full_cloud.size(), half_cloud.size());  // the weight changes labels, not the selection
