@@ -148,7 +148,7 @@ TEST(Config, OverridesUseTheSameChecks) {
   expect_rejected("cvo.ell_init=abc", "cvo.ell_init: expected a finite number, got 'abc'");
   expect_rejected("cvo.ell_init=nan", "cvo.ell_init: expected a finite number, got 'nan'");
   expect_rejected("cvo.ell_init=", "cvo.ell_init: expected a finite number, got ''");
-  expect_rejected("cvo.ell_init=0.01", "cvo.ell_min (0.05) must not exceed cvo.ell_init (0.01)");
+  expect_rejected("cvo.ell_init=0.01", "cvo.ell_min (0.07) must not exceed cvo.ell_init (0.01)");
   expect_rejected("cvo=1", "cvo: a section");
 }
 
