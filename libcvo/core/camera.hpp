@@ -32,6 +32,16 @@ struct Intrinsics {
   [[nodiscard]] std::string validate() const;
 };
 
+/// The lens model above on a normalised point: (x', y') -> (x'', y''), coefficients k1 k2 p1 p2 k3
+/// (Intrinsics::distortion). T = float in per-pixel loops.
+template <typename T>
+std::array<T, 2> distort(const std::array<double, 5>& d, T x, T y) {
+  const T k1 = static_cast<T>(d[0]), k2 = static_cast<T>(d[1]), p1 = static_cast<T>(d[2]), p2 = static_cast<T>(d[3]),
+          k3 = static_cast<T>(d[4]);
+  const T r2 = x * x + y * y, radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  return {x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x), y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y};
+}
+
 /// Named presets: "tum_fr1", "tum_fr2", "tum_fr3" (TUM RGB-D benchmark calibrations, 640x480,
 /// 5000 units/m, with the published distortion of fr1 and fr2, whose images are distorted; fr3's
 /// images were undistorted before release, so its coefficients are zero) and "synthetic" (the

@@ -212,9 +212,6 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const Eigen::Matrix3f R_cd = colour_T_depth.rotation_matrix().cast<float>();
   const Eigen::Matrix3f R_dc = R_cd.transpose();
   const Eigen::Vector3f t_cd = colour_T_depth.translation().cast<float>();
-  const auto& dist = K.distortion;
-  const float k1 = static_cast<float>(dist[0]), k2 = static_cast<float>(dist[1]), p1 = static_cast<float>(dist[2]),
-              p2 = static_cast<float>(dist[3]), k3 = static_cast<float>(dist[4]);
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
@@ -237,12 +234,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const Eigen::Vector3f P_d = R_dc * (Eigen::Vector3f(rx * z, ry * z, z) - t_cd);
     if (!(P_d.z() > 0)) continue;
     const float x = P_d.x() / P_d.z(), y = P_d.y() / P_d.z();
-    float xd = x, yd = y;
-    if (distorted) {
-      const float r2 = x * x + y * y, radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3));
-      xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
-      yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
-    }
+    const auto [xd, yd] = distorted ? core::distort(K.distortion, x, y) : std::array<float, 2>{x, y};
     const auto ud = std::lround(fx * xd + cx), vd = std::lround(fy * yd + cy);
     if (ud < 0 || vd < 0 || ud >= width_ || vd >= height_) continue;
     const auto raw = static_cast<float>(frame.depth.at<std::uint16_t>(static_cast<int>(vd), static_cast<int>(ud)));

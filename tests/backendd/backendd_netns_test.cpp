@@ -68,8 +68,7 @@ std::vector<std::int64_t> tracker_recording(const fs::path& dir, fs::path& first
 }
 
 TEST(BackenddNetns, KilledAndRestartedMidReplayLosesNoKeyframe) {
-  if (!cvo::testing::in_private_network_namespace()) GTEST_SKIP() << "runs only in a private network namespace (tests/support/in-private-netns)";
-  if (which("lcm-logger").empty() || which("lcm-logplayer").empty()) GTEST_SKIP() << "lcm-logger/lcm-logplayer missing (liblcm-bin)";
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
   cvo::test::TempDir dir;
   fs::path first, second;
   const auto keyframe_ids = tracker_recording(dir.path(), first, second);

@@ -1,6 +1,6 @@
 #pragma once
 // What the UDP multicast tests share: the LCM URL they use, the guard that they run only inside
-// tests/support/in-private-netns, and where the LCM command-line tools are.
+// tests/support/in-private-netns, where the LCM command-line tools are, and why a test skips.
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -21,6 +21,14 @@ inline bool in_private_network_namespace() {
 inline std::filesystem::path which(const std::string& tool) {
   for (const char* dir : {"/usr/bin", "/usr/local/bin", "/bin"})
     if (std::filesystem::exists(std::filesystem::path(dir) / tool)) return std::filesystem::path(dir) / tool;
+  return {};
+}
+
+/// Why a UDP multicast test cannot run here (outside in-private-netns, or without the LCM tools),
+/// or empty when it can.
+inline std::string udp_test_skip_reason() {
+  if (!in_private_network_namespace()) return "runs only in a private network namespace (tests/support/in-private-netns)";
+  if (which("lcm-logger").empty() || which("lcm-logplayer").empty()) return "lcm-logger/lcm-logplayer missing (liblcm-bin)";
   return {};
 }
 

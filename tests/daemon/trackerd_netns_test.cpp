@@ -75,8 +75,7 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
 }
 
 TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
-  if (!cvo::testing::in_private_network_namespace()) GTEST_SKIP() << "runs only in a private network namespace (tests/support/in-private-netns)";
-  if (which("lcm-logger").empty() || which("lcm-logplayer").empty()) GTEST_SKIP() << "lcm-logger/lcm-logplayer missing (liblcm-bin)";
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
   cvo::test::TempDir dir;
   const auto recording = dir.path() / "clip.lcmlog";
   const auto conversion = cvo::testing::run_tool(
