@@ -21,6 +21,7 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
   if (!frame) return std::nullopt;
   cvo_lcm::keyframe_t m{};
   m.version = cvo_lcm::keyframe_t::SCHEMA_VERSION;
+  m.session = keyframe.session;
   m.id = keyframe.id;
   m.frame_index = frame->frame_index;
   m.utime = frame->utime;
@@ -88,7 +89,7 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
     if (m.xyz[i].size() != 3 || m.labels[i].size() != registration::kFeatureDim)
       return fail(error, "point " + std::to_string(i) + " has the wrong number of coordinates or label channels");
 
-  Keyframe k{m.id, std::move(*images), *pose, registration::PointCloud(static_cast<std::size_t>(m.num_points))};
+  Keyframe k{m.session, m.id, std::move(*images), *pose, registration::PointCloud(static_cast<std::size_t>(m.num_points))};
   for (std::int32_t i = 0; i < m.num_points; ++i) {
     const auto& p = m.xyz[static_cast<std::size_t>(i)];
     registration::Feature f{};

@@ -13,9 +13,11 @@ std::nullopt_t fail(std::string* error, const std::string& what) {
 }
 }  // namespace
 
-cvo_lcm::local_graph_t to_message(const odometry::LocalGraph& graph, std::int64_t keyframe_id, std::int64_t utime) {
+cvo_lcm::local_graph_t to_message(const odometry::LocalGraph& graph, std::int64_t session, std::int64_t keyframe_id,
+                                  std::int64_t utime) {
   cvo_lcm::local_graph_t m{};
   m.version = cvo_lcm::local_graph_t::SCHEMA_VERSION;
+  m.session = session;
   m.keyframe_id = keyframe_id;
   m.utime = utime;
   for (const auto& n : graph.nodes())

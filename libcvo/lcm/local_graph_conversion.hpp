@@ -9,7 +9,9 @@
 
 namespace cvo::lcm {
 
-cvo_lcm::local_graph_t to_message(const odometry::LocalGraph& graph, std::int64_t keyframe_id, std::int64_t utime);
+/// The graph of keyframe (session, keyframe_id), closed at `utime`.
+cvo_lcm::local_graph_t to_message(const odometry::LocalGraph& graph, std::int64_t session, std::int64_t keyframe_id,
+                                  std::int64_t utime);
 
 /// Fails on another schema version, an empty graph, a bad pose or information matrix (not
 /// finite), or an edge naming a frame that is not a node of the graph.

@@ -13,16 +13,22 @@ constexpr int kGraphEdge = 8 + 8 + kPose3d + 36 * 8;  // from, to, measurement, 
 // rgbd_frame_t: version, utime, depth_utime, frame_index (28), fx fy cx cy (60), width height (68),
 // depth_scale (76), distortion[5] (116), two encodings (118), then the counts.
 constexpr std::array kRgbdCounts{CountField{"colour_size", 118, 1}, CountField{"depth_size", 122, 1}};
-// keyframe_t: version, id, frame_index, utime (28), pose (84), fx..cy (116), width height (124),
-// depth_scale (132), distortion[5] (172), two encodings (174), then the counts; a point is xyz[3] +
-// labels[5] floats.
-constexpr std::array kKeyframeCounts{CountField{"num_points", 174, 8 * 4}, CountField{"colour_size", 178, 1},
-                                     CountField{"depth_size", 182, 1}};
-// local_graph_t: version, keyframe_id, utime (20), then the counts.
-constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 20, kGraphNode},
-                                       CountField{"num_edges", 24, kGraphEdge}};
-// map_t: version, utime, revision (20), then the counts; a keyframe is an id and a pose.
-constexpr std::array kMapCounts{CountField{"num_keyframes", 20, 8 + kPose3d}, CountField{"num_loops", 24, kGraphEdge}};
+// keyframe_t: version, session, id, frame_index, utime (36), pose (92), fx..cy (124), width height
+// (132), depth_scale (140), distortion[5] (180), two encodings (182), then the counts; a point is
+// xyz[3] + labels[5] floats.
+constexpr std::array kKeyframeCounts{CountField{"num_points", 182, 8 * 4}, CountField{"colour_size", 186, 1},
+                                     CountField{"depth_size", 190, 1}};
+// local_graph_t: version, session, keyframe_id, utime (28), then the counts.
+constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 28, kGraphNode},
+                                       CountField{"num_edges", 32, kGraphEdge}};
+// map_t: version, utime, revision (20), then the counts of map_session_t (session, placed, piece,
+// keyframes, joined_at_keyframe, correction), map_keyframe_t (session, id, utime, pose) and
+// map_loop_t (two sessions, an edge).
+constexpr int kMapSession = 8 + 1 + 8 + 4 + 8 + kPose3d;
+constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
+constexpr int kMapLoop = 8 + 8 + kGraphEdge;
+constexpr std::array kMapCounts{CountField{"num_sessions", 20, kMapSession}, CountField{"num_keyframes", 24, kMapKeyframe},
+                                CountField{"num_loops", 28, kMapLoop}};
 
 std::int32_t read_be32(const std::uint8_t* p) {
   return static_cast<std::int32_t>((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
@@ -33,12 +39,12 @@ std::int32_t read_be32(const std::uint8_t* p) {
 
 WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "rgbd_frame_t") return {126, kRgbdCounts};
-  if (type_name == "keyframe_t") return {186, kKeyframeCounts};
-  if (type_name == "local_graph_t") return {28, kLocalGraphCounts};
-  if (type_name == "map_t") return {28, kMapCounts};
-  // status_t: version, utime, pid, state (17), 3 doubles (41), 5 int64 (81), queue_depth (85),
-  // rss_bytes (93), bad_messages[5] (133), then the strings process and detail.
-  if (type_name == "status_t") return {133, {}, 133, 2};
+  if (type_name == "keyframe_t") return {194, kKeyframeCounts};
+  if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
+  if (type_name == "map_t") return {32, kMapCounts};
+  // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
+  // (93), rss_bytes (101), bad_messages[6] (149), then the strings process and detail.
+  if (type_name == "status_t") return {149, {}, 149, 2};
   return {};
 }
 
@@ -52,7 +58,7 @@ std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int
     at += 4 + length;
   }
   if (layout.counts.empty()) return {};
-  std::int64_t needed = layout.header_bytes;  // 64-bit: counts up to 2^31 times up to 360 bytes
+  std::int64_t needed = layout.header_bytes;  // 64-bit: counts up to 2^31 times up to 376 bytes
   for (const auto& field : layout.counts) {
     const std::int32_t count = read_be32(body + field.offset);
     if (count < 0) return "negative count " + std::string(field.name) + " = " + std::to_string(count);

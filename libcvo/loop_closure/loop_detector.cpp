@@ -15,14 +15,24 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core:
   if (previous_ && id <= *previous_)
     throw std::invalid_argument("LoopDetector::add_keyframe: id " + std::to_string(id) + " is not above " +
                                 std::to_string(*previous_));
+  return add_keyframe(KeyframePlacement{id, previous_, pose, 0}, frame, cloud);
+}
+
+std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& placement, const core::RgbdFrame& frame,
+                                                    const registration::PointCloud& cloud) {
+  const std::int64_t id = placement.id;
+  if (keyframes_.contains(id))
+    throw std::invalid_argument("LoopDetector::add_keyframe: keyframe " + std::to_string(id) + " is stored already");
   attempts_.clear();
   const OrbFeatures features = extract_orb(frame.bgr, parameters_.orb);
-  LoopKeyframe keyframe = make_loop_keyframe(id, features, frame, cloud, pose, parameters_);
+  LoopKeyframe keyframe = make_loop_keyframe(id, features, frame, cloud, placement.pose, parameters_);
+  keyframe.piece = placement.piece;
   BowVector bow = vocabulary_.transform(features.descriptors);
 
   std::vector<LoopClosure> loops;
-  if (previous_) {
-    const auto candidates = database_.candidates(id, bow, *previous_, parameters_.loop.similarity_threshold);
+  if (placement.previous && database_.contains(*placement.previous)) {
+    const auto candidates =
+        database_.candidates(id, bow, *placement.previous, parameters_.loop.similarity_threshold);
     int refinements = 0;
     for (const auto& c : candidates) {  // best η first
       if (parameters_.max_refinements > 0 && refinements == parameters_.max_refinements) break;
@@ -45,6 +55,14 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core:
 void LoopDetector::update_poses(const std::map<std::int64_t, core::SE3>& poses) {
   for (const auto& [id, pose] : poses)
     if (const auto it = keyframes_.find(id); it != keyframes_.end()) it->second.pose = pose;
+}
+
+void LoopDetector::update_poses(const std::map<std::int64_t, PlacedPose>& poses) {
+  for (const auto& [id, placed] : poses)
+    if (const auto it = keyframes_.find(id); it != keyframes_.end()) {
+      it->second.pose = placed.pose;
+      it->second.piece = placed.piece;
+    }
 }
 
 }  // namespace cvo::loop_closure

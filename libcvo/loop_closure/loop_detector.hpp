@@ -18,6 +18,11 @@
 // Steps 2-4, the exact directions of the transforms, the length-scale of the α inner products and
 // why the CVO Hessian is the edge's information as it comes: loop_verification.hpp.
 //
+// Several tracker sessions (slam/mapper.hpp): each keyframe names its predecessor in its own
+// session (η's normaliser; the first keyframe of a session has none, so it proposes no candidates)
+// and the piece of map its pose is in. Candidates come from every earlier keyframe of every session;
+// the α test's trajectory term only compares keyframes of the same piece (loop_verification.hpp).
+//
 // The BoW vector uses all of a keyframe's ORB descriptors (appearance); matching uses only the
 // keypoints with depth in the selection's range (only they give 3-D correspondences).
 #include <cstdint>
@@ -39,11 +44,33 @@ namespace cvo::loop_closure {
 
 // LoopDetectorParameters, LoopClosure and LoopAttempt: loop_verification.hpp.
 
+/// Where a new keyframe sits: its id (unique), its predecessor in its session (none for the first),
+/// its current global estimate T_piece_keyframe and the piece of map that pose is in.
+struct KeyframePlacement {
+  std::int64_t id = 0;
+  std::optional<std::int64_t> previous;
+  core::SE3 pose;
+  std::int64_t piece = 0;
+};
+
+/// A keyframe's current estimate after an optimisation or a join of pieces.
+struct PlacedPose {
+  core::SE3 pose;
+  std::int64_t piece = 0;
+};
+
 class LoopDetector {
  public:
   LoopDetector(Vocabulary vocabulary, const LoopDetectorParameters& parameters);
 
-  /// Stores keyframe `id` (ids increase; `pose` is its current global estimate T_world_keyframe,
+  /// Stores a keyframe placed as `placement` says (any order of ids across sessions) and returns
+  /// the loops accepted between it and earlier keyframes, best η first; every candidate tried is in
+  /// last_attempts(). Throws std::invalid_argument when the id is stored already, and as
+  /// extract_orb and keypoints_with_depth do on a bad frame.
+  std::vector<LoopClosure> add_keyframe(const KeyframePlacement& placement, const core::RgbdFrame& frame,
+                                        const registration::PointCloud& cloud);
+
+  /// One session, one piece: keyframe `id` follows the last one added (ids increase; `pose` is its current global estimate T_world_keyframe,
   /// `cloud` its CVO points in its camera frame) and returns the loops accepted between it and
   /// earlier keyframes, best η first. Every candidate tried is recorded in last_attempts().
   /// Throws std::invalid_argument when id is not above every earlier id, and as extract_orb and
@@ -54,6 +81,7 @@ class LoopDetector {
   /// New global estimates after an optimisation (used for T_rel in the α test). Ids that are not
   /// stored keyframes (e.g. ordinary frames of the graph) are ignored.
   void update_poses(const std::map<std::int64_t, core::SE3>& poses);
+  void update_poses(const std::map<std::int64_t, PlacedPose>& poses);
 
   [[nodiscard]] const std::vector<LoopAttempt>& last_attempts() const { return attempts_; }
   [[nodiscard]] std::size_t size() const { return keyframes_.size(); }

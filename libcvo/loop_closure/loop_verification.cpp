@@ -1,6 +1,7 @@
 #include "libcvo/loop_closure/loop_verification.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "libcvo/loop_closure/feature_matching.hpp"
 #include "libcvo/loop_closure/rigid_ransac.hpp"
@@ -87,7 +88,10 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
   ip.cvo = registration.inner_product(i.cloud, j.cloud, v.refinement.transform, ip.ell);
   ip.identity = registration.inner_product(i.cloud, j.cloud, core::SE3(), ip.ell);
   ip.initial = registration.inner_product(i.cloud, j.cloud, v.initial.inverse(), ip.ell);
-  ip.estimate = registration.inner_product(i.cloud, j.cloud, i.pose.inverse() * j.pose, ip.ell);
+  // Keyframes of two pieces of map (sessions not joined yet) have no relative estimate: that term
+  // drops out of the max.
+  ip.estimate = i.piece == j.piece ? registration.inner_product(i.cloud, j.cloud, i.pose.inverse() * j.pose, ip.ell)
+                                   : -std::numeric_limits<double>::infinity();
   v.attempt.alpha = ip.alpha();
   if (!(v.attempt.alpha > 0)) {
     v.attempt.verdict = "alpha <= 0";

@@ -21,7 +21,8 @@
 //      frame into i's, and all at ONE length-scale: ℓ_min (min(ell_min, ell_init) of the CVO
 //      parameters, where align() converges), so the four numbers are comparable:
 //        α = <X_i, T_ij X_j> - max(<X_i, X_j>, <X_i, (T_ji^0)^-1 X_j>, <X_i, T_rel X_j>),
-//      T_rel = T_i^-1 T_j from the current global estimates of the two keyframes. α <= 0:
+//      T_rel = T_i^-1 T_j from the current global estimates of the two keyframes (a term only
+//      when both are in the same piece of map: two sessions not joined yet have no T_rel). α <= 0:
 //      "alpha <= 0" (the CVO pose aligns no better than identity, the RANSAC pose, or what the
 //      trajectory already says: such a loop would add nothing or harm). When RANSAC's pose is
 //      already at the optimum (exact rendered depth), CVO can only tie with it: α is then at the
@@ -92,7 +93,9 @@ struct LoopKeyframe {
   std::int64_t id = 0;
   Keypoints3d keypoints;           // ORB keypoints with depth, camera frame
   registration::PointCloud cloud;  // CVO points, camera frame (a copy)
-  core::SE3 pose;                  // current global estimate T_world_keyframe
+  core::SE3 pose;                  // current global estimate T_piece_keyframe
+  std::int64_t piece = 0;          // the piece of map `pose` is in (mapper.hpp): poses of two
+                                   // pieces are not comparable
 };
 
 /// The keyframe's keypoints with depth (selection's depth range) and a copy of the first

@@ -36,44 +36,71 @@ posegraph::OptimizerOptions Backend::optimizer_options() const {
   return options;
 }
 
-// The graph's keyframe becomes (or already is) a node of the keyframe graph: the first keyframe
-// is fixed at its tracker pose; a restart's keyframe is bridged from the previous graph's end.
-void Backend::join_keyframe(NodeId keyframe, const LocalFrame& first) {
+void Backend::add_session(SessionId session) {
+  if (sessions_.contains(session)) return;
+  sessions_.emplace(session, SessionState{order_.size(), session, std::nullopt, std::nullopt, {}});
+  order_.push_back(session);
+}
+
+SessionId Backend::piece(SessionId session) const {
+  const auto it = sessions_.find(session);
+  return it == sessions_.end() ? session : it->second.piece;
+}
+
+bool Backend::placed(SessionId session) const { return !order_.empty() && piece(session) == order_.front(); }
+
+// The graph's keyframe becomes (or already is) a node of the keyframe graph: a session's first
+// keyframe anchors its piece at its tracker pose; a restart's keyframe is bridged from the end of
+// the session's previous graph.
+void Backend::join_keyframe(SessionState& session, NodeId keyframe, const LocalFrame& first) {
   if (keyframes_.contains(keyframe)) return;
-  if (!last_node_) {
+  if (!session.last_node) {
     keyframes_.add_node(keyframe, first.odometry, /*fixed=*/true);
+    session.anchor = keyframe;
     return;
   }
-  const core::SE3 guess = last_odometry_.inverse() * first.odometry;  // the tracker's prediction
-  keyframes_.add_node(keyframe, keyframes_.node(*last_node_).pose * guess);
-  const posegraph::Edge bridge{*last_node_, keyframe, guess,
+  const core::SE3 guess = session.last_odometry.inverse() * first.odometry;  // the tracker's prediction
+  keyframes_.add_node(keyframe, keyframes_.node(*session.last_node).pose * guess);
+  const posegraph::Edge bridge{*session.last_node, keyframe, guess,
                                parameters_.bridge_information * core::Matrix6d::Identity(), false};
   keyframes_.add_edge(bridge);
   bridges_.push_back(bridge);
 }
 
 const LocalSolution& Backend::add_local_graph(NodeId keyframe_id, const odometry::LocalGraph& graph) {
+  return add_local_graph(order_.empty() ? SessionId{0} : order_.front(), keyframe_id, graph);
+}
+
+const LocalSolution& Backend::add_local_graph(SessionId session_id, NodeId keyframe_id, const odometry::LocalGraph& graph) {
   if (graph.empty()) throw std::invalid_argument("backend: empty local graph");
   if (static_cast<NodeId>(graph.keyframe().frame_index) != keyframe_id)
     throw std::invalid_argument("backend: local graph starts at frame " + std::to_string(graph.keyframe().frame_index) +
                                 ", not at keyframe " + std::to_string(keyframe_id));
   if (graph_of_keyframe_.contains(keyframe_id))
     throw std::invalid_argument("backend: keyframe " + std::to_string(keyframe_id) + "'s graph was added already");
+  for (const auto& n : graph.nodes())
+    if (const auto it = session_of_node_.find(static_cast<NodeId>(n.frame_index));
+        it != session_of_node_.end() && it->second != session_id)
+      throw std::invalid_argument("backend: frame " + std::to_string(n.frame_index) + " belongs to another session");
 
   LocalSolution solution = optimise_local_graph(graph, optimizer_options());
-  join_keyframe(keyframe_id, solution.frames.front());
+  add_session(session_id);
+  SessionState& session = sessions_.at(session_id);
+  join_keyframe(session, keyframe_id, solution.frames.front());
+  session_of_node_.emplace(keyframe_id, session_id);
 
   // The keyframe→next-keyframe edge (see the header).
   const LocalFrame& last = solution.frames.back();
   if (solution.frames.size() > 1 && !keyframes_.contains(last.id)) {
     keyframes_.add_node(last.id, keyframes_.node(keyframe_id).pose * last.relative);
     keyframes_.add_edge({keyframe_id, last.id, last.relative, information_into(solution, keyframe_id, last.id), false});
+    session_of_node_.emplace(last.id, session_id);
   }
-  last_node_ = last.id;
-  last_odometry_ = last.odometry;
+  session.last_node = last.id;
+  session.last_odometry = last.odometry;
 
   graph_of_keyframe_.emplace(keyframe_id, graphs_.size());
-  graphs_.push_back({keyframe_id, std::move(solution)});
+  graphs_.push_back({session_id, keyframe_id, std::move(solution)});
   ++revision_;
 
   // Loops that waited for a keyframe of this graph.
@@ -86,6 +113,7 @@ const LocalSolution& Backend::add_local_graph(NodeId keyframe_id, const odometry
 
 bool Backend::insert_loop(const loop_closure::LoopClosure& loop) {
   if (!keyframes_.contains(loop.from) || !keyframes_.contains(loop.to)) return false;
+  if (piece(session_of(loop.from)) != piece(session_of(loop.to))) join_pieces(loop);
   // The detector's information is the residual's already (see the header): no conversion.
   const posegraph::Edge edge{loop.from, loop.to, loop.measurement, 0.5 * (loop.information + loop.information.transpose()),
                              /*robust=*/true};
@@ -93,6 +121,21 @@ bool Backend::insert_loop(const loop_closure::LoopClosure& loop) {
   loops_.push_back({loop, edge});
   ++unoptimised_loops_;
   return true;
+}
+
+// The later piece moves rigidly onto the loop: T_piece(to) = T_piece(from) · Z (Z = T_from^to).
+void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
+  const SessionId a = piece(session_of(loop.from)), b = piece(session_of(loop.to));
+  const bool move_to_side = sessions_.at(b).ordinal > sessions_.at(a).ordinal;
+  const SessionId keep = move_to_side ? a : b, moved = move_to_side ? b : a;
+  const core::SE3& from = keyframes_.node(loop.from).pose;
+  const core::SE3& to = keyframes_.node(loop.to).pose;
+  const core::SE3 move = move_to_side ? from * loop.measurement * to.inverse() : to * loop.measurement.inverse() * from.inverse();
+  for (const auto& [id, node] : std::map<NodeId, posegraph::Node>(keyframes_.nodes()))
+    if (piece(session_of(id)) == moved) keyframes_.set_pose(id, move * node.pose);
+  for (auto& [id, s] : sessions_)
+    if (s.piece == moved) s.piece = keep;
+  if (const auto& anchor = sessions_.at(moved).anchor) keyframes_.set_fixed(*anchor, false);
 }
 
 bool Backend::add_loop(const loop_closure::LoopClosure& loop) {
@@ -116,9 +159,9 @@ posegraph::OptimizationReport Backend::optimise_keyframes() {
 posegraph::OptimizationReport Backend::optimise_all() {
   unoptimised_loops_ = 0;
   if (graphs_.empty()) return {};
-  const NodeId first = graphs_.front().keyframe;
-  posegraph::PoseGraph all;
-  for (const auto& [id, stamped] : frame_poses()) all.add_node(id, stamped.pose, id == first);
+  posegraph::PoseGraph all;  // each piece held at its anchor, as in the keyframe graph
+  for (const auto& [id, stamped] : frame_poses(std::nullopt))
+    all.add_node(id, stamped.pose, keyframes_.contains(id) && keyframes_.node(id).fixed);
   for (const auto& g : graphs_)
     for (const auto& e : g.solution.edges) all.add_edge(e);
   for (const auto& e : bridges_) all.add_edge(e);
@@ -135,9 +178,10 @@ posegraph::OptimizationReport Backend::optimise_all() {
   return report;
 }
 
-std::map<NodeId, core::StampedPose> Backend::frame_poses() const {
+std::map<NodeId, core::StampedPose> Backend::frame_poses(std::optional<SessionId> session) const {
   std::map<NodeId, core::StampedPose> poses;
   for (const auto& g : graphs_) {
+    if (session && g.session != *session) continue;
     const core::SE3& keyframe = keyframes_.node(g.keyframe).pose;
     for (const auto& f : g.solution.frames)
       poses[f.id] = {f.timestamp, keyframes_.contains(f.id) ? keyframes_.node(f.id).pose : keyframe * f.relative};
@@ -151,17 +195,26 @@ std::map<std::int64_t, core::SE3> Backend::keyframe_poses() const {
   return poses;
 }
 
-core::Trajectory Backend::frame_trajectory() const {
+namespace {
+core::Trajectory to_trajectory(const std::map<NodeId, core::StampedPose>& poses) {
   core::Trajectory trajectory;
-  const auto poses = frame_poses();
   trajectory.reserve(poses.size());
   for (const auto& [id, stamped] : poses) trajectory.push_back(stamped);
   return trajectory;
 }
+}  // namespace
+
+core::Trajectory Backend::frame_trajectory() const { return to_trajectory(frame_poses(std::nullopt)); }
+core::Trajectory Backend::frame_trajectory(SessionId session) const { return to_trajectory(frame_poses(session)); }
+
+core::SE3 Backend::odometry_correction(SessionId session) const {
+  const auto it = sessions_.find(session);
+  if (it == sessions_.end() || !it->second.last_node) return {};
+  return keyframes_.node(*it->second.last_node).pose * it->second.last_odometry.inverse();
+}
 
 core::SE3 Backend::odometry_correction() const {
-  if (!last_node_) return {};
-  return keyframes_.node(*last_node_).pose * last_odometry_.inverse();
+  return order_.empty() ? core::SE3() : odometry_correction(order_.front());
 }
 
 std::vector<LoopState> Backend::loops() const {

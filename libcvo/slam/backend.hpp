@@ -39,9 +39,18 @@
 //                    far below δ² (weight ~1 either way), and plain odometry is what lets the
 //                    kernel recognise a wrong loop as the odd one out.
 //
+// Sessions (several tracker runs, slam/mapper.hpp): every local graph belongs to a session, and
+// the restart bridge above only joins graphs of one session. A session's first keyframe starts a
+// piece of map of its own, anchored (fixed) at its odometry pose; the first session's piece is the
+// map. A loop between two pieces joins them: the piece whose first session came later is moved
+// rigidly so that the loop holds exactly, its anchor is released, and from then on it is one
+// piece (the map, when either was). Every optimisation holds each piece's anchor, so pieces that
+// share no loop stay well-posed side by side.
+//
 // A frame's pose is its keyframe's optimised pose ∘ its locally optimised pose relative to that
-// keyframe (after optimise_all: the global solution); a keyframe-graph node's is its own.
-// Frame indices are the node ids; ids increase along the run.
+// keyframe (after optimise_all: the global solution); a keyframe-graph node's is its own. Node ids
+// are the caller's (the mapper's per-session frame numbering); within a session they increase along
+// the run.
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -72,14 +81,23 @@ struct LoopState {
   double weight = 1;
 };
 
+using SessionId = std::int64_t;
+
 class Backend {
  public:
   explicit Backend(const BackendParameters& parameters = {});
 
-  /// Adds a closed local graph whose keyframe (first node) is frame `keyframe_id`; returns its
-  /// local solution (valid until the next add_local_graph or optimise_all). Throws
+  /// Registers a session (nothing when known); the first one registered defines the map frame.
+  /// add_local_graph registers its session itself.
+  void add_session(SessionId session);
+
+  /// Adds a closed local graph of `session` whose keyframe (first node) is node `keyframe_id`;
+  /// returns its local solution (valid until the next add_local_graph or optimise_all). Throws
   /// std::invalid_argument when the graph is empty, its first node is not `keyframe_id`, that
-  /// keyframe's graph was added already, or the graph is malformed (local_optimisation.hpp).
+  /// keyframe's graph was added already, a node belongs to another session, or the graph is
+  /// malformed (local_optimisation.hpp).
+  const LocalSolution& add_local_graph(SessionId session, posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
+  /// One session (the first registered, else 0).
   const LocalSolution& add_local_graph(posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
 
   /// Adds a loop as a robust edge (or keeps it waiting, see above); true when it entered the
@@ -95,9 +113,23 @@ class Backend {
   [[nodiscard]] std::map<std::int64_t, core::SE3> keyframe_poses() const;
   /// Every frame of every local graph added, in frame order, stamped with its colour timestamp.
   [[nodiscard]] core::Trajectory frame_trajectory() const;
-  /// T_world_odometry: the correction that maps the tracker's latest poses into the back end's
-  /// world, from the last frame of the latest local graph; the identity before any graph.
+  /// The frames of one session's local graphs.
+  [[nodiscard]] core::Trajectory frame_trajectory(SessionId session) const;
+  /// T_piece_odometry: the correction that maps the session's latest tracker poses into its piece
+  /// (the map, once placed), from the last frame of its latest local graph; the identity before
+  /// any graph of it.
+  [[nodiscard]] core::SE3 odometry_correction(SessionId session) const;
+  /// The first session's correction (one-session callers).
   [[nodiscard]] core::SE3 odometry_correction() const;
+
+  /// The piece of map a session is in, named by the piece's first session (itself until joined).
+  [[nodiscard]] SessionId piece(SessionId session) const;
+  /// In the map: in the first session's piece.
+  [[nodiscard]] bool placed(SessionId session) const;
+  /// The session of a keyframe-graph node.
+  [[nodiscard]] SessionId session_of(posegraph::NodeId node) const { return session_of_node_.at(node); }
+  /// Sessions in the order registered.
+  [[nodiscard]] const std::vector<SessionId>& sessions() const { return order_; }
 
   /// Loops in the graph with their χ² and Cauchy weight at the current poses, in insertion order.
   [[nodiscard]] std::vector<LoopState> loops() const;
@@ -114,8 +146,16 @@ class Backend {
 
  private:
   struct StoredGraph {
+    SessionId session = 0;
     posegraph::NodeId keyframe = 0;
     LocalSolution solution;
+  };
+  struct SessionState {
+    std::size_t ordinal = 0;                  // registration order: the earlier piece stays put
+    SessionId piece = 0;                       // see piece()
+    std::optional<posegraph::NodeId> anchor;   // its first keyframe
+    std::optional<posegraph::NodeId> last_node;  // last frame of its latest graph
+    core::SE3 last_odometry;                     // its tracker pose
   };
   struct StoredLoop {
     loop_closure::LoopClosure loop;
@@ -123,9 +163,10 @@ class Backend {
   };
 
   [[nodiscard]] posegraph::OptimizerOptions optimizer_options() const;
-  [[nodiscard]] std::map<posegraph::NodeId, core::StampedPose> frame_poses() const;
-  void join_keyframe(posegraph::NodeId keyframe, const LocalFrame& first);
+  [[nodiscard]] std::map<posegraph::NodeId, core::StampedPose> frame_poses(std::optional<SessionId> session) const;
+  void join_keyframe(SessionState& session, posegraph::NodeId keyframe, const LocalFrame& first);
   bool insert_loop(const loop_closure::LoopClosure& loop);
+  void join_pieces(const loop_closure::LoopClosure& loop);
 
   BackendParameters parameters_;
   posegraph::PoseGraph keyframes_;
@@ -136,8 +177,9 @@ class Backend {
   std::vector<StoredLoop> loops_;
   std::vector<loop_closure::LoopClosure> pending_;
   std::size_t unoptimised_loops_ = 0;
-  std::optional<posegraph::NodeId> last_node_;  // last frame of the latest graph
-  core::SE3 last_odometry_;                    // its tracker pose
+  std::map<SessionId, SessionState> sessions_;
+  std::vector<SessionId> order_;
+  std::map<posegraph::NodeId, SessionId> session_of_node_;  // keyframe-graph nodes
   std::uint64_t revision_ = 0;
 };
 

@@ -27,6 +27,7 @@ std::optional<T> through_bytes(const T& message) {
 
 TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
   Keyframe k;
+  k.session = -0x0123'4567'89ab'cdef;  // 64 random bits: any sign
   k.id = 7;
   k.frame = io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").read(5);
   k.pose = core::SE3::exp((core::Vector6d() << 0.1, -0.2, 0.3, 0.01, 0.02, -0.03).finished());
@@ -42,6 +43,7 @@ TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
   ASSERT_TRUE(decoded);
   const auto back = from_message(*decoded, &error);
   ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->session, -0x0123'4567'89ab'cdef);
   EXPECT_EQ(back->id, 7);
   EXPECT_EQ(back->frame.index, k.frame.index);
   EXPECT_EQ(back->frame.timestamp, k.frame.timestamp);
@@ -98,8 +100,9 @@ odometry::LocalGraph sample_graph() {
 
 TEST(LocalGraphConversion, RoundTripKeepsNodesEdgesAndInformation) {
   const auto graph = sample_graph();
-  const auto decoded = through_bytes(to_message(graph, 3, 123456));
+  const auto decoded = through_bytes(to_message(graph, 0x7e57, 3, 123456));
   ASSERT_TRUE(decoded);
+  EXPECT_EQ(decoded->session, 0x7e57);
   EXPECT_EQ(decoded->keyframe_id, 3);
   std::string error;
   const auto back = from_message(*decoded, &error);
@@ -116,7 +119,7 @@ TEST(LocalGraphConversion, RoundTripKeepsNodesEdgesAndInformation) {
 }
 
 TEST(LocalGraphConversion, EdgesToUnknownFramesAndBadInformationAreRefused) {
-  auto message = to_message(sample_graph(), 3, 0);
+  auto message = to_message(sample_graph(), 1, 3, 0);
   std::string error;
   auto dangling = message;
   dangling.edges[1].to = 99;

@@ -59,11 +59,13 @@ inline cvo_lcm::rgbd_frame_t sample_rgbd() {
 inline cvo_lcm::pose_t sample_pose_message() {
   cvo_lcm::pose_t m{};
   m.version = cvo_lcm::pose_t::SCHEMA_VERSION;
+  m.session = 0x5e5510'0000'0001;
   m.utime = 1305031229528748;
   m.frame_index = 7;
   m.keyframe_id = 3;
   m.odom_pose = sample_pose(1.0);
   m.map_pose = sample_pose(2.0);
+  m.map_placed = true;
   for (int i = 0; i < 36; ++i) m.covariance[i] = 1e-4 * (i + 1);
   m.status = cvo_lcm::pose_t::STATUS_REGISTRATION_FAILED;
   m.is_keyframe = true;
@@ -79,6 +81,7 @@ inline cvo_lcm::pose_t sample_pose_message() {
 inline cvo_lcm::keyframe_t sample_keyframe() {
   cvo_lcm::keyframe_t m{};
   m.version = cvo_lcm::keyframe_t::SCHEMA_VERSION;
+  m.session = 0x5e5510'0000'0001;
   m.id = 5;
   m.frame_index = 120;
   m.utime = 1305031233528748;
@@ -108,6 +111,7 @@ inline cvo_lcm::keyframe_t sample_keyframe() {
 inline cvo_lcm::local_graph_t sample_local_graph() {
   cvo_lcm::local_graph_t m{};
   m.version = cvo_lcm::local_graph_t::SCHEMA_VERSION;
+  m.session = 0x5e5510'0000'0001;
   m.keyframe_id = 5;
   m.utime = 1305031233528748;
   for (int n = 0; n < 3; ++n) {
@@ -128,10 +132,15 @@ inline cvo_lcm::map_t sample_map() {
   m.version = cvo_lcm::map_t::SCHEMA_VERSION;
   m.utime = 1305031299000000;
   m.revision = 17;
-  m.keyframe_ids = {0, 1, 2, 5};
-  for (std::size_t i = 0; i < m.keyframe_ids.size(); ++i) m.poses.push_back(sample_pose(static_cast<double>(i)));
-  m.loops = {sample_edge(0, 5), sample_edge(1, 5)};
-  m.num_keyframes = static_cast<std::int32_t>(m.keyframe_ids.size());
+  constexpr std::int64_t kFirst = 0x5e5510'0000'0001, kSecond = -0x2222'3333'4444'5555;
+  m.sessions = {{kFirst, true, kFirst, 3, 0, sample_pose(0)}, {kSecond, false, kSecond, 1, -1, sample_pose(1)}};
+  const std::int64_t ids[] = {0, 1, 2, 5};
+  for (std::size_t i = 0; i < 4; ++i)
+    m.keyframes.push_back({i < 3 ? kFirst : kSecond, ids[i], 1305031233528748 + 100000 * ids[i],
+                           sample_pose(static_cast<double>(i))});
+  m.loops = {{kFirst, kFirst, sample_edge(0, 2)}, {kFirst, kSecond, sample_edge(1, 5)}};
+  m.num_sessions = static_cast<std::int32_t>(m.sessions.size());
+  m.num_keyframes = static_cast<std::int32_t>(m.keyframes.size());
   m.num_loops = static_cast<std::int32_t>(m.loops.size());
   return m;
 }
@@ -139,6 +148,7 @@ inline cvo_lcm::map_t sample_map() {
 inline cvo_lcm::status_t sample_status() {
   cvo_lcm::status_t m{};
   m.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  m.session = 0x5e5510'0000'0001;
   m.utime = 1305031299000000;
   m.pid = 4242;
   m.state = cvo_lcm::status_t::STATE_DEGRADED;

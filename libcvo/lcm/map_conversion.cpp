@@ -1,0 +1,73 @@
+#include "libcvo/lcm/map_conversion.hpp"
+
+#include <algorithm>
+
+#include "libcvo/lcm/pose_conversion.hpp"
+
+namespace cvo::lcm {
+namespace {
+std::nullopt_t fail(std::string* error, const std::string& what) {
+  if (error != nullptr) *error = "cvo_lcm.map_t: " + what;
+  return std::nullopt;
+}
+}  // namespace
+
+cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime) {
+  cvo_lcm::map_t m{};
+  m.version = cvo_lcm::map_t::SCHEMA_VERSION;
+  m.utime = utime;
+  m.revision = static_cast<std::int64_t>(map.revision);
+  for (const auto& s : map.sessions)
+    m.sessions.push_back({s.session, s.placed, s.piece, static_cast<std::int32_t>(s.keyframes), s.joined_at_keyframe,
+                          to_message(s.correction)});
+  for (const auto& k : map.keyframes) m.keyframes.push_back({k.session, k.id, to_utime(k.timestamp), to_message(k.pose)});
+  for (const auto& l : map.loops) {
+    cvo_lcm::map_loop_t loop{};
+    loop.from_session = l.from_session;
+    loop.to_session = l.to_session;
+    loop.edge.from = l.from_id;
+    loop.edge.to = l.to_id;
+    loop.edge.measurement = to_message(l.loop.measurement);
+    matrix6_to_message(l.loop.information, loop.edge.information);
+    m.loops.push_back(loop);
+  }
+  m.num_sessions = static_cast<std::int32_t>(m.sessions.size());
+  m.num_keyframes = static_cast<std::int32_t>(m.keyframes.size());
+  m.num_loops = static_cast<std::int32_t>(m.loops.size());
+  return m;
+}
+
+std::optional<slam::Map> from_message(const cvo_lcm::map_t& m, std::string* error) {
+  if (m.version != cvo_lcm::map_t::SCHEMA_VERSION) return fail(error, "schema version " + std::to_string(m.version));
+  slam::Map map;
+  map.revision = static_cast<std::uint64_t>(m.revision);
+  std::string why;
+  for (const auto& s : m.sessions) {
+    const auto correction = from_message(s.correction, &why);
+    if (!correction) return fail(error, "session " + std::to_string(s.session) + ": " + why);
+    map.sessions.push_back({s.session, s.placed != 0, s.piece, static_cast<std::size_t>(std::max(0, s.keyframes)),
+                            s.joined_at_keyframe, *correction});
+  }
+  for (const auto& k : m.keyframes) {
+    const auto pose = from_message(k.pose, &why);
+    if (!pose) return fail(error, "keyframe " + std::to_string(k.id) + " of session " + std::to_string(k.session) + ": " + why);
+    map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *pose});
+  }
+  for (const auto& l : m.loops) {
+    const auto measurement = from_message(l.edge.measurement, &why);
+    if (!measurement) return fail(error, "loop " + std::to_string(l.edge.from) + " -> " + std::to_string(l.edge.to) + ": " + why);
+    slam::MapLoop loop;
+    loop.from_session = l.from_session;
+    loop.to_session = l.to_session;
+    loop.from_id = l.edge.from;
+    loop.to_id = l.edge.to;
+    loop.loop.from = l.edge.from;
+    loop.loop.to = l.edge.to;
+    loop.loop.measurement = *measurement;
+    loop.loop.information = matrix6_from_message(l.edge.information);
+    map.loops.push_back(loop);
+  }
+  return map;
+}
+
+}  // namespace cvo::lcm

@@ -1,0 +1,19 @@
+#pragma once
+// slam::Map <-> cvo_lcm::map_t (channel CVO_MAP): sessions with their placement and correction,
+// keyframes by (session, id), loops between sessions.
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "cvo_lcm/map_t.hpp"
+#include "libcvo/slam/mapper.hpp"
+
+namespace cvo::lcm {
+
+cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime);
+
+/// Fails on another schema version or a pose that is not a rigid transform. Loops come back with
+/// their keyframe ids in LoopClosure::from/to (node ids are the mapper's own, not on the wire).
+std::optional<slam::Map> from_message(const cvo_lcm::map_t& message, std::string* error);
+
+}  // namespace cvo::lcm

@@ -1,0 +1,167 @@
+#pragma once
+// The SLAM back end as one object, for every caller (cvo-run --mode slam, cvo-backendd): keyframes
+// and closed local graphs of any number of tracker sessions in, a multi-session map out.
+//
+//   add_keyframe      (session, id) is stored once; the loop detector gets its images, its CVO
+//                     points and its current estimate (its piece's pose when its graph is in, else
+//                     the session's newest correction applied to its odometry pose), with its
+//                     predecessor in the session as η's normaliser; accepted loops go to the
+//                     Backend; new loops trigger a keyframe-graph optimisation and the detector's
+//                     poses follow it.
+//   add_local_graph   the graph of keyframe (session, id) -> Backend::add_local_graph (loops that
+//                     waited for its keyframe enter now, and are optimised as above).
+//   finish            the global optimisation (Backend::optimise_all).
+//   map               every session (placed or not, its correction), every keyframe's pose, every
+//                     loop: what CVO_MAP carries.
+//
+// Sessions (ORB-SLAM3's atlas, maplab's multi-mission maps; the paper has one run): the first
+// session seen defines the map frame. A later one starts unplaced, a piece of map in its own
+// odometry frame; loops are looked for from its keyframes to every keyframe of every session, and
+// the first verified one to the map joins it (Backend: the later piece moves onto the loop, then
+// the whole graph is optimised); its poses are map poses from then on. Sessions that never join
+// stay pieces of their own and can join later; two unplaced ones that share a loop become one
+// piece.
+//
+// Node ids: a session's frame n is node (ordinal << 40) | n, ordinal the order the session was first
+// seen (so a replay of the same input rebuilds the same graph), n < 2^40 (a year at 30 Hz is 2^30).
+// Frame indices and keyframe ids count from 0 in every session, as the tracker numbers them.
+//
+// Everything that cannot be applied throws MapperError before anything changed, with a message
+// naming the session and keyframe; the mapper stays usable.
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "libcvo/config/config.hpp"
+#include "libcvo/core/rgbd_frame.hpp"
+#include "libcvo/core/se3.hpp"
+#include "libcvo/core/trajectory.hpp"
+#include "libcvo/loop_closure/loop_detector.hpp"
+#include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/registration/point_cloud.hpp"
+#include "libcvo/slam/backend.hpp"
+
+namespace cvo::slam {
+
+class MapperError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+struct MapperParameters {
+  loop_closure::LoopDetectorParameters detector;
+  BackendParameters backend;
+};
+
+/// The one place the configuration becomes the back end's parameters.
+MapperParameters mapper_parameters(const config::Config& config);
+
+/// A keyframe as the tracker sends it (CVO_KEYFRAME): frame.index is its frame in the session.
+struct SessionKeyframe {
+  SessionId session = 0;
+  std::int64_t id = 0;
+  const core::RgbdFrame& frame;
+  core::SE3 odometry;  // T_odom_camera
+  const registration::PointCloud& cloud;
+};
+
+struct MapSession {
+  SessionId session = 0;
+  bool placed = false;               // in the map frame
+  SessionId piece = 0;               // whose odometry frame its poses are in
+  std::size_t keyframes = 0;
+  std::int64_t joined_at_keyframe = -1;  // its newest keyframe id when it joined (first session: 0)
+  core::SE3 correction;              // T_piece_odom: piece pose = correction · odometry pose
+};
+
+struct MapKeyframe {
+  SessionId session = 0;
+  std::int64_t id = 0;
+  double timestamp = 0;  // the keyframe's colour image time
+  core::SE3 pose;        // T_piece_camera
+};
+
+struct MapLoop {
+  SessionId from_session = 0, to_session = 0;
+  std::int64_t from_id = 0, to_id = 0;  // keyframe ids in their sessions
+  loop_closure::LoopClosure loop;       // node ids as the Backend holds them
+  double chi2 = 0, weight = 1;          // at the current poses (Backend::loops)
+};
+
+struct Map {
+  std::uint64_t revision = 0;
+  std::vector<MapSession> sessions;    // in the order first seen
+  std::vector<MapKeyframe> keyframes;  // by session (that order), then id
+  std::vector<MapLoop> loops;          // in the order accepted
+};
+
+/// What one add_keyframe did.
+struct KeyframeOutcome {
+  bool duplicate = false;                  // the same keyframe again: nothing done
+  std::size_t loops_tried = 0;             // candidates verified
+  std::vector<MapLoop> loops;              // accepted
+  std::vector<SessionId> joined;           // sessions placed in the map by it
+};
+
+class Mapper {
+ public:
+  Mapper(loop_closure::Vocabulary vocabulary, const MapperParameters& parameters);
+
+  /// See the header. Throws MapperError when (session, id) is known with another frame or pose
+  /// (a repeat with the same frame index and pose is a duplicate), when id or the frame index is
+  /// not above the session's previous keyframe's, when the frame index is 2^40 or more, and as
+  /// LoopDetector::add_keyframe does on a bad frame (wrapped).
+  KeyframeOutcome add_keyframe(const SessionKeyframe& keyframe);
+
+  /// The closed local graph of keyframe (session, keyframe_id): its first node is that keyframe's
+  /// frame when the keyframe is known. Returns the sessions it placed in the map (through loops
+  /// that waited for it). Throws MapperError when it cannot be applied (as Backend does; a graph
+  /// whose first frame is not its keyframe's).
+  std::vector<SessionId> add_local_graph(SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
+
+  /// The global optimisation of every frame.
+  posegraph::OptimizationReport finish();
+
+  [[nodiscard]] Map map() const;
+  /// The frames of one session (placed or not) in its piece's frame, stamped with their colour time.
+  [[nodiscard]] core::Trajectory frame_trajectory(SessionId session) const;
+  [[nodiscard]] bool placed(SessionId session) const { return backend_.placed(session); }
+  [[nodiscard]] bool knows(SessionId session, std::int64_t keyframe_id) const;
+
+  [[nodiscard]] const Backend& backend() const { return backend_; }
+  [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
+  [[nodiscard]] std::size_t loops_accepted() const { return loops_.size(); }
+
+ private:
+  struct KeyframeRecord {
+    std::int64_t frame = 0;  // index in its session
+    double timestamp = 0;
+    core::SE3 odometry;
+  };
+  struct Session {
+    std::int64_t ordinal = 0;
+    std::map<std::int64_t, KeyframeRecord> keyframes;  // by id
+    std::int64_t joined_at_keyframe = -1;
+  };
+
+  Session& session(SessionId id);
+  [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
+  [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
+  std::vector<SessionId> after_change();  // optimise after new loops; note joins
+
+  loop_closure::LoopDetector detector_;
+  Backend backend_;
+  std::map<SessionId, Session> sessions_;
+  std::vector<SessionId> order_;
+  std::map<posegraph::NodeId, std::pair<SessionId, std::int64_t>> keyframe_of_node_;
+  std::vector<loop_closure::LoopClosure> loops_;
+  std::size_t loops_tried_ = 0;
+  std::uint64_t revision_ = 0;
+};
+
+}  // namespace cvo::slam
