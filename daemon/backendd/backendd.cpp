@@ -3,9 +3,11 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include <chrono>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <iostream>
-#include <optional>
+#include <limits>
 #include <thread>
 #include <utility>
 
@@ -14,16 +16,15 @@
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/map_t.hpp"
-#include "cvo_lcm/status_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
-#include "libcvo/lcm/pose_conversion.hpp"
-#include "libcvo/loop_closure/loop_detector.hpp"
-#include "libcvo/slam/backend.hpp"
+#include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/slam/mapper.hpp"
 
 namespace cvo::daemon::backendd {
 namespace {
@@ -31,6 +32,9 @@ namespace {
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 constexpr const char* kProcess = "cvo-backendd";
+// At a stop, messages already in the socket are taken in; a tracker that is still sending must
+// not keep the drain going for ever.
+constexpr int kMaxDrainMessages = 10000;
 
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
@@ -38,6 +42,58 @@ std::int64_t now_ns() {
 std::int64_t wall_utime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+std::string fixed(double value, int digits) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f", digits, value);
+  return text;
+}
+
+std::string keyframe_name(slam::SessionId session, std::int64_t id) {
+  return describe(MessageKey{RecordKind::kKeyframe, session, id});
+}
+
+// What CVO_STATUS, systemd and the closing note say of the map.
+struct MapSummary {
+  std::size_t sessions = 0, placed = 0, keyframes = 0, loops = 0, loops_across = 0;
+  std::uint64_t revision = 0;
+};
+
+MapSummary summarise(const slam::Map& map) {
+  MapSummary s;
+  s.sessions = map.sessions.size();
+  s.placed = static_cast<std::size_t>(std::count_if(map.sessions.begin(), map.sessions.end(), [](const auto& m) { return m.placed; }));
+  s.keyframes = map.keyframes.size();
+  s.loops = map.loops.size();
+  s.loops_across = static_cast<std::size_t>(
+      std::count_if(map.loops.begin(), map.loops.end(), [](const auto& l) { return l.from_session != l.to_session; }));
+  s.revision = map.revision;
+  return s;
+}
+
+std::string text(const MapSummary& s) {
+  return std::to_string(s.sessions) + " sessions (" + std::to_string(s.placed) + " placed), " + std::to_string(s.keyframes) +
+         " keyframes, " + std::to_string(s.loops) + " loops (" + std::to_string(s.loops_across) +
+         " across sessions), map revision " + std::to_string(s.revision);
+}
+
+// How long a new session took to find its place in the map, after its first keyframe: in sensor
+// time (what the robot had to see) and on this machine (what the back end took, with its queue).
+std::string join_text(const slam::Map& map, slam::SessionId session, std::optional<Clock::time_point> first_arrival) {
+  const auto s = std::find_if(map.sessions.begin(), map.sessions.end(), [&](const auto& m) { return m.session == session; });
+  const std::int64_t at = s != map.sessions.end() ? s->joined_at_keyframe : -1;
+  double first = std::numeric_limits<double>::quiet_NaN(), joined = first;
+  for (const auto& k : map.keyframes) {
+    if (k.session != session) continue;
+    if (std::isnan(first)) first = k.timestamp;  // by id: the session's first keyframe
+    if (k.id == at) joined = k.timestamp;
+  }
+  std::string out = "session " + session_name(session) + " joined the map at its keyframe " + std::to_string(at) + " (" +
+                    fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
+  if (!first_arrival) return out + "its first keyframe replayed from the store)";
+  return out + fixed(std::chrono::duration<double>(Clock::now() - *first_arrival).count(), 2) +
+         " s after its first keyframe arrived)";
 }
 
 }  // namespace
@@ -49,33 +105,25 @@ std::filesystem::path resolve_vocabulary(const std::string& setting) {
 // Everything the cvo-backend thread owns.
 struct Backendd::Work {
   Work(loop_closure::Vocabulary vocabulary, const config::Config& config)
-      : detector(std::move(vocabulary), detector_parameters(config)),
-        backend(slam::BackendParameters{config.pose_graph.cauchy_delta, 1.0, 100}) {}
+      : mapper(std::move(vocabulary), slam::mapper_parameters(config)), lcm(config.backendd.lcm_url) {}
 
-  static loop_closure::LoopDetectorParameters detector_parameters(const config::Config& config) {
-    loop_closure::LoopDetectorParameters p;
-    p.loop = config.loop_closure;
-    p.cvo = config.cvo;
-    return p;
-  }
-
-  loop_closure::LoopDetector detector;
-  slam::Backend backend;
-  std::map<std::int64_t, std::int64_t> keyframe_id_of_frame;  // frame index -> tracker keyframe id
-  std::map<std::int64_t, core::SE3> odometry_pose_of_frame;   // keyframes' tracker poses
-  std::vector<loop_closure::LoopClosure> loops;
-  std::int64_t revision = 0, keyframes = 0, local_graphs = 0, loops_tried = 0;
+  slam::Mapper mapper;
+  ::lcm::LCM lcm;  // CVO_MAP and CVO_STATUS
+  // When each session's first keyframe arrived (nullopt: it was replayed from the store).
+  std::map<slam::SessionId, std::optional<Clock::time_point>> first_arrival;
+  std::vector<std::string> joins;  // every join noted, repeated in the closing note
+  MapSummary summary;              // of the last map published
+  std::int64_t local_graphs = 0, processed = 0, processed_at_last_status = 0;
+  Clock::time_point last_status = Clock::now();
 };
 
 Backendd::Backendd(config::Config config) : config_(std::move(config)) {
   const auto& b = config_.backendd;
-  const auto vocabulary = loop_closure::Vocabulary::load(resolve_vocabulary(b.vocabulary));
-  work_ = std::make_unique<Work>(vocabulary, config_);
+  work_ = std::make_unique<Work>(loop_closure::Vocabulary::load(resolve_vocabulary(b.vocabulary)), config_);
+  if (!work_->lcm.good()) throw io::InputError("backendd.lcm_url", "cannot open LCM provider '" + b.lcm_url + "'");
   std::string warning;
   store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning);
   if (!warning.empty()) note("warning: " + warning);
-  ::lcm::LCM probe(b.lcm_url);
-  if (!probe.good()) throw io::InputError("backendd.lcm_url", "cannot open LCM provider '" + b.lcm_url + "'");
 }
 
 Backendd::~Backendd() = default;
@@ -86,14 +134,27 @@ void Backendd::note(const std::string& detail) {
   detail_ = detail;
 }
 
-int Backendd::run() {
-  note("store " + store_->file().string() + " (" + std::to_string(recovered_.size()) + " records recovered), LCM " +
-       config_.backendd.lcm_url);
+void Backendd::note_limited(const std::string& kind, const std::string& detail) {
+  std::int64_t held_back = 0;
   {
-    const std::lock_guard lock(queue_mutex_);
-    for (auto& r : recovered_) queue_.push_back(std::move(r));  // replayed first, in order
-    recovered_.clear();
+    const std::lock_guard lock(detail_mutex_);
+    auto& limit = note_limits_[kind];
+    const auto now = Clock::now();
+    if (limit.last != Clock::time_point{} && now - limit.last < 1s) {
+      ++limit.held_back;
+      return;
+    }
+    held_back = std::exchange(limit.held_back, 0);
+    limit.last = now;
   }
+  note(held_back == 0 ? detail : detail + " (and " + std::to_string(held_back) + " like it not shown)");
+}
+
+int Backendd::run() {
+  const auto recovered = recovered_.size();
+  let_in_recovered(std::exchange(recovered_, {}));
+  note("store " + store_->file().string() + " (" + std::to_string(recovered) + " records recovered), LCM " +
+       config_.backendd.lcm_url);
   std::thread receive([this] { receive_loop(); });
   std::thread work([this] { work_loop(); });
   systemd_.ready();
@@ -124,48 +185,39 @@ int Backendd::run() {
 // cvo-receive: nothing but decoding, checking and storing, so that no message waits on the
 // back end's work and every accepted record is on disk before it is used.
 
+// The store's records pass the same door as received messages (replayed first, in order), so a
+// store written before the door, or a damaged one, cannot feed the mapper a repeat.
+void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
+  const std::lock_guard lock(queue_mutex_);
+  for (auto& record : recovered) {
+    std::string error;
+    const auto key = identify(record.kind, record.payload.data(), record.payload.size(), &error, nullptr);
+    if (!key) {
+      note_limited("stored unreadable", "stored record skipped: " + error);
+      continue;
+    }
+    const auto crc = crc32_of(record.payload.data(), record.payload.size());
+    if (door_.check(*key, crc) != Admission::kNew) {
+      note_limited("stored repeat", "stored record skipped: " + describe(*key) + " is in the store twice");
+      continue;
+    }
+    door_.admit(*key, crc);
+    queue_.push_back({std::move(record), std::nullopt});
+  }
+}
+
 void Backendd::receive_loop() {
   name_this_thread("cvo-receive");
   ::lcm::LCM lcm(config_.backendd.lcm_url);
   struct Handler {
     Backendd* self;
-    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
-      std::string error;
-      lcm::DecodeFailure failure{};
-      const auto size = static_cast<int>(buffer->data_size);
-      // Decoded (the wire is sound) and converted (the content is usable), or refused by kind.
-      std::optional<std::size_t> bad;
-      if (channel == "CVO_KEYFRAME") {
-        const auto m = lcm::decode<cvo_lcm::keyframe_t>(buffer->data, size, &error, &failure);
-        if (!m) bad = static_cast<std::size_t>(failure);
-        else if (!lcm::from_message(*m, &error)) bad = cvo_lcm::status_t::BAD_CONTENT;
-      } else {
-        const auto m = lcm::decode<cvo_lcm::local_graph_t>(buffer->data, size, &error, &failure);
-        if (!m) bad = static_cast<std::size_t>(failure);
-        else if (!lcm::from_message(*m, &error)) bad = cvo_lcm::status_t::BAD_CONTENT;
-      }
-      if (bad) {
-        ++self->bad_messages_[std::min<std::size_t>(*bad, 4)];
-        self->note("skipped " + channel + ": " + error);
-        return;
-      }
-      StoredRecord record{channel == "CVO_KEYFRAME" ? RecordKind::kKeyframe : RecordKind::kLocalGraph,
-                          std::vector<std::uint8_t>(static_cast<const std::uint8_t*>(buffer->data),
-                                                    static_cast<const std::uint8_t*>(buffer->data) + size)};
-      try {
-        self->store_->append(record.kind, record.payload);
-      } catch (const std::exception& e) {
-        self->note(std::string("warning: not stored (will be lost on restart): ") + e.what());
-      }
-      {
-        const std::lock_guard lock(self->queue_mutex_);
-        self->queue_.push_back(std::move(record));
-      }
-      self->queue_ready_.notify_one();
+    RecordKind kind;
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+      self->receive(kind, static_cast<const std::uint8_t*>(buffer->data), buffer->data_size);
     }
-  } handler{this};
-  lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &handler);
-  lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &handler);
+  } keyframes{this, RecordKind::kKeyframe}, local_graphs{this, RecordKind::kLocalGraph};
+  lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
+  lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &local_graphs);
   while (!stop_) {
     receive_heartbeat_ns_ = now_ns();
     if (lcm.handleTimeout(100) < 0) {
@@ -173,7 +225,49 @@ void Backendd::receive_loop() {
       std::this_thread::sleep_for(100ms);
     }
   }
+  // What is in the socket was sent before the stop (a tracker's last keyframe and local graph):
+  // it is taken in and used too.
+  for (int n = 0; n < kMaxDrainMessages && lcm.handleTimeout(0) > 0; ++n) {
+  }
   receiver_done_ = true;
+}
+
+void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t size) {
+  const std::string channel = kind == RecordKind::kKeyframe ? "CVO_KEYFRAME" : "CVO_LOCAL_GRAPH";
+  const auto refuse = [&](std::size_t why, const std::string& detail) {
+    ++bad_messages_[why];
+    note_limited("refused " + std::to_string(why), detail);
+  };
+  try {
+    std::string error;
+    std::size_t bad = cvo_lcm::status_t::BAD_BODY;
+    const auto key = identify(kind, data, size, &error, &bad);
+    if (!key) return refuse(bad, "skipped " + channel + ": " + error);
+    const auto crc = crc32_of(data, size);
+    switch (door_.check(*key, crc)) {
+      case Admission::kRepeat:
+        return note_limited("repeat", describe(*key) + " received again: stored already, not used twice");
+      case Admission::kConflict:
+        return refuse(cvo_lcm::status_t::BAD_CONFLICT, describe(*key) + " repeats an existing one with other content: refused");
+      case Admission::kNew:
+        break;
+    }
+    if (!usable(kind, data, size, &error)) return refuse(cvo_lcm::status_t::BAD_CONTENT, "skipped " + channel + ": " + error);
+    QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now()};
+    try {
+      store_->append(queued.record.kind, queued.record.payload);
+    } catch (const std::exception& e) {
+      note(std::string("warning: not stored (will be lost on restart): ") + e.what());
+    }
+    door_.admit(*key, crc);
+    {
+      const std::lock_guard lock(queue_mutex_);
+      queue_.push_back(std::move(queued));
+    }
+    queue_ready_.notify_one();
+  } catch (const std::exception& e) {  // out of memory, most likely: this message is lost, not the daemon
+    note_limited("receive failure", "skipped " + channel + ": " + e.what());
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -181,136 +275,126 @@ void Backendd::receive_loop() {
 
 void Backendd::work_loop() {
   name_this_thread("cvo-backend");
-  ::lcm::LCM lcm(config_.backendd.lcm_url);
-  Work& w = *work_;
-
-  const auto publish_map = [&] {
-    cvo_lcm::map_t m{};
-    m.version = cvo_lcm::map_t::SCHEMA_VERSION;
-    m.utime = wall_utime();
-    m.revision = ++w.revision;
-    const auto optimised = w.backend.keyframe_poses();
-    const core::SE3 correction = w.backend.odometry_correction();
-    for (const auto& [frame, id] : w.keyframe_id_of_frame) {
-      const auto it = optimised.find(frame);
-      // A keyframe whose local graph has not closed yet follows the newest correction.
-      const core::SE3 pose = it != optimised.end() ? it->second : correction * w.odometry_pose_of_frame.at(frame);
-      m.keyframe_ids.push_back(id);
-      m.poses.push_back(lcm::to_message(pose));
-    }
-    for (const auto& loop : w.loops) {
-      cvo_lcm::graph_edge_t e{};
-      e.from = w.keyframe_id_of_frame.count(loop.from) ? w.keyframe_id_of_frame.at(loop.from) : loop.from;
-      e.to = w.keyframe_id_of_frame.count(loop.to) ? w.keyframe_id_of_frame.at(loop.to) : loop.to;
-      e.measurement = lcm::to_message(loop.measurement);
-      lcm::matrix6_to_message(loop.information, e.information);
-      m.loops.push_back(e);
-    }
-    m.num_keyframes = static_cast<std::int32_t>(m.keyframe_ids.size());
-    m.num_loops = static_cast<std::int32_t>(m.loops.size());
-    lcm.publish("CVO_MAP", &m);
-  };
-
-  const auto process = [&](const StoredRecord& record) {
-    std::string error;
-    const auto size = static_cast<int>(record.payload.size());
-    if (record.kind == RecordKind::kLocalGraph) {
-      const auto m = lcm::decode<cvo_lcm::local_graph_t>(record.payload.data(), size, &error);
-      const auto graph = m ? lcm::from_message(*m, &error) : std::nullopt;
-      if (!graph) return note("stored local graph unreadable: " + error);
-      try {
-        w.backend.add_local_graph(static_cast<std::int64_t>(graph->keyframe().frame_index), *graph);
-        ++w.local_graphs;
-      } catch (const std::exception& e) {
-        return note(std::string("local graph refused: ") + e.what());
-      }
-      publish_map();
-      return;
-    }
-    const auto m = lcm::decode<cvo_lcm::keyframe_t>(record.payload.data(), size, &error);
-    auto keyframe = m ? lcm::from_message(*m, &error) : std::nullopt;
-    if (!keyframe) return note("stored keyframe unreadable: " + error);
-    const auto frame = static_cast<std::int64_t>(keyframe->frame.index);
-    if (w.keyframe_id_of_frame.count(frame)) return;  // a duplicate (e.g. re-sent): already known
-    w.keyframe_id_of_frame[frame] = keyframe->id;
-    w.odometry_pose_of_frame[frame] = keyframe->pose;
-    ++w.keyframes;
-    const auto poses = w.backend.keyframe_poses();
-    const auto it = poses.find(frame);
-    const core::SE3 pose = it != poses.end() ? it->second : w.backend.odometry_correction() * keyframe->pose;
-    const auto loops = w.detector.add_keyframe(frame, keyframe->frame, keyframe->cloud, pose);
-    w.loops_tried += static_cast<std::int64_t>(w.detector.last_attempts().size());
-    for (const auto& loop : loops) {
-      w.backend.add_loop(loop);
-      w.loops.push_back(loop);
-      note("loop accepted: keyframe " + std::to_string(keyframe->id) + " (frame " + std::to_string(loop.to) +
-           ") to frame " + std::to_string(loop.from) + ", alpha " + std::to_string(loop.alpha));
-    }
-    if (w.backend.unoptimised_loops() > 0) {
-      w.backend.optimise_keyframes();
-      w.detector.update_poses(w.backend.keyframe_poses());
-    }
-    publish_map();
-  };
-
-  auto last_status = Clock::now();
-  std::int64_t processed = 0, processed_at_last_status = 0;
-  const auto publish_status = [&](std::int8_t state) {
-    const auto now = Clock::now();
-    cvo_lcm::status_t s{};
-    s.version = cvo_lcm::status_t::SCHEMA_VERSION;
-    s.utime = wall_utime();
-    s.pid = static_cast<std::int32_t>(getpid());
-    s.state = state;
-    const double elapsed = std::chrono::duration<double>(now - last_status).count();
-    s.rate_hz = elapsed > 0 ? static_cast<double>(processed - processed_at_last_status) / elapsed : 0;
-    {
-      const std::lock_guard lock(queue_mutex_);
-      s.queue_depth = static_cast<std::int32_t>(queue_.size());
-    }
-    s.rss_bytes = resident_bytes();
-    for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = bad_messages_[k];
-    s.process = kProcess;
-    {
-      const std::lock_guard lock(detail_mutex_);
-      s.detail = detail_;
-    }
-    lcm.publish("CVO_STATUS", &s);
-    systemd_.status(std::to_string(w.keyframes) + " keyframes, " + std::to_string(w.loops.size()) + " loops, map revision " +
-                    std::to_string(w.revision));
-    processed_at_last_status = processed;
-    last_status = now;
-  };
-
+  const auto status_period = std::chrono::duration<double>(config_.backendd.status_period_s);
   while (true) {
     work_heartbeat_ns_ = now_ns();
-    std::optional<StoredRecord> record;
+    std::optional<QueuedRecord> queued;
     {
       std::unique_lock lock(queue_mutex_);
       queue_ready_.wait_for(lock, 50ms, [&] { return !queue_.empty() || receiver_done_; });
       if (!queue_.empty()) {
-        record = std::move(queue_.front());
+        queued = std::move(queue_.front());
         queue_.pop_front();
       } else if (receiver_done_) {
         break;
       }
     }
-    if (record) {
-      process(*record);
-      ++processed;
+    if (queued) process(*queued);
+    if (Clock::now() - work_->last_status >= status_period)
+      publish_status(work_->summary.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT
+                                                   : cvo_lcm::status_t::STATE_RUNNING);
+  }
+  finish();
+}
+
+// One record into the mapper. What it cannot apply changed nothing (slam::Mapper's promise): it is
+// noted and the daemon goes on with the next.
+void Backendd::process(const QueuedRecord& queued) {
+  try {
+    if (queued.record.kind == RecordKind::kKeyframe) apply_keyframe(queued);
+    else apply_local_graph(queued.record);
+  } catch (const slam::MapperError& e) {
+    note_limited("not applied", std::string("not applied: ") + e.what());
+  } catch (const std::exception& e) {
+    note_limited("failure", std::string("record skipped after a failure: ") + e.what());
+  }
+  ++work_->processed;
+}
+
+void Backendd::apply_keyframe(const QueuedRecord& queued) {
+  Work& w = *work_;
+  const auto& payload = queued.record.payload;
+  std::string error;
+  const auto m = lcm::decode<cvo_lcm::keyframe_t>(payload.data(), static_cast<int>(payload.size()), &error);
+  const auto k = m ? lcm::from_message(*m, &error) : std::nullopt;
+  if (!k) return note_limited("unreadable", "stored keyframe unreadable: " + error);
+  const auto outcome = w.mapper.add_keyframe({k->session, k->id, k->frame, k->pose, k->cloud});
+  if (outcome.duplicate) return;
+  w.first_arrival.try_emplace(k->session, queued.arrived);
+  for (const auto& loop : outcome.loops)
+    note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
+         keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
+  publish_map(outcome.joined);
+}
+
+void Backendd::apply_local_graph(const StoredRecord& record) {
+  std::string error;
+  const auto m = lcm::decode<cvo_lcm::local_graph_t>(record.payload.data(), static_cast<int>(record.payload.size()), &error);
+  const auto graph = m ? lcm::from_message(*m, &error) : std::nullopt;
+  if (!graph) return note_limited("unreadable", "stored local graph unreadable: " + error);
+  const auto joined = work_->mapper.add_local_graph(m->session, m->keyframe_id, *graph);
+  ++work_->local_graphs;
+  publish_map(joined);
+}
+
+void Backendd::publish_map(const std::vector<std::int64_t>& joined) {
+  Work& w = *work_;
+  const slam::Map map = w.mapper.map();
+  const auto message = lcm::to_message(map, wall_utime());
+  w.lcm.publish("CVO_MAP", &message);
+  w.summary = summarise(map);
+  for (const auto session : joined) {
+    const auto arrived = w.first_arrival.find(session);
+    w.joins.push_back(join_text(map, session, arrived != w.first_arrival.end() ? arrived->second : std::nullopt));
+    note(w.joins.back());
+  }
+}
+
+void Backendd::publish_status(std::int8_t state) {
+  Work& w = *work_;
+  const auto now = Clock::now();
+  cvo_lcm::status_t s{};
+  s.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  s.session = 0;  // the back end is no tracker session
+  s.utime = wall_utime();
+  s.pid = static_cast<std::int32_t>(getpid());
+  s.state = state;
+  const double elapsed = std::chrono::duration<double>(now - w.last_status).count();
+  s.rate_hz = elapsed > 0 ? static_cast<double>(w.processed - w.processed_at_last_status) / elapsed : 0;
+  {
+    const std::lock_guard lock(queue_mutex_);
+    s.queue_depth = static_cast<std::int32_t>(queue_.size());
+  }
+  s.rss_bytes = resident_bytes();
+  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = bad_messages_[k];
+  s.process = kProcess;
+  {
+    const std::lock_guard lock(detail_mutex_);
+    s.detail = detail_;
+  }
+  w.lcm.publish("CVO_STATUS", &s);
+  systemd_.status(text(w.summary));
+  w.processed_at_last_status = w.processed;
+  w.last_status = now;
+}
+
+// The final global optimisation, the map it gives, and the closing note.
+void Backendd::finish() {
+  Work& w = *work_;
+  try {
+    if (w.mapper.backend().local_graphs() > 0) {  // nothing to optimise before a local graph
+      const auto report = w.mapper.finish();
+      note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
+           std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
     }
-    if (Clock::now() - last_status >= std::chrono::duration<double>(config_.backendd.status_period_s))
-      publish_status(w.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT : cvo_lcm::status_t::STATE_RUNNING);
+    publish_map({});
+  } catch (const std::exception& e) {
+    note(std::string("final optimisation failed, the last map stands: ") + e.what());
   }
-  // The final global optimisation, and the map it gives.
-  if (w.backend.local_graphs() > 0) {
-    const auto report = w.backend.optimise_all();
-    note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " + std::to_string(report.final_cost) +
-         " in " + std::to_string(report.iterations) + " iterations");
-  }
-  publish_map();
-  note(std::to_string(w.keyframes) + " keyframes, " + std::to_string(w.local_graphs) + " local graphs, " +
-       std::to_string(w.loops.size()) + " loops accepted of " + std::to_string(w.loops_tried) + " tried");
+  note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
+       std::to_string(w.mapper.loops_accepted()) + " loops accepted of " + std::to_string(w.mapper.loops_tried()) +
+       " tried");
+  for (const auto& join : w.joins) note(join);
   publish_status(cvo_lcm::status_t::STATE_STOPPING);
 }
 

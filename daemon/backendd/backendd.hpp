@@ -1,19 +1,22 @@
 #pragma once
-// cvo-backendd's wiring: two named threads around libcvo's loop closure and SLAM back end.
+// cvo-backendd's wiring: two named threads around libcvo's SLAM mapper (slam::Mapper, the same
+// back end cvo-run --mode slam uses).
 //
-//   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded and checked -> appended to the
-//                 keyframe store (durable before anything else happens) -> work queue
-//   cvo-backend   work queue -> slam::Backend (local graphs) and loop_closure::LoopDetector
-//                 (keyframes) -> keyframe-graph optimisation after new loops -> CVO_MAP;
-//                 CVO_STATUS once a period
+//   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded and checked -> the door (each
+//                 keyframe (session, id) and local graph once; a repeat with other content is
+//                 refused, message_door.hpp) -> appended to the keyframe store (durable before
+//                 anything else happens) -> work queue
+//   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
+//                 keyframe-graph optimisation) -> CVO_MAP after each change; CVO_STATUS once a
+//                 period
 //
-// At start-up the store is read back and every record goes through the same path, so a restart
-// resumes with every keyframe received before. On SIGTERM/SIGINT: the queue is drained, a final
-// global optimisation runs, the final CVO_MAP is published, exit 0.
-//
-// Node ids of the back end and the loop detector are frame indices (the tracker's); CVO_MAP
-// names keyframes by the tracker's keyframe ids, as cvo-trackerd's correction expects.
+// At start-up the store is read back and every record goes through the same door and path, so a
+// restart resumes every session received before. On SIGTERM/SIGINT: what is already in the socket
+// is taken in, the queue is drained, a final global optimisation runs, the final CVO_MAP is
+// published, exit 0. No record can stop the daemon: what the mapper cannot apply is noted and
+// skipped.
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
@@ -21,9 +24,13 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <vector>
 
+#include "cvo_lcm/status_t.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
+#include "daemon/backendd/message_door.hpp"
 #include "daemon/common/systemd_notify.hpp"
 #include "libcvo/config/config.hpp"
 
@@ -48,25 +55,47 @@ class Backendd {
 
  private:
   struct Work;
+  struct QueuedRecord {
+    StoredRecord record;
+    std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
+  };
+
+  void let_in_recovered(std::vector<StoredRecord> recovered);
   void receive_loop();
+  void receive(RecordKind kind, const std::uint8_t* data, std::size_t size);
   void work_loop();
+  void process(const QueuedRecord& queued);
+  void apply_keyframe(const QueuedRecord& queued);
+  void apply_local_graph(const StoredRecord& record);
+  void publish_map(const std::vector<std::int64_t>& joined);
+  void publish_status(std::int8_t state);
+  void finish();
   void note(const std::string& detail);
+  /// note(), at most once a second per `kind` of event (a flood of bad messages must not flood
+  /// the journal); what was held back is counted in the next one.
+  void note_limited(const std::string& kind, const std::string& detail);
 
   config::Config config_;
   SystemdNotifier systemd_;
   std::unique_ptr<KeyframeStore> store_;
   std::vector<StoredRecord> recovered_;
-  std::unique_ptr<Work> work_;  // the back end, the detector and what they know; cvo-backend only
+  MessageDoor door_;            // cvo-receive only (filled from the store before it starts)
+  std::unique_ptr<Work> work_;  // the mapper and what the daemon reports of it; cvo-backend only
 
   std::mutex queue_mutex_;
   std::condition_variable queue_ready_;
-  std::deque<StoredRecord> queue_;
+  std::deque<QueuedRecord> queue_;
   std::atomic<bool> stop_{false}, receiver_done_{false};
-  std::atomic<std::int64_t> bad_messages_[5]{};
+  std::atomic<std::int64_t> bad_messages_[cvo_lcm::status_t::NUM_BAD_KINDS]{};
   std::atomic<std::int64_t> receive_heartbeat_ns_{0}, work_heartbeat_ns_{0};
 
+  struct NoteLimit {
+    std::chrono::steady_clock::time_point last{};
+    std::int64_t held_back = 0;
+  };
   std::mutex detail_mutex_;
   std::string detail_;
+  std::map<std::string, NoteLimit> note_limits_;
 };
 
 }  // namespace cvo::daemon::backendd

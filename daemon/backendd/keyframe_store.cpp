@@ -4,6 +4,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
@@ -28,15 +29,7 @@ std::uint32_t get32(const std::uint8_t* p) {
 }
 
 std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size_t size) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  crc = crc32(crc, &kind, 1);
-  // zlib takes uInt lengths: feed large payloads in pieces.
-  for (std::size_t at = 0; at < size;) {
-    const auto n = static_cast<uInt>(std::min<std::size_t>(size - at, 1u << 30));
-    crc = crc32(crc, payload + at, n);
-    at += n;
-  }
-  return static_cast<std::uint32_t>(crc);
+  return crc32_of(payload, size, crc32_of(&kind, 1));
 }
 
 bool read_exactly(int fd, void* buffer, std::size_t size) {
@@ -63,6 +56,17 @@ bool write_all(int fd, const std::uint8_t* p, std::size_t size) {
 }
 
 }  // namespace
+
+std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc) {
+  uLong c = crc;
+  // zlib takes uInt lengths: feed large buffers in pieces.
+  for (std::size_t at = 0; at < size;) {
+    const auto n = static_cast<uInt>(std::min<std::size_t>(size - at, 1u << 30));
+    c = crc32(c, data + at, n);
+    at += n;
+  }
+  return static_cast<std::uint32_t>(c);
+}
 
 KeyframeStore::KeyframeStore(const std::filesystem::path& file, std::vector<StoredRecord>& recovered,
                              std::string& warning)

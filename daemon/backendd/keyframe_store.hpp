@@ -11,6 +11,7 @@
 // the first one that is cut short or fails its checksum it stops, says so, and truncates the file
 // there: a corrupt tail is dropped with a message, never loaded, and new records follow the last
 // good one.
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -19,6 +20,10 @@
 namespace cvo::daemon::backendd {
 
 enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2 };
+
+/// zlib's CRC-32 of `size` bytes, continuing `crc` (0 to start): the store's record checksum and
+/// the receiver's fingerprint of a message's content.
+std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);
 
 struct StoredRecord {
   RecordKind kind;

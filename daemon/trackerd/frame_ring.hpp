@@ -23,6 +23,10 @@ using Clock = std::chrono::steady_clock;
 struct RingSlot {
   core::RgbdFrame frame;
   Clock::time_point received;  // when the driver handed the frame over: latency starts here
+  // Which connection of the source the frame came from: 0, then one more each time frames come
+  // again after a disconnection. A count rather than a flag on the first frame back, which the
+  // ring may drop: the tracker starts a new session whenever it changes (trackerd.hpp).
+  std::uint64_t connection = 0;
 };
 
 class FrameRing {

@@ -1,29 +1,40 @@
 #pragma once
-// The back end's newest correction of the odometry: T_map_odom, so that a frame's map pose is
-// T_map_odom · T_odom_camera. The publisher thread computes it from each CVO_MAP (the newest
-// keyframe the map and this tracker both know: T_map_odom = P_map(k) · P_odom(k)^-1); the
-// tracking thread reads it for every frame. A plain mutex: the critical sections are a copy of
-// 7 doubles, and the reader never waits for a computation.
+// The back end's newest word on this tracker's session: whether CVO_MAP places it in the map, and
+// its correction T_map_odom, so that a frame's map pose is T_map_odom · T_odom_camera. The
+// publisher thread sets it from each CVO_MAP (the entry of the session the tracker runs); the
+// tracking thread reads it for every frame. It is keyed by session: a map that was decoded for a
+// session the tracker has just left (a camera re-initialisation) never places the new one. A plain
+// mutex: the critical sections are a copy of a few words, and the reader never waits for a
+// computation.
+#include <cstdint>
 #include <mutex>
 
 #include "libcvo/core/se3.hpp"
 
 namespace cvo::daemon::trackerd {
 
+struct MapPlacement {
+  core::SE3 T_map_odom;  // identity while not placed: map pose = odometry pose
+  bool placed = false;
+};
+
 class MapCorrection {
  public:
-  void set(const core::SE3& T_map_odom) {
+  void set(std::int64_t session, const MapPlacement& placement) {
     const std::lock_guard lock(mutex_);
-    T_map_odom_ = T_map_odom;
+    session_ = session;
+    placement_ = placement;
   }
-  [[nodiscard]] core::SE3 get() const {
+  /// The placement of `session`: not placed until a map placed it.
+  [[nodiscard]] MapPlacement get(std::int64_t session) const {
     const std::lock_guard lock(mutex_);
-    return T_map_odom_;
+    return session_ == session ? placement_ : MapPlacement{};
   }
 
  private:
   mutable std::mutex mutex_;
-  core::SE3 T_map_odom_;  // identity until the first map
+  std::int64_t session_ = 0;  // 0 is never a session
+  MapPlacement placement_;
 };
 
 }  // namespace cvo::daemon::trackerd

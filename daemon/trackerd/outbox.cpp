@@ -1,5 +1,7 @@
 #include "daemon/trackerd/outbox.hpp"
 
+#include <algorithm>
+
 #include <opencv2/core.hpp>
 
 namespace cvo::daemon::trackerd {
@@ -16,18 +18,18 @@ Outbox::Outbox(std::size_t capacity, std::size_t pool_size, int width, int heigh
   for (std::size_t i = 0; i < pool_size; ++i) graphs_.push_back({0, odometry::LocalGraph(graph_capacity)});
 }
 
-int Outbox::acquire(std::vector<char>& used) {
-  const std::lock_guard lock(mutex_);
-  for (std::size_t i = 0; i < used.size(); ++i)
-    if (used[i] == 0) {
-      used[i] = 1;
-      return static_cast<int>(i);
-    }
-  return -1;
+int Outbox::acquire(std::vector<char>& used, bool wait) {
+  std::unique_lock lock(mutex_);
+  const auto free_slot = [&] { return std::find(used.begin(), used.end(), 0); };
+  if (wait) room_.wait(lock, [&] { return free_slot() != used.end(); });
+  const auto slot = free_slot();
+  if (slot == used.end()) return -1;
+  *slot = 1;
+  return static_cast<int>(slot - used.begin());
 }
 
-int Outbox::acquire_keyframe_slot() { return acquire(keyframe_used_); }
-int Outbox::acquire_graph_slot() { return acquire(graph_used_); }
+int Outbox::acquire_keyframe_slot(bool wait) { return acquire(keyframe_used_, wait); }
+int Outbox::acquire_graph_slot(bool wait) { return acquire(graph_used_, wait); }
 
 bool Outbox::push(const Event& event, bool wait) {
   std::unique_lock lock(mutex_);
@@ -66,9 +68,12 @@ bool Outbox::pop(Event& event, std::chrono::milliseconds timeout) {
 }
 
 void Outbox::release(const Event& event) {
-  const std::lock_guard lock(mutex_);
-  if (event.keyframe_slot >= 0) keyframe_used_[static_cast<std::size_t>(event.keyframe_slot)] = 0;
-  if (event.graph_slot >= 0) graph_used_[static_cast<std::size_t>(event.graph_slot)] = 0;
+  {
+    const std::lock_guard lock(mutex_);
+    if (event.keyframe_slot >= 0) keyframe_used_[static_cast<std::size_t>(event.keyframe_slot)] = 0;
+    if (event.graph_slot >= 0) graph_used_[static_cast<std::size_t>(event.graph_slot)] = 0;
+  }
+  room_.notify_all();  // a tracker waiting for a slot
 }
 
 bool Outbox::finished() const {

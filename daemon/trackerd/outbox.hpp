@@ -22,10 +22,11 @@
 namespace cvo::daemon::trackerd {
 
 struct PoseEvent {
-  std::int64_t frame_index = 0;
+  std::int64_t frame_index = 0;  // in its session
   std::int64_t keyframe_id = -1;
   double timestamp = 0;  // the frame's colour stamp
   core::SE3 odom_pose, map_pose;
+  bool map_placed = false;  // map_pose is in the map frame (CVO_MAP placed the session)
   core::Matrix6d covariance = core::Matrix6d::Identity();
   odometry::TrackStatus status = odometry::TrackStatus::kOk;
   bool is_keyframe = false;
@@ -47,6 +48,8 @@ struct LocalGraphSlot {
 };
 
 struct Event {
+  std::int64_t session = 0;  // the tracker session everything in the event belongs to
+  bool has_pose = true;      // false: only a local graph (a session's open one, at its end)
   PoseEvent pose;
   int keyframe_slot = -1;  // index into keyframes(), or -1
   int graph_slot = -1;     // index into graphs(), or -1
@@ -59,11 +62,11 @@ class Outbox {
   Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t cloud_capacity,
          std::size_t graph_capacity);
 
-  // Tracking thread: reserve pool slots (nullptr-free: -1 when the pool is exhausted), fill
-  // them, then push the event. push() returns false (counted in dropped()) when full, unless
-  // `wait` is set: then it waits for room.
-  int acquire_keyframe_slot();
-  int acquire_graph_slot();
+  // Tracking thread: reserve pool slots (-1 when the pool is exhausted, unless `wait` is set:
+  // then it waits for the publisher to release one), fill them, then push the event. push()
+  // returns false (counted in dropped()) when full, unless `wait` is set: then it waits for room.
+  int acquire_keyframe_slot(bool wait);
+  int acquire_graph_slot(bool wait);
   [[nodiscard]] KeyframeSlot& keyframe(int slot) { return keyframes_[static_cast<std::size_t>(slot)]; }
   [[nodiscard]] LocalGraphSlot& graph(int slot) { return graphs_[static_cast<std::size_t>(slot)]; }
   bool push(const Event& event, bool wait);
@@ -77,7 +80,7 @@ class Outbox {
   [[nodiscard]] std::int64_t dropped() const;
 
  private:
-  int acquire(std::vector<char>& used);
+  int acquire(std::vector<char>& used, bool wait);
 
   std::vector<Event> events_;  // circular
   std::size_t head_ = 0, count_ = 0;

@@ -2,12 +2,13 @@
 
 #include <poll.h>
 #include <signal.h>
+#include <sys/random.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <iostream>
-#include <map>
 #include <optional>
 #include <utility>
 
@@ -17,20 +18,19 @@
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
-#include "cvo_lcm/status_t.hpp"
 #include "daemon/common/allocation_counter.hpp"
 #include "daemon/common/latency_window.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
-#include "daemon/trackerd/outbox.hpp"
-#include "drivers/frame_source.hpp"
 #include "drivers/reconnecting_source.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
+#include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
+#include "libcvo/odometry/keyframe_output.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {
@@ -50,6 +50,25 @@ std::int64_t wall_utime() {
       .count();
 }
 
+// 64 random bits from the kernel: unique across restarts and machines. getrandom(2) neither
+// allocates nor blocks once the kernel's pool is ready (it was for the first session), so the
+// tracking thread may call it. 0 means "no session" (status_t), so it is never an id. Should the
+// call fail, the clock mixed into the previous id (splitmix64) still gives a new one.
+std::int64_t new_session_id(std::uint64_t previous = 0) {
+  std::uint64_t id = 0;
+  while (id == 0) {
+    const auto n = getrandom(&id, sizeof id, 0);
+    if (n == static_cast<ssize_t>(sizeof id) || (n < 0 && errno == EINTR)) continue;
+    std::uint64_t z = previous += 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(now_ns());
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    id = z ^ (z >> 31);
+  }
+  return static_cast<std::int64_t>(id);
+}
+
+std::string session_hex(std::int64_t session) { return lcm::detail::hex64(static_cast<std::uint64_t>(session)); }
+
 std::int8_t to_pose_status(odometry::TrackStatus status) {
   switch (status) {
     case odometry::TrackStatus::kOk: return cvo_lcm::pose_t::STATUS_OK;
@@ -62,8 +81,9 @@ std::int8_t to_pose_status(odometry::TrackStatus status) {
 
 bool is_device(const std::string& spec) { return spec.starts_with("openni2:") || spec.starts_with("v4l2:"); }
 
-// Intrinsics for the sources that carry none (v4l2): the configured camera. The others bring
-// their own (TUM folder, CVO_RGBD message, OpenNI2 stream).
+// Intrinsics for the sources that carry none (v4l2): the configured camera (a bad camera file
+// throws here, at start-up, not in a thread). The others bring their own (TUM folder, CVO_RGBD
+// message, OpenNI2 stream).
 drivers::SourceOptions source_options(const config::Config& config) {
   drivers::SourceOptions options;
   options.realtime = config.trackerd.paced;
@@ -71,32 +91,86 @@ drivers::SourceOptions source_options(const config::Config& config) {
   return options;
 }
 
+// The source trackerd.source names; devices are re-opened with back-off when they go away.
+Trackerd::SourceFactory configured_source(const config::Config& config) {
+  return [spec = config.trackerd.source, options = source_options(config)]() -> std::unique_ptr<drivers::FrameSource> {
+    if (is_device(spec)) return std::make_unique<drivers::ReconnectingSource>(spec, options);
+    return drivers::open_source(spec, options);
+  };
+}
+
+odometry::KeyframeOdometryParameters tracker_parameters(const config::Config& config) {
+  odometry::KeyframeOdometryParameters parameters;
+  parameters.selection = config.selection;
+  parameters.cvo = config.cvo;
+  parameters.keyframe = config.keyframe;
+  return parameters;
+}
+
+// Covariance of a frame's pose relative to its keyframe: the inverse CVO Hessian of the keyframe
+// registration (the last keyframe->frame edge), when the frame has one.
+std::optional<core::Matrix6d> keyframe_covariance(const odometry::KeyframeOdometry& tracker, std::uint64_t frame) {
+  const auto& edges = tracker.current_local_graph().edges();
+  for (auto it = edges.rbegin(); it != edges.rend() && it != edges.rbegin() + 2; ++it)
+    if (it->to == frame && it->from == tracker.keyframe_index()) {
+      const Eigen::FullPivLU<core::Matrix6d> lu(it->information);
+      if (lu.isInvertible()) return lu.inverse();
+    }
+  return std::nullopt;
+}
+
+cvo_lcm::pose_t pose_message(const Event& event) {
+  const PoseEvent& e = event.pose;
+  cvo_lcm::pose_t m{};
+  m.version = cvo_lcm::pose_t::SCHEMA_VERSION;
+  m.session = event.session;
+  m.utime = lcm::to_utime(e.timestamp);
+  m.frame_index = e.frame_index;
+  m.keyframe_id = e.keyframe_id;
+  m.odom_pose = lcm::to_message(e.odom_pose);
+  m.map_pose = lcm::to_message(e.map_pose);
+  m.map_placed = e.map_placed;
+  lcm::matrix6_to_message(e.covariance, m.covariance);
+  m.status = to_pose_status(e.status);
+  m.is_keyframe = e.is_keyframe;
+  m.inner_product = e.inner_product;
+  m.gamma_frame = 0;
+  m.gamma_keyframe = e.gamma_keyframe;
+  m.iterations = e.iterations;
+  m.points = e.points;
+  m.latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - e.received).count();
+  return m;
+}
+
 }  // namespace
 
 // Everything sized by the first frame. Owned by Trackerd; the tracking thread uses the tracker
-// and the frame copy, both threads the outbox (thread-safe).
+// and the keyframe output, both threads the outbox (thread-safe).
 struct Trackerd::Pipeline {
   Pipeline(int w, int h, const odometry::KeyframeOdometryParameters& parameters)
       : width(w),
         height(h),
         tracker(w, h, parameters),
-        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.max_points, parameters.local_graph_capacity) {
-    previous.bgr.create(h, w, CV_8UC3);
-    previous.depth.create(h, w, CV_16UC1);
-  }
+        output(w, h),
+        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.max_points, parameters.local_graph_capacity) {}
   int width, height;
   odometry::KeyframeOdometry tracker;
-  core::RgbdFrame previous;  // frame n-1: it becomes the keyframe when one is made at frame n
+  odometry::KeyframeOutput output;  // which frame each keyframe is, and its id in the session
   Outbox outbox;
+  std::int64_t session_frames = 0;  // frames tracked in the running session
+  std::uint64_t connection = 0;     // the source connection they came from (RingSlot::connection)
 };
 
-Trackerd::Trackerd(config::Config config) : config_(std::move(config)) {
+Trackerd::Trackerd(config::Config config) : Trackerd(std::move(config), SourceFactory{}) {}
+
+Trackerd::Trackerd(config::Config config, SourceFactory open_source)
+    : config_(std::move(config)), open_source_(std::move(open_source)), session_(new_session_id()) {
   const auto& t = config_.trackerd;
   if (t.source.find(':') == std::string::npos)
     throw io::InputError("trackerd.source", "'" + t.source + "': expected tum:DIR, lcm:URL, openni2:URI or v4l2:DEV");
   if (!lcm::parse_colour_encoding(t.keyframe_colour_encoding))
     throw io::InputError("trackerd.keyframe_colour_encoding", "'" + t.keyframe_colour_encoding + "': expected raw, jpeg or png");
-  if (t.source.starts_with("v4l2:")) (void)io::load_camera(config_.camera);  // fail now, not in a thread
+  if (!open_source_) open_source_ = configured_source(config_);
   ring_ = std::make_unique<FrameRing>(t.ring_slots, t.deterministic ? FrameRing::Overflow::kBlock
                                                                     : FrameRing::Overflow::kDropOldest);
   ::lcm::LCM probe(t.lcm_url);  // the publisher opens its own; a bad URL should fail at start-up
@@ -111,8 +185,15 @@ void Trackerd::note(const std::string& detail) {
   detail_ = detail;
 }
 
+void Trackerd::count_bad(int kind, const std::string& what, const std::string& why) {
+  if (kind < 0 || kind >= cvo_lcm::status_t::NUM_BAD_KINDS) kind = cvo_lcm::status_t::BAD_CONTENT;
+  const auto n = ++counters_.bad_messages[kind];
+  if (n <= 10 || (n & (n - 1)) == 0) note(what + " #" + std::to_string(n) + ": " + why);
+}
+
 int Trackerd::run() {
   const auto& t = config_.trackerd;
+  note("session " + session_hex(session_));
   note("source " + t.source + ", publishing on " + t.lcm_url + (t.deterministic ? " (deterministic)" : ""));
   if (t.lock_memory)
     if (const auto why = lock_all_memory(); !why.empty()) note("warning: " + why + "; running without locked memory");
@@ -161,8 +242,7 @@ void Trackerd::acquire_loop() {
   const auto& t = config_.trackerd;
   std::unique_ptr<drivers::FrameSource> source;
   try {
-    source = is_device(t.source) ? std::make_unique<drivers::ReconnectingSource>(t.source, source_options(config_))
-                                 : drivers::open_source(t.source, source_options(config_));
+    source = open_source_();
   } catch (const std::exception& e) {
     note(std::string("cannot open the frame source: ") + e.what());
     fatal_ = true;  // a folder or URL that is wrong now stays wrong; devices are retried above
@@ -172,7 +252,10 @@ void Trackerd::acquire_loop() {
   note("reading " + source->describe());
   counters_.source_connected = true;
 
-  std::int64_t next_index = 0;  // our own sequence: the tracker needs increasing indices across re-opens
+  // Frame indices of the session: increasing for the tracker, from 0 again when the source comes
+  // back after a disconnection (a new connection, and so a new session).
+  std::int64_t next_index = 0;
+  std::uint64_t connection = 0;
   bool connected = true;
   while (!stop_) {
     RingSlot* slot = ring_->begin_write();
@@ -181,22 +264,22 @@ void Trackerd::acquire_loop() {
     counters_.source_lost_frames = static_cast<std::int64_t>(source->lost_frames());
     switch (result.status) {
       case drivers::ReadStatus::kFrame:
-        slot->received = Clock::now();
-        slot->frame.index = static_cast<std::uint64_t>(next_index++);
-        ring_->commit_write();
         if (!connected) {
           connected = true;
+          ++connection;
+          next_index = 0;
           counters_.source_connected = true;
           note("frames again from " + source->describe());
         }
+        slot->received = Clock::now();
+        slot->frame.index = static_cast<std::uint64_t>(next_index++);
+        slot->connection = connection;
+        ring_->commit_write();
         continue;
       case drivers::ReadStatus::kTimeout: break;
-      case drivers::ReadStatus::kBadInput: {
-        const auto kind = static_cast<std::size_t>(result.bad_input);
-        const auto n = ++counters_.bad_messages[std::min<std::size_t>(kind, 4)];
-        if (n <= 10 || (n & (n - 1)) == 0) note("skipped bad input #" + std::to_string(n) + ": " + result.message);
+      case drivers::ReadStatus::kBadInput:
+        count_bad(static_cast<int>(result.bad_input), "skipped bad input", result.message);
         break;
-      }
       case drivers::ReadStatus::kDisconnected:
         if (connected) {
           connected = false;
@@ -232,13 +315,8 @@ void Trackerd::track_loop() {
   if (t.cpu >= 0)
     if (const auto why = pin_this_thread(t.cpu); !why.empty()) note("warning: " + why);
 
-  odometry::KeyframeOdometryParameters parameters;
-  parameters.selection = config_.selection;
-  parameters.cvo = config_.cvo;
-  parameters.keyframe = config_.keyframe;
-
   Pipeline* p = nullptr;
-  std::int64_t keyframe_id = -1, frames = 0, allocations_at_warmup = 0;
+  std::int64_t frames = 0, allocations_at_warmup = 0;
   while (true) {
     track_heartbeat_ns_ = now_ns();
     RingSlot* slot = ring_->begin_read(100ms);
@@ -247,239 +325,160 @@ void Trackerd::track_loop() {
       continue;
     }
     const core::RgbdFrame& frame = slot->frame;
-    if (p == nullptr) {
-      const auto& k = frame.intrinsics;
-      if (!k.validate().empty() || frame.bgr.cols != k.width || frame.bgr.rows != k.height) {
-        ++counters_.bad_messages[cvo_lcm::status_t::BAD_CONTENT];
-        ring_->end_read();
-        continue;
-      }
-      pipeline_ = std::make_unique<Pipeline>(k.width, k.height, parameters);
-      p = pipeline_.get();
-      pipeline_ready_ = true;
-    }
-    if (frame.bgr.cols != p->width || frame.bgr.rows != p->height || frame.depth.cols != p->width ||
+    if (p == nullptr) p = start_pipeline(frame);
+    if (p == nullptr || frame.bgr.cols != p->width || frame.bgr.rows != p->height || frame.depth.cols != p->width ||
         frame.depth.rows != p->height) {  // the first frame fixed the size; a change is a new camera
       ++counters_.bad_messages[cvo_lcm::status_t::BAD_CONTENT];
       ring_->end_read();
       continue;
     }
+    if (slot->connection != p->connection) {
+      if (p->session_frames > 0) start_new_session(*p);
+      p->connection = slot->connection;
+    }
 
-    const odometry::TrackResult result = p->tracker.track(frame);
     Event event;
-    PoseEvent& e = event.pose;
-    e.frame_index = static_cast<std::int64_t>(frame.index);
-    e.timestamp = frame.timestamp;
-    e.received = slot->received;
-    e.status = result.status;
-    e.odom_pose = result.pose;
-    e.map_pose = correction_.get() * result.pose;
-    e.inner_product = result.inner_product;
-    e.gamma_keyframe = p->tracker.gamma();
-    e.iterations = result.iterations;
-    e.points = static_cast<int>(result.points);
-    if (!result.tracked()) ++counters_.failed_frames;
-
-    if (p->tracker.local_graph_closed() && keyframe_id >= 0) {
-      event.graph_slot = p->outbox.acquire_graph_slot();
-      if (event.graph_slot >= 0) {
-        auto& g = p->outbox.graph(event.graph_slot);
-        g.keyframe_id = keyframe_id;
-        g.graph = p->tracker.closed_local_graph();  // within capacity: no allocation
-      }
-    }
-    if (result.keyframe) {
-      ++keyframe_id;
-      ++counters_.keyframes;
-      event.keyframe_slot = p->outbox.acquire_keyframe_slot();
-      if (event.keyframe_slot >= 0) {
-        auto& k = p->outbox.keyframe(event.keyframe_slot);
-        // The keyframe is this frame (first frame, restart) or, as in the paper, frame n-1.
-        const core::RgbdFrame& source = p->tracker.keyframe_index() == frame.index ? frame : p->previous;
-        k.id = keyframe_id;
-        k.pose = p->tracker.current_local_graph().keyframe().pose;
-        k.frame.index = source.index;
-        k.frame.timestamp = source.timestamp;
-        k.frame.depth_timestamp = source.depth_timestamp;
-        k.frame.intrinsics = source.intrinsics;
-        source.bgr.copyTo(k.frame.bgr);
-        source.depth.copyTo(k.frame.depth);
-        k.cloud = p->tracker.keyframe_cloud();  // same capacity: copies points, no allocation
-      }
-    }
-    e.keyframe_id = keyframe_id;
-    e.is_keyframe = result.keyframe;
-    // Covariance of the pose relative to its keyframe: the inverse CVO Hessian of the keyframe
-    // registration (the last keyframe->frame edge), when this frame has one.
-    const auto& edges = p->tracker.current_local_graph().edges();
-    for (auto it = edges.rbegin(); it != edges.rend() && it != edges.rbegin() + 2; ++it)
-      if (it->to == frame.index && it->from == p->tracker.keyframe_index()) {
-        const Eigen::FullPivLU<core::Matrix6d> lu(it->information);
-        if (lu.isInvertible()) e.covariance = lu.inverse();
-      }
-
-    // Keep frame n for the next keyframe decision (copyTo into a same-sized image: no allocation).
-    p->previous.index = frame.index;
-    p->previous.timestamp = frame.timestamp;
-    p->previous.depth_timestamp = frame.depth_timestamp;
-    p->previous.intrinsics = frame.intrinsics;
-    frame.bgr.copyTo(p->previous.bgr);
-    frame.depth.copyTo(p->previous.depth);
+    track_frame(*p, *slot, event);
     ring_->end_read();
-
     p->outbox.push(event, t.deterministic);
+    ++p->session_frames;
     ++counters_.frames_tracked;
     if (++frames == static_cast<std::int64_t>(t.warmup_frames)) allocations_at_warmup = thread_allocations();
     if (frames > static_cast<std::int64_t>(t.warmup_frames))
       counters_.allocations_after_warmup = thread_allocations() - allocations_at_warmup;
   }
-  if (p != nullptr) p->outbox.close();
+  if (p != nullptr) {
+    publish_open_graph(*p);  // the end of the session: the back end gets every tracked frame
+    p->outbox.close();
+  }
   tracker_done_ = true;
+}
+
+// The pipeline for frames of this one's size, or nullptr (counted) when its intrinsics are unusable.
+Trackerd::Pipeline* Trackerd::start_pipeline(const core::RgbdFrame& first) {
+  const auto& k = first.intrinsics;
+  if (!k.validate().empty() || first.bgr.cols != k.width || first.bgr.rows != k.height) return nullptr;
+  pipeline_ = std::make_unique<Pipeline>(k.width, k.height, tracker_parameters(config_));
+  pipeline_ready_ = true;
+  return pipeline_.get();
+}
+
+// One frame through KF-CVO into an event: its pose (map pose when CVO_MAP places the session), the
+// local graph it closed and the keyframe it made, copied into preallocated outbox slots.
+void Trackerd::track_frame(Pipeline& p, const RingSlot& slot, Event& event) {
+  const core::RgbdFrame& frame = slot.frame;
+  const odometry::TrackResult result = p.tracker.track(frame);
+  const odometry::KeyframeStep step = p.output.after_track(p.tracker, result, frame);
+  const bool wait = config_.trackerd.deterministic;  // never lose a graph or keyframe in a replay
+  event.session = session_.load(std::memory_order_relaxed);
+
+  PoseEvent& e = event.pose;
+  const MapPlacement placement = correction_.get(event.session);
+  e.frame_index = static_cast<std::int64_t>(frame.index);
+  e.timestamp = frame.timestamp;
+  e.received = slot.received;
+  e.status = result.status;
+  e.odom_pose = result.pose;
+  e.map_pose = placement.T_map_odom * result.pose;
+  e.map_placed = placement.placed;
+  e.inner_product = result.inner_product;
+  e.gamma_keyframe = p.tracker.gamma();
+  e.iterations = result.iterations;
+  e.points = static_cast<int>(result.points);
+  e.keyframe_id = p.output.keyframe_id();
+  e.is_keyframe = result.keyframe;
+  if (const auto covariance = keyframe_covariance(p.tracker, frame.index)) e.covariance = *covariance;
+  if (!result.tracked()) ++counters_.failed_frames;
+
+  if (step.closed_graph != nullptr && (event.graph_slot = p.outbox.acquire_graph_slot(wait)) >= 0) {
+    auto& g = p.outbox.graph(event.graph_slot);
+    g.keyframe_id = step.closed_graph_keyframe;
+    g.graph = *step.closed_graph;  // within capacity: no allocation
+  }
+  if (step.keyframe_id >= 0) ++counters_.keyframes;
+  if (step.keyframe != nullptr && (event.keyframe_slot = p.outbox.acquire_keyframe_slot(wait)) >= 0) {
+    auto& k = p.outbox.keyframe(event.keyframe_slot);
+    const core::RgbdFrame& source = *step.keyframe;
+    k.id = step.keyframe_id;
+    k.pose = step.keyframe_pose;
+    k.frame.index = source.index;
+    k.frame.timestamp = source.timestamp;
+    k.frame.depth_timestamp = source.depth_timestamp;
+    k.frame.intrinsics = source.intrinsics;
+    source.bgr.copyTo(k.frame.bgr);  // same-sized images: no allocation
+    source.depth.copyTo(k.frame.depth);
+    k.cloud = p.tracker.keyframe_cloud();  // same capacity: copies points, no allocation
+  }
+  p.output.keep(frame);
+}
+
+// The open local graph of the running session (its current keyframe and the frames tracked
+// against it), as the tracker stops or the session ends. Waiting for room is harmless here: the
+// source has ended or was away.
+void Trackerd::publish_open_graph(Pipeline& p) {
+  const auto& open = p.tracker.current_local_graph();
+  if (open.empty() || p.output.keyframe_id() < 0) return;
+  Event event;
+  event.session = session_.load(std::memory_order_relaxed);
+  event.has_pose = false;
+  event.graph_slot = p.outbox.acquire_graph_slot(true);
+  auto& g = p.outbox.graph(event.graph_slot);
+  g.keyframe_id = p.output.keyframe_id();
+  g.graph = open;  // within capacity: no allocation
+  p.outbox.push(event, true);
+}
+
+// The source came back: the camera may have been re-initialised, so odometry starts again from
+// its first frame in a new session (the publisher notes it when that session's first pose goes
+// out: this thread does not allocate).
+void Trackerd::start_new_session(Pipeline& p) {
+  publish_open_graph(p);
+  p.tracker.reset();
+  p.output.reset();
+  p.session_frames = 0;
+  session_ = new_session_id(static_cast<std::uint64_t>(session_.load()));
 }
 
 // ---------------------------------------------------------------------------------------------
 // cvo-publish
 
+// What the publisher thread keeps between events and status messages.
+struct Trackerd::Publisher {
+  explicit Publisher(const config::TrackerdParameters& t, std::int64_t first_session)
+      : lcm(t.lcm_url),
+        encoding{*lcm::parse_colour_encoding(t.keyframe_colour_encoding), lcm::DepthEncoding::kPng},
+        session(first_session) {}
+  ::lcm::LCM lcm;
+  LatencyWindow latency{1024};
+  lcm::RgbdEncoding encoding;
+  std::int64_t session;  // of the last event published
+  std::int64_t published = 0, published_at_last_status = 0, deadline_misses = 0, failed_at_last_status = 0;
+  Clock::time_point last_status = Clock::now(), last_frame = Clock::now();
+};
+
 void Trackerd::publish_loop() {
   name_this_thread("cvo-publish");
   const auto& t = config_.trackerd;
-  ::lcm::LCM lcm(t.lcm_url);
+  Publisher out(t, session_.load());
   publish_heartbeat_ns_ = now_ns();
 
-  // CVO_MAP: the back end's keyframe poses; keyframe odometry poses are remembered as published.
-  std::map<std::int64_t, core::SE3> keyframe_odom_poses;
   struct MapHandler {
     Trackerd* self;
-    std::map<std::int64_t, core::SE3>* odom;
     void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
-      std::string error;
-      const auto map = lcm::decode<cvo_lcm::map_t>(buffer->data, static_cast<int>(buffer->data_size), &error);
-      if (!map) {
-        ++self->counters_.bad_messages[cvo_lcm::status_t::BAD_BODY];
-        self->note("skipped CVO_MAP: " + error);
-        return;
-      }
-      for (int i = map->num_keyframes - 1; i >= 0; --i) {  // the newest keyframe both sides know
-        const auto it = odom->find(map->keyframe_ids[static_cast<std::size_t>(i)]);
-        if (it == odom->end()) continue;
-        const auto map_pose = lcm::from_message(map->poses[static_cast<std::size_t>(i)], &error);
-        if (!map_pose) {
-          ++self->counters_.bad_messages[cvo_lcm::status_t::BAD_CONTENT];
-          self->note("skipped CVO_MAP: " + error);
-          return;
-        }
-        self->correction_.set(*map_pose * it->second.inverse());
-        return;
-      }
+      self->apply_map(buffer->data, static_cast<int>(buffer->data_size));
     }
-  } map_handler{this, &keyframe_odom_poses};
+  } map_handler{this};
   // A file:// output is a log being written: nothing comes back on it.
   const bool receives = !t.lcm_url.starts_with("file://");
-  if (receives) lcm.subscribe("CVO_MAP", &MapHandler::handle, &map_handler);
+  if (receives) out.lcm.subscribe("CVO_MAP", &MapHandler::handle, &map_handler);
 
-  LatencyWindow latency(1024);
-  const auto encoding = lcm::RgbdEncoding{*lcm::parse_colour_encoding(t.keyframe_colour_encoding), lcm::DepthEncoding::kPng};
-  std::int64_t published = 0, published_at_last_status = 0, deadline_misses = 0, failed_at_last_status = 0;
-  auto last_status = Clock::now();
-  auto last_frame = Clock::now();
-  bool first = true;
-
-  const auto publish_status = [&](std::int8_t state_override) {
-    const auto now = Clock::now();
-    const double elapsed = std::chrono::duration<double>(now - last_status).count();
-    cvo_lcm::status_t s{};
-    s.version = cvo_lcm::status_t::SCHEMA_VERSION;
-    s.utime = wall_utime();
-    s.pid = static_cast<std::int32_t>(getpid());
-    s.rate_hz = elapsed > 0 ? static_cast<double>(published - published_at_last_status) / elapsed : 0;
-    const auto l = latency.summary();
-    s.latency_median_ms = l.median_ms;
-    s.latency_p99_ms = l.p99_ms;
-    s.deadline_misses = deadline_misses;
-    s.dropped_frames = ring_->dropped() + counters_.source_lost_frames;
-    s.failed_frames = counters_.failed_frames;
-    s.source_gaps = counters_.source_gaps;
-    s.allocations_after_warmup = counters_.allocations_after_warmup;
-    s.queue_depth = static_cast<std::int32_t>(ring_->waiting());
-    s.rss_bytes = resident_bytes();
-    for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = counters_.bad_messages[k];
-    s.process = kProcess;
-    {
-      const std::lock_guard lock(detail_mutex_);
-      s.detail = detail_;
-    }
-    const bool idle = now - last_frame > 1s;
-    if (state_override >= 0) s.state = state_override;
-    else if (published == 0) s.state = counters_.source_connected ? cvo_lcm::status_t::STATE_STARTING : cvo_lcm::status_t::STATE_WAITING_FOR_INPUT;
-    else if (!counters_.source_connected || idle) s.state = cvo_lcm::status_t::STATE_WAITING_FOR_INPUT;
-    else if (counters_.failed_frames > failed_at_last_status) s.state = cvo_lcm::status_t::STATE_DEGRADED;
-    else s.state = cvo_lcm::status_t::STATE_RUNNING;
-    lcm.publish("CVO_STATUS", &s);
-    systemd_.status(std::to_string(published) + " frames, " + std::to_string(static_cast<int>(std::lround(s.rate_hz))) +
-                    " Hz, latency p99 " + std::to_string(static_cast<int>(std::lround(s.latency_p99_ms))) + " ms, " +
-                    std::to_string(s.dropped_frames) + " dropped");
-    published_at_last_status = published;
-    failed_at_last_status = counters_.failed_frames;
-    last_status = now;
-  };
-
-  const auto publish_event = [&](const Event& event) {
-    Pipeline& p = *pipeline_;
-    const PoseEvent& e = event.pose;
-    if (event.graph_slot >= 0) {
-      const auto& g = p.outbox.graph(event.graph_slot);
-      const auto message = lcm::to_message(g.graph, g.keyframe_id, wall_utime());
-      lcm.publish("CVO_LOCAL_GRAPH", &message);
-    }
-    if (event.keyframe_slot >= 0) {
-      const auto& k = p.outbox.keyframe(event.keyframe_slot);
-      std::string error;
-      lcm::Keyframe keyframe{k.id, k.frame, k.pose, k.cloud};
-      if (const auto message = lcm::to_message(keyframe, encoding, &error)) {
-        lcm.publish("CVO_KEYFRAME", &*message);
-        keyframe_odom_poses[k.id] = k.pose;
-      } else {
-        note("keyframe " + std::to_string(k.id) + " not published: " + error);
-      }
-    }
-    cvo_lcm::pose_t m{};
-    m.version = cvo_lcm::pose_t::SCHEMA_VERSION;
-    m.utime = lcm::to_utime(e.timestamp);
-    m.frame_index = e.frame_index;
-    m.keyframe_id = e.keyframe_id;
-    m.odom_pose = lcm::to_message(e.odom_pose);
-    m.map_pose = lcm::to_message(e.map_pose);
-    lcm::matrix6_to_message(e.covariance, m.covariance);
-    m.status = to_pose_status(e.status);
-    m.is_keyframe = e.is_keyframe;
-    m.inner_product = e.inner_product;
-    m.gamma_frame = 0;
-    m.gamma_keyframe = e.gamma_keyframe;
-    m.iterations = e.iterations;
-    m.points = e.points;
-    m.latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - e.received).count();
-    lcm.publish("CVO_POSE", &m);
-    latency.add(m.latency_ms);
-    if (m.latency_ms > t.deadline_ms) ++deadline_misses;
-    ++published;
-    last_frame = Clock::now();
-    p.outbox.release(event);
-  };
-
-  const int fd = receives ? lcm.getFileno() : -1;
+  const int fd = receives ? out.lcm.getFileno() : -1;
   Event event;
   while (true) {
     publish_heartbeat_ns_ = now_ns();
     if (pipeline_ready_) {
-      if (pipeline_->outbox.pop(event, 10ms)) {
-        publish_event(event);
-        if (first) {
-          first = false;
-          note("first pose published");
-        }
-      } else if (tracker_done_ && pipeline_->outbox.finished()) {
-        break;
-      }
+      if (pipeline_->outbox.pop(event, 10ms)) publish_event(out, event);
+      else if (tracker_done_ && pipeline_->outbox.finished()) break;
     } else if (tracker_done_) {
       break;
     } else {
@@ -487,12 +486,103 @@ void Trackerd::publish_loop() {
     }
     if (fd >= 0) {  // CVO_MAP, without blocking the poses
       pollfd pfd{fd, POLLIN, 0};
-      while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) lcm.handle();
+      while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) out.lcm.handle();
     }
-    if (Clock::now() - last_status >= std::chrono::duration<double>(t.status_period_s)) publish_status(-1);
+    if (Clock::now() - out.last_status >= std::chrono::duration<double>(t.status_period_s)) publish_status(out, -1);
   }
-  publish_status(cvo_lcm::status_t::STATE_STOPPING);
+  publish_status(out, cvo_lcm::status_t::STATE_STOPPING);
   publisher_done_ = true;
+}
+
+void Trackerd::publish_event(Publisher& out, const Event& event) {
+  Pipeline& p = *pipeline_;
+  if (event.session != out.session) {  // noted here: the tracking thread does not allocate
+    out.session = event.session;
+    note("camera re-initialised: new session " + session_hex(event.session));
+  }
+  if (event.graph_slot >= 0) {
+    const auto& g = p.outbox.graph(event.graph_slot);
+    const auto message = lcm::to_message(g.graph, event.session, g.keyframe_id, wall_utime());
+    out.lcm.publish("CVO_LOCAL_GRAPH", &message);
+  }
+  if (event.keyframe_slot >= 0) {
+    const auto& k = p.outbox.keyframe(event.keyframe_slot);
+    std::string error;
+    const lcm::Keyframe keyframe{event.session, k.id, k.frame, k.pose, k.cloud};
+    if (const auto message = lcm::to_message(keyframe, out.encoding, &error)) out.lcm.publish("CVO_KEYFRAME", &*message);
+    else note("keyframe " + std::to_string(k.id) + " not published: " + error);
+  }
+  if (event.has_pose) {
+    const cvo_lcm::pose_t m = pose_message(event);
+    out.lcm.publish("CVO_POSE", &m);
+    out.latency.add(m.latency_ms);
+    if (m.latency_ms > config_.trackerd.deadline_ms) ++out.deadline_misses;
+    if (out.published++ == 0) note("first pose published");
+    out.last_frame = Clock::now();
+  }
+  p.outbox.release(event);
+}
+
+void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
+  const auto now = Clock::now();
+  const double elapsed = std::chrono::duration<double>(now - out.last_status).count();
+  cvo_lcm::status_t s{};
+  s.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  s.session = out.session;
+  s.utime = wall_utime();
+  s.pid = static_cast<std::int32_t>(getpid());
+  s.rate_hz = elapsed > 0 ? static_cast<double>(out.published - out.published_at_last_status) / elapsed : 0;
+  const auto l = out.latency.summary();
+  s.latency_median_ms = l.median_ms;
+  s.latency_p99_ms = l.p99_ms;
+  s.deadline_misses = out.deadline_misses;
+  s.dropped_frames = ring_->dropped() + counters_.source_lost_frames;
+  s.failed_frames = counters_.failed_frames;
+  s.source_gaps = counters_.source_gaps;
+  s.allocations_after_warmup = counters_.allocations_after_warmup;
+  s.queue_depth = static_cast<std::int32_t>(ring_->waiting());
+  s.rss_bytes = resident_bytes();
+  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = counters_.bad_messages[k];
+  s.process = kProcess;
+  {
+    const std::lock_guard lock(detail_mutex_);
+    s.detail = detail_;
+  }
+  const bool idle = now - out.last_frame > 1s;
+  if (state_override >= 0) s.state = state_override;
+  else if (out.published == 0) s.state = counters_.source_connected ? cvo_lcm::status_t::STATE_STARTING : cvo_lcm::status_t::STATE_WAITING_FOR_INPUT;
+  else if (!counters_.source_connected || idle) s.state = cvo_lcm::status_t::STATE_WAITING_FOR_INPUT;
+  else if (counters_.failed_frames > out.failed_at_last_status) s.state = cvo_lcm::status_t::STATE_DEGRADED;
+  else s.state = cvo_lcm::status_t::STATE_RUNNING;
+  out.lcm.publish("CVO_STATUS", &s);
+  systemd_.status(std::to_string(out.published) + " frames, " + std::to_string(static_cast<int>(std::lround(s.rate_hz))) +
+                  " Hz, latency p99 " + std::to_string(static_cast<int>(std::lround(s.latency_p99_ms))) + " ms, " +
+                  std::to_string(s.dropped_frames) + " dropped");
+  out.published_at_last_status = out.published;
+  out.failed_at_last_status = counters_.failed_frames;
+  out.last_status = now;
+}
+
+// CVO_MAP: only the running session's entry counts. Placed: its correction moves the map poses;
+// unplaced or absent: map pose = odometry pose. Anything undecodable is a counted refusal.
+void Trackerd::apply_map(const void* data, int size) {
+  std::string error;
+  auto failure = lcm::DecodeFailure::kBody;
+  const auto message = lcm::decode<cvo_lcm::map_t>(data, size, &error, &failure);
+  const auto map = message ? lcm::from_message(*message, &error) : std::nullopt;
+  if (!map) {
+    count_bad(message ? cvo_lcm::status_t::BAD_CONTENT : static_cast<int>(failure), "skipped CVO_MAP", error);
+    return;
+  }
+  const std::int64_t session = session_.load();
+  const auto entry = std::find_if(map->sessions.begin(), map->sessions.end(),
+                                  [&](const slam::MapSession& s) { return s.session == session; });
+  MapPlacement placement;
+  if (entry != map->sessions.end() && entry->placed) placement = {entry->correction, true};
+  if (placement.placed != correction_.get(session).placed)
+    note("session " + session_hex(session) + (placement.placed ? " placed in the map" : " no longer placed in the map") +
+         " (map revision " + std::to_string(map->revision) + ")");
+  correction_.set(session, placement);
 }
 
 }  // namespace cvo::daemon::trackerd

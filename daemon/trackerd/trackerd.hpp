@@ -8,18 +8,30 @@
 //
 // The caller's thread (run()) waits for SIGTERM/SIGINT or the end of a finite source, pets the
 // systemd watchdog while the workers are alive, and shuts down in order: acquisition stops, the
-// tracker finishes the frames already in the ring, the publisher flushes, then run() returns 0.
+// tracker finishes the frames already in the ring and hands out the open local graph (so the back
+// end has every tracked frame), the publisher flushes, then run() returns 0.
+//
+// Sessions (proto/pose_t.lcm): each start is a session with a random 64-bit id, carried by every
+// message; frame indices and keyframe ids count from 0 in it. A source that comes back after a
+// disconnection (a camera unplugged, re-initialised) is a new session: its odometry starts again at
+// the first frame, so the old session's open local graph goes out first and the tracker, its
+// keyframe numbering and the frame indices are reset (RingSlot::connection tells the tracker).
+// CVO_MAP corrects the map pose only when it places the running session.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 
+#include "cvo_lcm/status_t.hpp"
 #include "daemon/common/systemd_notify.hpp"
 #include "daemon/trackerd/frame_ring.hpp"
 #include "daemon/trackerd/map_correction.hpp"
+#include "daemon/trackerd/outbox.hpp"
+#include "drivers/frame_source.hpp"
 #include "libcvo/config/config.hpp"
 
 namespace cvo::daemon::trackerd {
@@ -32,7 +44,7 @@ struct Counters {
   std::atomic<std::int64_t> source_gaps{0};
   std::atomic<std::int64_t> source_lost_frames{0};  // frames the source saw missing (FrameSource::lost_frames)
   std::atomic<std::int64_t> allocations_after_warmup{0};
-  std::atomic<std::int64_t> bad_messages[5]{};  // cvo_lcm::status_t BAD_* (frames and CVO_MAP)
+  std::atomic<std::int64_t> bad_messages[cvo_lcm::status_t::NUM_BAD_KINDS]{};  // by BAD_* (frames and CVO_MAP)
   std::atomic<bool> source_connected{false};
 };
 
@@ -42,6 +54,10 @@ class Trackerd {
   /// that names the key or URL) when that cannot work. The frame source is opened by the
   /// acquisition thread, so a camera that is not plugged in yet is waited for, not fatal.
   explicit Trackerd(config::Config config);
+  /// The same with another frame source than trackerd.source names (opened by the acquisition
+  /// thread, as above): how tests drive the daemon with a camera that goes away and comes back.
+  using SourceFactory = std::function<std::unique_ptr<drivers::FrameSource>()>;
+  Trackerd(config::Config config, SourceFactory open_source);
   ~Trackerd();
   Trackerd(const Trackerd&) = delete;
   Trackerd& operator=(const Trackerd&) = delete;
@@ -52,16 +68,30 @@ class Trackerd {
   int run();
 
  private:
+  struct Pipeline;
   void acquire_loop();
   void track_loop();
+  Pipeline* start_pipeline(const core::RgbdFrame& first);
+  void track_frame(Pipeline& p, const RingSlot& slot, Event& event);
+  void publish_open_graph(Pipeline& p);
+  void start_new_session(Pipeline& p);
+  struct Publisher;
   void publish_loop();
+  void publish_event(Publisher& out, const Event& event);
+  void publish_status(Publisher& out, std::int8_t state_override);
+  void apply_map(const void* data, int size);
+  void count_bad(int kind, const std::string& what, const std::string& why);  // by BAD_*; notes the first ones
   void note(const std::string& detail);  // logs to stderr, and CVO_STATUS.detail
 
   config::Config config_;
+  SourceFactory open_source_;
   SystemdNotifier systemd_;
   Counters counters_;
   std::unique_ptr<FrameRing> ring_;
   MapCorrection correction_;
+  // The running session: written by the tracking thread (a new one when the camera comes back),
+  // read by the publisher for CVO_MAP.
+  std::atomic<std::int64_t> session_;
 
   std::atomic<bool> stop_{false};          // asks acquisition to stop
   std::atomic<bool> tracker_done_{false};  // the tracker drained the ring and closed the outbox
@@ -71,7 +101,6 @@ class Trackerd {
 
   // Created by the tracking thread on the first frame (its size fixes every buffer); the
   // publisher uses it once pipeline_ready_ is set (release/acquire of the atomic).
-  struct Pipeline;
   std::unique_ptr<Pipeline> pipeline_;
   std::atomic<bool> pipeline_ready_{false};
 

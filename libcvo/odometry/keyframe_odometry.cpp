@@ -55,6 +55,20 @@ KeyframeOdometry::KeyframeOdometry(int width, int height, const KeyframeOdometry
               registration::PointCloud(parameters.max_points)},
       graphs_{LocalGraph(parameters.local_graph_capacity), LocalGraph(parameters.local_graph_capacity)} {}
 
+void KeyframeOdometry::reset() {
+  for (auto& graph : graphs_) graph.clear();
+  graph_ = 0;
+  graph_closed_ = false;
+  keyframe_ = 0;
+  previous_ = 1;
+  current_ = 2;
+  have_keyframe_ = have_previous_ = have_frame_ = false;
+  keyframe_frame_ = previous_frame_ = 0;
+  keyframe_pose_ = previous_pose_ = T_m_previous_ = velocity_ = last_pose_ = core::SE3();
+  previous_timestamp_ = velocity_dt_ = gamma_reference_ = gamma_ = 0;
+  reason_ = KeyframeReason::kNone;
+}
+
 void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose,
                                       KeyframeReason why) {
   if (!graphs_[graph_].empty()) {  // close the open graph; it stays readable until the next one

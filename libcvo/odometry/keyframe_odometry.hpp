@@ -79,6 +79,11 @@ class KeyframeOdometry {
   /// Tracks the next frame. Never throws on bad frames: see TrackResult::status.
   TrackResult track(const core::RgbdFrame& frame);
 
+  /// Back to the state of a new tracker: the next frame is the first (at
+  /// parameters().initial_pose, a new keyframe), no graph is open or closed. For a camera that was
+  /// re-initialised (a new session); every buffer is kept, so it does not allocate.
+  void reset();
+
   /// Why the last track() made a keyframe (kNone when it did not).
   [[nodiscard]] KeyframeReason keyframe_reason() const { return reason_; }
   /// γ of the last frame (eq. 9); 0 when no keyframe registration ran.

@@ -1,6 +1,7 @@
 #include "libcvo/slam/mapper.hpp"
 
 #include <algorithm>
+#include <tuple>
 #include <utility>
 
 namespace cvo::slam {
@@ -173,6 +174,8 @@ MapLoop Mapper::describe(const loop_closure::LoopClosure& loop) const {
   m.loop = loop;
   std::tie(m.from_session, m.from_id) = keyframe_of_node_.at(loop.from);
   std::tie(m.to_session, m.to_id) = keyframe_of_node_.at(loop.to);
+  m.from_frame = loop.from & (kMaxFrame - 1);
+  m.to_frame = loop.to & (kMaxFrame - 1);
   return m;
 }
 

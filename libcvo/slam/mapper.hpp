@@ -89,6 +89,7 @@ struct MapKeyframe {
 struct MapLoop {
   SessionId from_session = 0, to_session = 0;
   std::int64_t from_id = 0, to_id = 0;  // keyframe ids in their sessions
+  std::int64_t from_frame = 0, to_frame = 0;  // their frame indices in their sessions
   loop_closure::LoopClosure loop;       // node ids as the Backend holds them
   double chi2 = 0, weight = 1;          // at the current poses (Backend::loops)
 };

@@ -93,6 +93,45 @@ TEST_F(LoopDetectorTest, FindsARevisitedRealViewAmongEarlierKeyframes) {
   EXPECT_THROW(d.add_keyframe(2, k[0].frame, k[0].cloud, pose(0)), std::invalid_argument);  // ids must increase
 }
 
+// Two sessions (slam/mapper.hpp): frames 20 and 44 are session A's keyframes; session B's first
+// keyframe (frame 28) has no predecessor in its session, so no η and no candidates; its second
+// (frame 27, previous = B's first) finds A's frame 20. B is a piece of its own: its estimate says
+// nothing about A's, and the α test leaves the trajectory term out (an estimate that would tie
+// with CVO, as above, cannot refuse the loop).
+TEST_F(LoopDetectorTest, ASessionsFirstKeyframeHasNoCandidatesAndPiecesAreNotCompared) {
+  std::vector<testing::TestKeyframe> k;
+  for (const std::size_t f : {20, 44, 28, 27}) k.push_back(testing::real_keyframe(f));
+  LoopDetector d = detector();
+  d.add_keyframe({0, std::nullopt, k[0].truth, 0}, k[0].frame, k[0].cloud);
+  d.add_keyframe({1, 0, k[1].truth, 0}, k[1].frame, k[1].cloud);
+  EXPECT_TRUE(d.add_keyframe({100, std::nullopt, core::SE3(), 1}, k[2].frame, k[2].cloud).empty());
+  EXPECT_TRUE(d.last_attempts().empty());
+  const auto loops = d.add_keyframe({101, 100, core::SE3(), 1}, k[3].frame, k[3].cloud);
+  print_attempts(101, d);
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_EQ(loops.front().from, 0);
+  EXPECT_EQ(loops.front().to, 101);
+
+  // An estimate that already holds the loop's pose: inside one piece α is 0 (as above); in another
+  // piece the same numbers are not comparable and the loop keeps the α of CVO against identity and
+  // RANSAC.
+  const core::SE3 b_pose = k[0].truth * loops.front().measurement;
+  const auto alpha_in_piece = [&](std::int64_t piece) {
+    LoopDetector e = detector();
+    e.add_keyframe({0, std::nullopt, k[0].truth, 0}, k[0].frame, k[0].cloud);
+    e.add_keyframe({1, 0, k[1].truth, 0}, k[1].frame, k[1].cloud);
+    e.add_keyframe({100, std::nullopt, b_pose, piece}, k[2].frame, k[2].cloud);
+    e.add_keyframe({101, 100, b_pose, piece}, k[3].frame, k[3].cloud);
+    for (const auto& a : e.last_attempts())
+      if (a.candidate == 0) return a.alpha;
+    return -1.0;
+  };
+  EXPECT_NEAR(alpha_in_piece(0), 0.0, 1e-9);
+  EXPECT_NEAR(alpha_in_piece(1), loops.front().alpha, 1e-9);
+  EXPECT_GT(loops.front().alpha, 1e-3);
+  EXPECT_THROW(d.add_keyframe({101, 100, b_pose, 1}, k[3].frame, k[3].cloud), std::invalid_argument);  // stored already
+}
+
 // max_refinements caps the CVO refinements (the back end's main cost) per new keyframe; candidates
 // refused before CVO (matches, RANSAC) do not count, and the best η go first.
 TEST_F(LoopDetectorTest, RefinesAtMostMaxRefinementsCandidatesBestEtaFirst) {

@@ -12,6 +12,7 @@ namespace cvo::slam {
 namespace {
 
 using testing::loop;
+using testing::pose_xy_yaw;
 using testing::make_run;
 using testing::position_error;
 using testing::square;
@@ -166,6 +167,100 @@ TEST(Backend, ARestartIsBridgedAndItsLoopWaits) {
   EXPECT_EQ(t.size(), 9u);  // frames 0-4 and 7-10; frames 5 and 6 are in no graph
   backend.optimise_all();
   EXPECT_LT(position_error(run.truth[7], backend.keyframe_poses().at(7)), 1e-3);
+}
+
+// A session's graphs: the run's, renumbered from `first_node` and seen from another odometry frame
+// (its tracker started elsewhere): poses G · P, relative measurements unchanged.
+std::vector<odometry::LocalGraph> as_session(const SyntheticRun& run, std::uint64_t first_node, const core::SE3& G) {
+  std::vector<odometry::LocalGraph> graphs;
+  for (const auto& g : run.graphs) {
+    odometry::LocalGraph out(g.nodes().size());
+    for (auto n : g.nodes()) {
+      n.frame_index += first_node;
+      n.pose = G * n.pose;
+      out.add_node(n);
+    }
+    for (auto e : g.edges()) {
+      e.from += first_node;
+      e.to += first_node;
+      out.add_edge(e);
+    }
+    graphs.push_back(out);
+  }
+  return graphs;
+}
+
+void add_session(Backend& backend, SessionId session, const std::vector<odometry::LocalGraph>& graphs) {
+  for (const auto& g : graphs) backend.add_local_graph(session, static_cast<posegraph::NodeId>(g.keyframe().frame_index), g);
+}
+
+TEST(Backend, ASessionStaysInItsOwnFrameUntilALoopJoinsItToTheMap) {
+  const SyntheticRun run = make_run(square(), 5, kBias, kInformation);
+  const core::SE3 elsewhere = pose_xy_yaw(5.0, -3.0, 1.2);
+  Backend backend;
+  add_session(backend, 11, as_session(run, 0, core::SE3()));
+  add_session(backend, 22, as_session(run, 1000, elsewhere));
+  add_session(backend, 33, as_session(run, 2000, pose_xy_yaw(-7.0, 2.0, -0.4)));
+
+  // Unplaced: anchored where its own tracker put it, no correction, a piece of its own.
+  EXPECT_TRUE(backend.placed(11));
+  EXPECT_FALSE(backend.placed(22));
+  EXPECT_EQ(backend.piece(22), 22);
+  EXPECT_TRUE(backend.keyframe_graph().node(1000).fixed);
+  EXPECT_LT(position_error(elsewhere * run.odometry[10], backend.keyframe_poses().at(1010)), 1e-3);
+  // (no correction but the local optimisation's millimetres, the same as the first session's)
+  EXPECT_LT(backend.odometry_correction(22).translation().norm(), 1e-2);
+  backend.optimise_keyframes();  // three pieces, each held at its anchor: well-posed
+
+  // Session 22 revisits session 11's frame 10 at its own frame 10: the same place.
+  loop_closure::LoopClosure l = loop(run, 10, 10, kInformation);
+  l.to = 1010;
+  EXPECT_TRUE(backend.add_loop(l));
+  EXPECT_TRUE(backend.placed(22));
+  EXPECT_EQ(backend.piece(22), 11);
+  EXPECT_FALSE(backend.keyframe_graph().node(1000).fixed);
+  EXPECT_TRUE(backend.keyframe_graph().node(0).fixed);
+  // Moved rigidly onto the loop: the two runs of one trajectory now coincide, and the correction
+  // maps session 22's odometry into the map.
+  for (std::size_t n = 0; n <= 40; n += 5)
+    EXPECT_LT(position_error(backend.keyframe_poses().at(static_cast<std::int64_t>(n)),
+                             backend.keyframe_poses().at(static_cast<std::int64_t>(1000 + n))), 1e-6) << n;
+  EXPECT_LT(position_error(backend.odometry_correction(11) * elsewhere.inverse(), backend.odometry_correction(22)), 1e-6);
+  EXPECT_TRUE(backend.optimise_keyframes().converged);
+  EXPECT_LT(position_error(backend.keyframe_poses().at(20), backend.keyframe_poses().at(1020)), 1e-3);
+
+  // Session 33 never met the others: still its own piece after every optimisation.
+  EXPECT_FALSE(backend.placed(33));
+  EXPECT_TRUE(backend.keyframe_graph().node(2000).fixed);
+  EXPECT_TRUE(backend.optimise_all().converged);
+  EXPECT_FALSE(backend.placed(33));
+  EXPECT_EQ(backend.frame_trajectory(22).size(), 41u);
+  EXPECT_EQ(backend.frame_trajectory().size(), 3 * 41u);
+}
+
+TEST(Backend, TwoUnplacedSessionsThatShareALoopBecomeOnePieceOutsideTheMap) {
+  const SyntheticRun run = make_run(square(), 5, kBias, kInformation);
+  Backend backend;
+  add_session(backend, 1, as_session(run, 0, core::SE3()));
+  add_session(backend, 2, as_session(run, 1000, pose_xy_yaw(1.0, 1.0, 0.5)));
+  add_session(backend, 3, as_session(run, 2000, pose_xy_yaw(-2.0, 0.0, -0.5)));
+  loop_closure::LoopClosure l = loop(run, 15, 15, kInformation);
+  l.from = 1015;
+  l.to = 2015;
+  backend.add_loop(l);
+  EXPECT_EQ(backend.piece(3), 2);  // the later session joins the earlier one's frame
+  EXPECT_FALSE(backend.placed(2));
+  EXPECT_FALSE(backend.placed(3));
+  EXPECT_LT(position_error(backend.keyframe_poses().at(1015), backend.keyframe_poses().at(2015)), 1e-6);
+  // A loop from the map to either places both.
+  l.from = 25;
+  l.to = 2025;
+  l.measurement = core::SE3();
+  backend.add_loop(l);
+  EXPECT_TRUE(backend.placed(2));
+  EXPECT_TRUE(backend.placed(3));
+  EXPECT_TRUE(backend.optimise_keyframes().converged);
+  EXPECT_LT(position_error(backend.keyframe_poses().at(30), backend.keyframe_poses().at(1030)), 1e-3);
 }
 
 TEST(Backend, BadInputIsRefused) {

@@ -4,10 +4,12 @@
 // A contract that scripts rely on (extras may be added, nothing here changed):
 //   cvo-run SEQUENCE --out TRAJ.txt [--mode cvo] [--max-frames N] [--groundtruth GT] [--plot PNG]
 //           [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]
+//   cvo-run --mode slam SEQUENCE [SEQUENCE ...] ...: each folder a session of one map
 //   --json prints one JSON object on stdout (keys in report.cpp; the human summary then goes to
 //   stderr); exit status 0 ok, 1 bad input (the message names the file), 2 usage error.
 #include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cstdio>
@@ -50,11 +52,18 @@ using namespace cvo;
 constexpr std::string_view kUsage =
     R"(usage: cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]
                [--plot PNG] [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]
+       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [options as above]
 
 Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
 groundtruth.txt), and writes the estimated poses T_world_camera as a TUM trajectory, stamped with
 the colour images' timestamps. A frame whose images cannot be read is skipped and reported (it has
 no pose); a frame that cannot be tracked keeps the constant-velocity prediction and is reported.
+
+With --mode slam, several folders are several sessions of one map (a robot mapping a building in
+several runs), run in order through one back end: each starts in its own odometry frame and joins
+the first one's map at its first verified loop to it. TRAJ.txt holds every joined session's frames
+in the first session's map frame; a session that never joined is left out and reported so (--json:
+"sessions"). Ground truth: --groundtruth, else every folder's groundtruth.txt together.
 
 options:
   --out TRAJ.txt     the trajectory to write (required)
@@ -67,7 +76,7 @@ options:
                      opencv-rgbd-icp: OpenCV's photometric + point-to-plane ICP odometry
                      (both frame to frame with the same motion model; depth 0.1-5 m, from
                      selection.min_depth_m / max_depth_m)
-  --max-frames N     only the first N frames
+  --max-frames N     only the first N frames (of each folder)
   --groundtruth GT   evaluate against this TUM trajectory (default: SEQUENCE/groundtruth.txt)
   --plot PNG         write the evaluation figure (needs ground truth)
   --json             print one JSON object on stdout; the summary then goes to stderr
@@ -96,7 +105,8 @@ constexpr ModeInfo kModes[] = {
     {"cvo", true}, {"kf-cvo", true}, {"slam", true}, {"opencv-rgbd", true}, {"opencv-rgbd-icp", true}};
 
 struct Arguments {
-  fs::path sequence, out;
+  std::vector<fs::path> sequences;
+  fs::path out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
   std::optional<fs::path> groundtruth, plot, config, vocabulary;
@@ -146,9 +156,11 @@ Arguments parse_arguments(int argc, char** argv) {
     }
   }
   if (args.help) return args;
-  if (positional.size() != 1)
-    throw UsageError("expected one SEQUENCE folder, got " + std::to_string(positional.size()));
-  args.sequence = positional[0];
+  if (positional.empty()) throw UsageError("expected a SEQUENCE folder");
+  if (positional.size() > 1 && args.mode != "slam")
+    throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " + std::to_string(positional.size()) +
+                     " for mode '" + args.mode + "'");
+  args.sequences.assign(positional.begin(), positional.end());
   if (args.out.empty()) throw UsageError("--out TRAJ.txt is required");
 
   const ModeInfo* mode = nullptr;
@@ -192,9 +204,9 @@ loop_closure::Vocabulary load_vocabulary(const Arguments& args) {
   return loop_closure::Vocabulary::load(args.vocabulary ? fs::path(*args.vocabulary) : loop_closure::default_vocabulary_file());
 }
 
-// One tracker per mode; a mode is one more alternative and one more branch.
-using Tracker = std::variant<odometry::FrameToFrameOdometry, odometry::KeyframeOdometry, odometry::OpenCvOdometry,
-                             tools::SlamPipeline>;
+// One tracker per mode; a mode is one more alternative and one more branch. The slam mode is
+// tools::SlamPipeline, driven session by session in run_slam().
+using Tracker = std::variant<odometry::FrameToFrameOdometry, odometry::KeyframeOdometry, odometry::OpenCvOdometry>;
 
 Tracker make_tracker(const Arguments& args, const config::Config& config, const core::Intrinsics& camera) {
   const std::string_view mode = args.mode;
@@ -211,8 +223,6 @@ Tracker make_tracker(const Arguments& args, const config::Config& config, const 
     parameters.keyframe = config.keyframe;
     return odometry::KeyframeOdometry(camera.width, camera.height, parameters);
   }
-  if (mode == "slam")
-    return Tracker(std::in_place_type<tools::SlamPipeline>, camera.width, camera.height, config, load_vocabulary(args));
   if (mode == "opencv-rgbd" || mode == "opencv-rgbd-icp") {
     odometry::OpenCvOdometryParameters parameters;
     parameters.variant = mode == "opencv-rgbd" ? odometry::OpenCvVariant::rgbd : odometry::OpenCvVariant::rgbd_icp;
@@ -233,106 +243,179 @@ std::string failure_reason(const odometry::TrackResult& r) {
   return reason + "; pose predicted (constant velocity)";
 }
 
-int run(const Arguments& args) {
-  const config::Config config = make_config(args);
-  if (!fs::is_directory(args.sequence)) throw io::InputError(args.sequence, "no such folder");
-  io::TumOptions options{.max_association_dt = config.dataset.max_association_dt,
-                         .intrinsics = choose_camera(args, config),
-                         .max_frames = args.max_frames};
-  io::TumSequence sequence = io::TumSequence::open(args.sequence, options);
+// Every folder opened before the (long) run, so a bad one fails at once.
+std::vector<io::TumSequence> open_sequences(const Arguments& args, const config::Config& config) {
+  std::vector<io::TumSequence> sequences;
+  for (const auto& folder : args.sequences) {
+    if (!fs::is_directory(folder)) throw io::InputError(folder, "no such folder");
+    io::TumOptions options{.max_association_dt = config.dataset.max_association_dt,
+                           .intrinsics = choose_camera(args, config),
+                           .max_frames = args.max_frames};
+    sequences.push_back(io::TumSequence::open(folder, options));
+  }
+  return sequences;
+}
 
-  // Everything that can fail on input is checked before the (long) run.
-  const core::Trajectory groundtruth =
-      args.groundtruth ? io::read_tum_trajectory(*args.groundtruth) : sequence.groundtruth();
-  if (args.plot && groundtruth.empty())
-    throw UsageError("--plot needs ground truth: " + args.sequence.string() +
-                     " has no groundtruth.txt and no --groundtruth was given");
-  if (!std::ofstream(args.out)) throw io::InputError(args.out, "cannot write the trajectory here");
+// --groundtruth, else every folder's ground truth together (sorted, each stamp once).
+core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::TumSequence>& sequences,
+                                  std::string& source) {
+  if (args.groundtruth) {
+    source = args.groundtruth->string();
+    return io::read_tum_trajectory(*args.groundtruth);
+  }
+  core::Trajectory all;
+  for (std::size_t k = 0; k < sequences.size(); ++k) {
+    const auto& gt = sequences[k].groundtruth();
+    if (!gt.empty()) source += (source.empty() ? "" : " ") + (args.sequences[k] / "groundtruth.txt").string();
+    all.insert(all.end(), gt.begin(), gt.end());
+  }
+  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
+  all.erase(std::unique(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.timestamp == b.timestamp; }),
+            all.end());
+  return all;
+}
 
-  tools::RunReport report;
-  report.mode = args.mode;
-  report.sequence = args.sequence.string();
-  report.trajectory = args.out.string();
-  if (!groundtruth.empty())
-    report.groundtruth = args.groundtruth ? args.groundtruth->string() : (args.sequence / "groundtruth.txt").string();
-
-  Tracker tracker = make_tracker(args, config, sequence.intrinsics());
+// Streams one folder through `track` (frame -> TrackResult), adding its frames to the report;
+// returns the poses of the frames tracked. `keyframes` counts this folder's keyframes.
+template <class Track>
+core::Trajectory stream(io::TumSequence& sequence, Track&& track, tools::RunReport& report, std::size_t& keyframes) {
+  using Clock = std::chrono::steady_clock;
   core::Trajectory trajectory;
   trajectory.reserve(sequence.size());
-  {
-    tools::ProgressBar progress(sequence.size());
-    using Clock = std::chrono::steady_clock;
-    const auto run_start = Clock::now();
-    for (;;) {
-      const std::size_t index = sequence.position();
-      std::optional<core::RgbdFrame> frame;
-      try {
-        frame = sequence.next();
-      } catch (const io::FrameError& e) {
-        // The sequence has moved past the frame: report it and go on with the next one.
-        report.failed.push_back({e.frame_index(), sequence.files()[index].timestamp, "read", e.what()});
-        progress.update(++report.frames);
-        continue;
-      }
-      if (!frame) break;
-      const auto start = Clock::now();
-      const odometry::TrackResult r = std::visit([&](auto& t) { return t.track(*frame); }, tracker);
-      report.track_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
-      trajectory.push_back({frame->timestamp, r.pose});
-      report.points.push_back(static_cast<double>(r.points));
-      if (r.iterations > 0) report.iterations.push_back(r.iterations);
-      if (r.keyframe) ++report.keyframes;
-      if (!r.tracked())
-        report.failed.push_back({index, frame->timestamp,
-                                 r.status == odometry::TrackStatus::kSelectionFailed ? "selection" : "registration",
-                                 failure_reason(r)});
-      progress.update(++report.frames);
+  tools::ProgressBar progress(sequence.size());
+  const auto run_start = Clock::now();
+  for (std::size_t frames = 0;;) {
+    const std::size_t index = sequence.position();
+    std::optional<core::RgbdFrame> frame;
+    try {
+      frame = sequence.next();
+    } catch (const io::FrameError& e) {
+      // The sequence has moved past the frame: report it and go on with the next one.
+      report.failed.push_back({e.frame_index(), sequence.files()[index].timestamp, "read", e.what()});
+      progress.update(++frames);
+      ++report.frames;
+      continue;
     }
-    report.wall_s = std::chrono::duration<double>(Clock::now() - run_start).count();
+    if (!frame) break;
+    const auto start = Clock::now();
+    const odometry::TrackResult r = track(*frame);
+    report.track_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+    trajectory.push_back({frame->timestamp, r.pose});
+    report.points.push_back(static_cast<double>(r.points));
+    if (r.iterations > 0) report.iterations.push_back(r.iterations);
+    if (r.keyframe) ++keyframes;
+    if (!r.tracked())
+      report.failed.push_back({index, frame->timestamp,
+                               r.status == odometry::TrackStatus::kSelectionFailed ? "selection" : "registration",
+                               failure_reason(r)});
+    progress.update(++frames);
+    ++report.frames;
   }
-  if (trajectory.empty()) {
+  report.wall_s += std::chrono::duration<double>(Clock::now() - run_start).count();
+  return trajectory;
+}
+
+// --mode slam: every folder a session (ids 1, 2, ... in order) of one mapper; the trajectory is
+// every joined session's frames in the map frame, kf-cvo's own poses corrected by the back end
+// (slam::correct_trajectory fills in the frames it never saw).
+core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
+                          const core::Trajectory& groundtruth, tools::RunReport& report) {
+  tools::SlamPipeline pipeline(config, load_vocabulary(args));
+  std::vector<core::Trajectory> odometry(sequences.size());
+  report.slam = tools::SlamReport{};
+  for (std::size_t k = 0; k < sequences.size(); ++k) {
+    const auto session = static_cast<slam::SessionId>(k + 1);
+    const auto& camera = sequences[k].intrinsics();
+    pipeline.begin_session(session, camera.width, camera.height);
+    tools::SessionEntry entry{args.sequences[k].string(), session, report.frames, 0, false, std::nullopt};
+    odometry[k] = stream(sequences[k], [&](const core::RgbdFrame& f) { return pipeline.track(f); }, report, entry.keyframes);
+    entry.frames = report.frames - entry.frames;
+    report.keyframes += entry.keyframes;
+    report.slam->sessions.push_back(entry);
+  }
+  pipeline.finish();
+
+  const slam::Mapper& mapper = pipeline.mapper();
+  const slam::Map map = mapper.map();
+  core::Trajectory trajectory;
+  for (std::size_t k = 0; k < sequences.size(); ++k) {
+    auto& entry = report.slam->sessions[k];
+    entry.joined = mapper.placed(entry.session);
+    for (const auto& s : map.sessions)
+      if (s.session == entry.session && s.joined_at_keyframe >= 0) entry.joined_at_keyframe = s.joined_at_keyframe;
+    if (!entry.joined || odometry[k].empty()) continue;
+    const auto corrected = slam::correct_trajectory(odometry[k], mapper.frame_trajectory(entry.session));
+    trajectory.insert(trajectory.end(), corrected.begin(), corrected.end());
+  }
+  auto& s = *report.slam;
+  s.loops_accepted = mapper.loops_accepted();
+  s.loops_tried = mapper.loops_tried();
+  s.backend_ms = pipeline.statistics().backend_ms;
+  s.final_optimisation_ms = pipeline.statistics().final_ms;
+  for (const auto& l : map.loops)
+    s.loops.push_back({l.from_frame, l.to_frame, l.chi2, l.weight, l.from_session, l.to_session});
+  // kf-cvo's own ATE: one session only (several have several odometry frames).
+  if (!groundtruth.empty() && sequences.size() == 1 && !odometry[0].empty()) {
+    try {
+      s.ate_odometry = eval::absolute_trajectory_error(groundtruth, odometry[0]);
+    } catch (const std::invalid_argument&) {
+      // As for the main ATE, which says why.
+    }
+  }
+  return trajectory;
+}
+
+void evaluate(const Arguments& args, const core::Trajectory& groundtruth, const core::Trajectory& trajectory,
+              tools::RunReport& report) {
+  // A short run may have an ATE but no 1 s RPE pairs: report what exists instead of failing.
+  try {
+    report.ate = eval::absolute_trajectory_error(groundtruth, trajectory);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "cvo-run: warning: no ATE: " << e.what() << "\n";
+  }
+  try {
+    report.rpe = eval::relative_pose_error(groundtruth, trajectory);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "cvo-run: warning: no RPE: " << e.what() << "\n";
+  }
+  if (!args.plot) return;
+  if (report.ate)
+    eval::write_evaluation_plot(*args.plot, groundtruth, trajectory, *report.ate,
+                                {.title = args.out.filename().string() + " (" + args.mode + ")"});
+  else
+    std::cerr << "cvo-run: warning: no plot written: no ATE\n";
+}
+
+int run(const Arguments& args) {
+  const config::Config config = make_config(args);
+  std::vector<io::TumSequence> sequences = open_sequences(args, config);
+
+  // Everything that can fail on input is checked before the (long) run.
+  tools::RunReport report;
+  const core::Trajectory groundtruth = load_groundtruth(args, sequences, report.groundtruth);
+  if (args.plot && groundtruth.empty())
+    throw UsageError("--plot needs ground truth: " + args.sequences.front().string() +
+                     " has no groundtruth.txt and no --groundtruth was given");
+  if (!std::ofstream(args.out)) throw io::InputError(args.out, "cannot write the trajectory here");
+  report.mode = args.mode;
+  for (const auto& folder : args.sequences) report.sequence += (report.sequence.empty() ? "" : " ") + folder.string();
+  report.trajectory = args.out.string();
+
+  core::Trajectory trajectory;
+  if (args.mode == "slam") {
+    trajectory = run_slam(args, config, sequences, groundtruth, report);
+  } else {
+    Tracker tracker = make_tracker(args, config, sequences.front().intrinsics());
+    trajectory = stream(sequences.front(), [&](const core::RgbdFrame& f) { return std::visit([&](auto& t) { return t.track(f); }, tracker); },
+                        report, report.keyframes);
+  }
+  if (trajectory.empty() && (report.slam == std::nullopt || report.frames == report.failed.size())) {
     io::write_tum_trajectory(args.out, trajectory);
-    throw io::InputError(args.sequence, "no frame could be read");
-  }
-  if (auto* slam = std::get_if<tools::SlamPipeline>(&tracker)) {
-    // The trajectory written and evaluated is the back end's; kf-cvo's own is evaluated beside it.
-    const core::Trajectory odometry = std::move(trajectory);
-    trajectory = slam::correct_trajectory(odometry, slam->finish());
-    const auto& s = slam->statistics();
-    report.slam = tools::SlamReport{s.loops_accepted, s.loops_tried, s.backend_ms, s.final_ms, std::nullopt, {}};
-    for (const auto& l : slam->backend().loops())
-      report.slam->loops.push_back({l.loop.from, l.loop.to, l.chi2, l.weight});
-    if (!groundtruth.empty()) {
-      try {
-        report.slam->ate_odometry = eval::absolute_trajectory_error(groundtruth, odometry);
-      } catch (const std::invalid_argument&) {
-        // As for the main ATE below, which says why.
-      }
-    }
+    throw io::InputError(args.sequences.front(), "no frame could be read");
   }
   report.poses = trajectory.size();
   io::write_tum_trajectory(args.out, trajectory);
-
-  if (!groundtruth.empty()) {
-    // A short run may have an ATE but no 1 s RPE pairs: report what exists instead of failing.
-    try {
-      report.ate = eval::absolute_trajectory_error(groundtruth, trajectory);
-    } catch (const std::invalid_argument& e) {
-      std::cerr << "cvo-run: warning: no ATE: " << e.what() << "\n";
-    }
-    try {
-      report.rpe = eval::relative_pose_error(groundtruth, trajectory);
-    } catch (const std::invalid_argument& e) {
-      std::cerr << "cvo-run: warning: no RPE: " << e.what() << "\n";
-    }
-    if (args.plot) {
-      if (report.ate)
-        eval::write_evaluation_plot(*args.plot, groundtruth, trajectory, *report.ate,
-                                    {.title = args.out.filename().string() + " (" + args.mode + ")"});
-      else
-        std::cerr << "cvo-run: warning: no plot written: no ATE\n";
-    }
-  }
+  if (!groundtruth.empty() && !trajectory.empty()) evaluate(args, groundtruth, trajectory, report);
 
   tools::print_text(args.json ? stderr : stdout, report);
   if (args.json) std::cout << tools::to_json(report) << std::flush;

@@ -33,9 +33,27 @@ std::string loop_list(const RunReport& r) {
     const auto& l = r.slam->loops[k];
     out.append(k ? ",\n    " : "\n    ")
         .append("{\"from\": " + std::to_string(l.from) + ", \"to\": " + std::to_string(l.to))
-        .append(", \"chi2\": " + io::json_number(l.chi2) + ", \"weight\": " + io::json_number(l.weight) + "}");
+        .append(", \"chi2\": " + io::json_number(l.chi2) + ", \"weight\": " + io::json_number(l.weight))
+        .append(", \"from_session\": " + std::to_string(l.from_session) + ", \"to_session\": " +
+                std::to_string(l.to_session) + "}");
   }
   return out + "\n  ]";
+}
+
+// [{"sequence": ..., "session": n, "frames": .., "keyframes": .., "joined": .., "joined_at_keyframe": ..}]
+std::string session_list(const RunReport& r) {
+  if (!r.slam) return "null";
+  std::string out = "[";
+  for (std::size_t k = 0; k < r.slam->sessions.size(); ++k) {
+    const auto& s = r.slam->sessions[k];
+    out.append(k ? ",\n    " : "\n    ")
+        .append("{\"sequence\": " + io::json_string(s.sequence) + ", \"session\": " + std::to_string(s.session))
+        .append(", \"frames\": " + std::to_string(s.frames) + ", \"keyframes\": " + std::to_string(s.keyframes))
+        .append(std::string(", \"joined\": ") + (s.joined ? "true" : "false") + ", \"joined_at_keyframe\": ")
+        .append(s.joined_at_keyframe ? std::to_string(*s.joined_at_keyframe) : "null")
+        .append("}");
+  }
+  return out + (r.slam->sessions.empty() ? "]" : "\n  ]");
 }
 
 }  // namespace
@@ -61,6 +79,13 @@ void print_text(std::FILE* out, const RunReport& r) {
                  r.slam->loops_accepted, r.slam->loops_tried, outliers);
     std::fprintf(out, "back end    %.0f ms in the run (local graphs, loop detection, keyframe optimisations), final %.0f ms\n",
                  r.slam->backend_ms, r.slam->final_optimisation_ms);
+    if (r.slam->sessions.size() > 1)
+      for (const auto& s : r.slam->sessions) {
+        const std::string at = s.joined_at_keyframe ? " at its keyframe " + std::to_string(*s.joined_at_keyframe) : "";
+        std::fprintf(out, "session %-3lld %s: %zu frames, %zu keyframes, %s\n", static_cast<long long>(s.session),
+                     s.sequence.c_str(), s.frames, s.keyframes,
+                     s.joined ? ("joined the map" + at).c_str() : "NOT placed in the map (left out of the trajectory)");
+      }
   }
   if (r.groundtruth.empty()) {
     std::fprintf(out, "evaluation  none (no ground truth)\n");
@@ -132,6 +157,7 @@ std::string to_json(const RunReport& r) {
     << "  \"loops_accepted\": " << (r.slam ? std::to_string(r.slam->loops_accepted) : "null") << ",\n"
     << "  \"loops_tried\": " << (r.slam ? std::to_string(r.slam->loops_tried) : "null") << ",\n"
     << "  \"loop_list\": " << loop_list(r) << ",\n"
+    << "  \"sessions\": " << session_list(r) << ",\n"
     << "  \"backend_ms_total\": " << json_number(slam([](const auto& s) { return s.backend_ms; })) << ",\n"
     << "  \"final_optimisation_ms\": " << json_number(slam([](const auto& s) { return s.final_optimisation_ms; }))
     << ",\n"

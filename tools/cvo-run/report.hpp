@@ -20,11 +20,22 @@ struct FailedFrame {
   std::string reason;
 };
 
-/// An accepted loop after the final optimisation: its keyframes (frame indices), χ² and the
-/// Cauchy kernel's weight (1: fully trusted; near 0: treated as an outlier).
+/// An accepted loop after the final optimisation: its keyframes (frame indices within their
+/// sessions, and the sessions: 1, 2, ... in folder order), χ² and the Cauchy kernel's weight (1:
+/// fully trusted; near 0: treated as an outlier).
 struct LoopEntry {
   std::int64_t from = 0, to = 0;
   double chi2 = 0, weight = 1;
+  std::int64_t from_session = 1, to_session = 1;
+};
+
+/// One folder of a --mode slam run: a session of the map.
+struct SessionEntry {
+  std::string sequence;
+  std::int64_t session = 0;
+  std::size_t frames = 0, keyframes = 0;
+  bool joined = false;                             // placed in the first session's map frame
+  std::optional<std::int64_t> joined_at_keyframe;  // its keyframe id when it joined (first: 0)
 };
 
 /// What --mode slam adds: loops, the back end's time, and kf-cvo's own ATE on the same run.
@@ -35,6 +46,7 @@ struct SlamReport {
   double final_optimisation_ms = 0;         // the last local graph and the global optimisation
   std::optional<eval::AteResult> ate_odometry;  // of the tracker's poses, before the back end
   std::vector<LoopEntry> loops;             // in acceptance order
+  std::vector<SessionEntry> sessions;       // one per folder, in order
 };
 
 struct RunReport {
