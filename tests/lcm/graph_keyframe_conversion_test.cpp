@@ -1,5 +1,5 @@
-// Keyframe <-> keyframe_t and LocalGraph <-> local_graph_t: lossless round trips through bytes,
-// and malformed messages refused with a message.
+// Keyframe <-> keyframe_t, LocalGraph <-> local_graph_t and the map <-> map_t: lossless round trips
+// through bytes, and malformed messages refused with a message.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +11,7 @@
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
+#include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/registration/point_selection.hpp"
 
 namespace cvo::lcm {
@@ -135,6 +136,58 @@ TEST(LocalGraphConversion, EdgesToUnknownFramesAndBadInformationAreRefused) {
   empty.nodes.clear();
   empty.num_nodes = 0;
   EXPECT_FALSE(from_message(empty, &error));
+}
+
+}  // namespace
+}  // namespace cvo::lcm
+
+namespace cvo::lcm {
+namespace {
+
+// A two-session map: CVO_MAP carries each session's placement and correction, every keyframe by
+// (session, id) with its time, and loops across sessions, and comes back as it was sent.
+TEST(MapConversion, RoundTripKeepsSessionsKeyframesAndLoops) {
+  slam::Map map;
+  map.revision = 42;
+  const core::SE3 correction = core::SE3::from_translation({0.5, -0.25, 2.0});
+  map.sessions = {{-7, true, -7, 2, 0, core::SE3()}, {99, false, 99, 1, -1, correction}};
+  map.keyframes = {{-7, 0, 1305031229.528748, core::SE3()},
+                   {-7, 1, 1305031230.5, core::SE3::from_translation({1, 0, 0})},
+                   {99, 0, 1305031240.25, correction}};
+  slam::MapLoop loop;
+  loop.from_session = -7;
+  loop.from_id = 1;
+  loop.to_session = 99;
+  loop.to_id = 0;
+  loop.loop.measurement = core::SE3::from_translation({0, 0.1, 0});
+  loop.loop.information = 3.0 * core::Matrix6d::Identity();
+  map.loops = {loop};
+
+  const auto decoded = through_bytes(to_message(map, 1234));
+  ASSERT_TRUE(decoded);
+  EXPECT_EQ(decoded->utime, 1234);
+  std::string error;
+  const auto back = from_message(*decoded, &error);
+  ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->revision, 42u);
+  ASSERT_EQ(back->sessions.size(), 2u);
+  EXPECT_TRUE(back->sessions[0].placed);
+  EXPECT_FALSE(back->sessions[1].placed);
+  EXPECT_EQ(back->sessions[1].session, 99);
+  EXPECT_EQ(back->sessions[1].joined_at_keyframe, -1);
+  EXPECT_LT((back->sessions[1].correction.translation() - correction.translation()).norm(), 1e-12);
+  ASSERT_EQ(back->keyframes.size(), 3u);
+  EXPECT_EQ(back->keyframes[2].session, 99);
+  EXPECT_NEAR(back->keyframes[1].timestamp, 1305031230.5, 1e-6);
+  ASSERT_EQ(back->loops.size(), 1u);
+  EXPECT_EQ(back->loops[0].from_session, -7);
+  EXPECT_EQ(back->loops[0].to_id, 0);
+  EXPECT_EQ(back->loops[0].loop.information(2, 2), 3.0);
+
+  auto old = *decoded;
+  old.version = 1;  // a back end from before sessions
+  EXPECT_FALSE(from_message(old, &error));
+  EXPECT_NE(error.find("schema version 1"), std::string::npos) << error;
 }
 
 }  // namespace
