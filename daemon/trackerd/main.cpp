@@ -24,8 +24,10 @@ constexpr std::string_view kUsage =
                     [--deterministic] [--set key=value]... [--print-config]
 
 Tracks an RGB-D stream with keyframe-based CVO in a realtime thread and publishes on LCM:
-CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes one) and CVO_STATUS
-(once a second). Applies the newest CVO_MAP from cvo-backendd to the map pose. Stops cleanly on
+CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes one, and the open
+one at the end) and CVO_STATUS (once a second). Every start, and every camera that comes back
+after a disconnection, is a new session with a random id carried by every message. The map pose
+follows the newest CVO_MAP from cvo-backendd once it places this session. Stops cleanly on
 SIGTERM or SIGINT; under systemd it sends READY, STATUS and WATCHDOG notifications.
 
 options:

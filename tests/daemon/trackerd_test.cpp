@@ -20,6 +20,7 @@
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 #include "tests/daemon/daemon_process.hpp"
@@ -47,6 +48,25 @@ std::vector<std::string> base_args(const fs::path& out_log) {
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
   a.insert(a.end(), b.begin(), b.end());
   return a;
+}
+
+std::string hex(std::int64_t session) {
+  char text[19];
+  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(session));
+  return text;
+}
+
+// Messages of every channel whose session is not `session`.
+std::size_t count_other_sessions(const cvo::testing::PublishedLog& log, std::int64_t session) {
+  std::size_t other = 0;
+  const auto count = [&](const auto& messages) {
+    for (const auto& m : messages) other += m.session != session;
+  };
+  count(log.poses);
+  count(log.keyframes);
+  count(log.local_graphs);
+  count(log.statuses);
+  return other;
 }
 
 core::Trajectory odom_trajectory(const std::vector<cvo_lcm::pose_t>& poses) {
@@ -89,11 +109,23 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
     EXPECT_GT(k.num_points, 1000);
     EXPECT_GT(k.colour_size, 0);
   }
-  EXPECT_EQ(log.local_graphs.size(), log.keyframes.size() - 1);
+  // Keyframe ids count from 0 in the session; every keyframe's graph is published, the last one
+  // (still open when the clip ended) too, so the back end gets every tracked frame.
+  ASSERT_EQ(log.local_graphs.size(), log.keyframes.size()) << "the open local graph is published at the end";
   for (std::size_t i = 0; i < log.local_graphs.size(); ++i) {
+    EXPECT_EQ(log.keyframes[i].id, static_cast<std::int64_t>(i));
     EXPECT_EQ(log.local_graphs[i].keyframe_id, log.keyframes[i].id);
     EXPECT_EQ(log.local_graphs[i].nodes.front().frame_index, log.keyframes[i].frame_index);
   }
+  EXPECT_EQ(log.local_graphs.back().nodes.back().frame_index, log.poses.back().frame_index);
+  EXPECT_EQ(log.poses.front().keyframe_id, 0);
+
+  // One session: every message carries it, and the start names it.
+  const std::int64_t session = log.poses.front().session;
+  EXPECT_NE(session, 0);
+  EXPECT_EQ(count_other_sessions(log, session), 0u);
+  const auto err = cvo::testing::slurp(dir.path() / "stderr.txt");
+  EXPECT_NE(err.find("session " + hex(session)), std::string::npos) << err;
 
   // The last status is the stopping one; the tracking thread did not allocate after warm-up.
   ASSERT_FALSE(log.statuses.empty());
@@ -125,6 +157,11 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   ASSERT_EQ(status.exit_code, 0) << status.err;
   EXPECT_NE(status.out.find("\"cvo-trackerd\":{"), std::string::npos) << status.out;
   EXPECT_NE(status.out.find("\"allocations_after_warmup\":0"), std::string::npos) << status.out;
+  EXPECT_NE(status.out.find("\"session\":" + std::to_string(session) + ","), std::string::npos) << status.out;
+  const auto text = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(out), dir.path());
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("session: " + hex(session)), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0\n"), std::string::npos) << "all six kinds\n" << text.out;
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(dir.path() / "missing.lcm") + " --out x", dir.path()).exit_code, 1);
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "frobnicate", dir.path()).exit_code, 2);
 }
@@ -133,6 +170,7 @@ TEST(Trackerd, ReplayingALogTwiceGivesIdenticalPoses) {
   cvo::test::TempDir dir;
   const auto recording = record_clip(dir.path());
   std::vector<std::vector<cvo_lcm::pose_t>> runs;
+  std::vector<std::int64_t> sessions;
   for (int run = 0; run < 2; ++run) {
     const auto out = dir.path() / ("out" + std::to_string(run) + ".lcmlog");
     DaemonProcess d(kTrackerd,
@@ -142,8 +180,14 @@ TEST(Trackerd, ReplayingALogTwiceGivesIdenticalPoses) {
     const auto code = d.wait_for(120s);
     ASSERT_TRUE(code);
     ASSERT_EQ(*code, 0) << cvo::testing::slurp(dir.path() / "stderr.txt");
-    runs.push_back(cvo::testing::read_published(out).poses);
+    const auto log = cvo::testing::read_published(out);
+    ASSERT_FALSE(log.poses.empty());
+    sessions.push_back(log.poses.front().session);
+    EXPECT_NE(sessions.back(), 0);
+    EXPECT_EQ(count_other_sessions(log, sessions.back()), 0u);
+    runs.push_back(log.poses);
   }
+  EXPECT_NE(sessions[0], sessions[1]) << "every start is a new session";
   ASSERT_EQ(runs[0].size(), 50u);
   ASSERT_EQ(runs[1].size(), runs[0].size());
   for (std::size_t i = 0; i < runs[0].size(); ++i) {
@@ -351,6 +395,87 @@ TEST(Trackerd, UnusableSourceOrSettingsFailWithAMessage) {
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option : {"--config", "--source", "--lcm-url", "--exit-on-eof"})
     EXPECT_NE(help.out.find(option), std::string::npos) << option;
+}
+
+// cvo-log map: a recording with two CVO_MAPs (and a broken one after them) as the back end sends
+// them; the last readable one is written, its placed sessions' keyframes merged in time order.
+TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
+  cvo::test::TempDir dir;
+  constexpr std::int64_t kFirst = 0x1111, kJoined = -0x2222, kAlone = 0x3333;  // any 64 bits
+  const auto at = [](double x) { return core::SE3::from_translation({x, 0, 0}); };
+  slam::Map early;
+  early.revision = 1;
+  early.sessions = {{kFirst, true, kFirst, 1, 0, {}}};
+  early.keyframes = {{kFirst, 0, 100.0, at(9)}};
+  slam::Map last;
+  last.revision = 2;
+  last.sessions = {{kFirst, true, kFirst, 2, 0, {}}, {kJoined, true, kFirst, 2, 1, at(1)},
+                   {kAlone, false, kAlone, 3, -1, at(5)}};
+  last.keyframes = {{kFirst, 0, 100.0, at(1)}, {kFirst, 1, 103.0, at(2)}, {kJoined, 0, 101.5, at(3)},
+                    {kJoined, 1, 104.0, at(4)}, {kAlone, 0, 100.5, at(7)}, {kAlone, 1, 102.0, at(7)},
+                    {kAlone, 2, 105.0, at(7)}};
+  const auto log_path = dir.path() / "map.lcmlog";
+  {
+    ::lcm::LogFile log(log_path.string(), "w");
+    ASSERT_TRUE(log.good());
+    std::int64_t t = 0;
+    const auto write = [&](const std::vector<std::uint8_t>& bytes) {
+      ::lcm::LogEvent e{};
+      e.timestamp = t += 1000;
+      e.channel = "CVO_MAP";
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = const_cast<std::uint8_t*>(bytes.data());
+      ASSERT_EQ(log.writeEvent(&e), 0);
+    };
+    write(lcm::encode(lcm::to_message(early, 1)));
+    write(lcm::encode(lcm::to_message(last, 2)));
+    write({1, 2, 3});  // a logger killed mid-write
+  }
+  const auto traj = dir.path() / "map.txt";
+  const auto map_of = [&](const fs::path& log, const std::string& out) {
+    return cvo::testing::run_tool("cvo-log", "map " + cvo::testing::quoted(log) + " --out " + out, dir.path());
+  };
+  const auto r = map_of(log_path, cvo::testing::quoted(traj));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto written = io::read_tum_trajectory(traj);
+  const std::vector<std::pair<double, double>> expected = {{100.0, 1}, {101.5, 3}, {103.0, 2}, {104.0, 4}};
+  ASSERT_EQ(written.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_NEAR(written[i].timestamp, expected[i].first, 1e-6) << i;
+    EXPECT_NEAR(written[i].pose.translation().x(), expected[i].second, 1e-9) << i;
+  }
+  EXPECT_NE(r.err.find("session " + hex(kAlone) + " not placed in the map: its 3 keyframes left out"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("skipped"), std::string::npos) << "the broken event is reported\n" << r.err;
+
+  // No map at all, or none that places a keyframe: exit 1 with a message.
+  const auto empty_path = dir.path() / "empty.lcmlog";
+  {
+    ::lcm::LogFile log(empty_path.string(), "w");
+    ASSERT_TRUE(log.good());
+  }
+  const auto none = map_of(empty_path, "x.txt");
+  EXPECT_EQ(none.exit_code, 1);
+  EXPECT_NE(none.err.find("no CVO_MAP"), std::string::npos) << none.err;
+  slam::Map unplaced;
+  unplaced.sessions = {{kAlone, false, kAlone, 1, -1, {}}};
+  unplaced.keyframes = {{kAlone, 0, 100.0, at(1)}};
+  const auto unplaced_path = dir.path() / "unplaced.lcmlog";
+  {
+    ::lcm::LogFile log(unplaced_path.string(), "w");
+    const auto bytes = lcm::encode(lcm::to_message(unplaced, 1));
+    ::lcm::LogEvent e{};
+    e.channel = "CVO_MAP";
+    e.datalen = static_cast<int32_t>(bytes.size());
+    e.data = const_cast<std::uint8_t*>(bytes.data());
+    ASSERT_EQ(log.writeEvent(&e), 0);
+  }
+  const auto nothing = map_of(unplaced_path, "x.txt");
+  EXPECT_EQ(nothing.exit_code, 1);
+  EXPECT_NE(nothing.err.find("places no keyframe"), std::string::npos) << nothing.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "x.txt"));
+  EXPECT_EQ(cvo::testing::run_tool("cvo-log", "map " + cvo::testing::quoted(log_path), dir.path()).exit_code, 2)
+      << "map needs --out";
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // realtime thread. This binary links tests/support/allocation_counter.cpp (counts operator new);
 // the frames are rendered before counting starts.
 #include <new>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -71,6 +72,43 @@ TEST(OdometryAllocation, KeyframeTrackAllocatesNothingAfterWarmUp) {
   EXPECT_GE(keyframes, 2);
   EXPECT_GE(closed, 1);
   EXPECT_EQ(allocations, 0) << "heap allocations in KeyframeOdometry::track()";
+}
+
+// A camera re-initialisation starts a new session: after reset() the tracker behaves exactly as a
+// new one on the same frames (first frame at the initial pose, same poses bit for bit), and
+// neither reset() nor the new session's frames touch the heap.
+TEST(OdometryAllocation, KeyframeResetStartsOverWithoutAllocating) {
+  auto s = testing::render_path(sim::PathKind::orbit, 6);
+  KeyframeOdometryParameters parameters;
+  parameters.initial_pose = s.truth[0].pose;
+  parameters.keyframe.translation_threshold_m = 0.02;
+  KeyframeOdometry odometry(s.frames[0].intrinsics.width, s.frames[0].intrinsics.height, parameters);
+  std::vector<core::SE3> first;
+  int keyframes = 0;
+  for (const auto& frame : s.frames) {
+    const TrackResult r = odometry.track(frame);
+    first.push_back(r.pose);
+    keyframes += r.keyframe;
+  }
+  ASSERT_GE(keyframes, 2) << "the first session moved past its first keyframe";
+
+  const long before = allocation_count();
+  odometry.reset();
+  long allocations = allocation_count() - before;
+  for (std::size_t i = 0; i < s.frames.size(); ++i) {
+    const long start = allocation_count();
+    const TrackResult r = odometry.track(s.frames[i]);
+    allocations += allocation_count() - start;
+    if (i == 0) {
+      EXPECT_EQ(r.status, TrackStatus::kFirstFrame);
+      EXPECT_TRUE(r.keyframe);
+      EXPECT_EQ(odometry.keyframe_reason(), KeyframeReason::kFirst);
+      EXPECT_FALSE(odometry.local_graph_closed()) << "the old session's graph is not handed out again";
+      EXPECT_EQ(odometry.current_local_graph().nodes().size(), 1u);
+    }
+    EXPECT_TRUE((r.pose.matrix().array() == first[i].matrix().array()).all()) << "frame " << i;
+  }
+  EXPECT_EQ(allocations, 0) << "heap allocations in reset() and the new session's track()";
 }
 
 }  // namespace

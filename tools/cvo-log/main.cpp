@@ -71,7 +71,8 @@ Arguments parse(int argc, char** argv) {
   if (a.command != "poses" && a.command != "map" && a.command != "status")
     throw tools::UsageError("expected 'poses', 'map' or 'status'");
   if (a.log.empty()) throw tools::UsageError("no LOG given");
-  if ((a.command == "poses" || a.command == "map") && a.out.empty()) throw tools::UsageError(a.command + " needs --out TRAJ.txt");
+  if ((a.command == "poses" || a.command == "map") && a.out.empty())
+    throw tools::UsageError(a.command + " needs --out TRAJ.txt");
   return a;
 }
 
