@@ -67,7 +67,6 @@ std::int64_t new_session_id(std::uint64_t previous = 0) {
   return static_cast<std::int64_t>(id);
 }
 
-std::string session_hex(std::int64_t session) { return lcm::detail::hex64(static_cast<std::uint64_t>(session)); }
 
 std::int8_t to_pose_status(odometry::TrackStatus status) {
   switch (status) {
@@ -193,7 +192,7 @@ void Trackerd::count_bad(int kind, const std::string& what, const std::string& w
 
 int Trackerd::run() {
   const auto& t = config_.trackerd;
-  note("session " + session_hex(session_));
+  note("session " + slam::session_name(session_));
   note("source " + t.source + ", publishing on " + t.lcm_url + (t.deterministic ? " (deterministic)" : ""));
   if (t.lock_memory)
     if (const auto why = lock_all_memory(); !why.empty()) note("warning: " + why + "; running without locked memory");
@@ -498,7 +497,7 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
   Pipeline& p = *pipeline_;
   if (event.session != out.session) {  // noted here: the tracking thread does not allocate
     out.session = event.session;
-    note("camera re-initialised: new session " + session_hex(event.session));
+    note("camera re-initialised: new session " + slam::session_name(event.session));
   }
   if (event.graph_slot >= 0) {
     const auto& g = p.outbox.graph(event.graph_slot);
@@ -580,7 +579,7 @@ void Trackerd::apply_map(const void* data, int size) {
   MapPlacement placement;
   if (entry != map->sessions.end() && entry->placed) placement = {entry->correction, true};
   if (placement.placed != correction_.get(session).placed)
-    note("session " + session_hex(session) + (placement.placed ? " placed in the map" : " no longer placed in the map") +
+    note("session " + slam::session_name(session) + (placement.placed ? " placed in the map" : " no longer placed in the map") +
          " (map revision " + std::to_string(map->revision) + ")");
   correction_.set(session, placement);
 }

@@ -1,6 +1,7 @@
 #include "libcvo/slam/mapper.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <tuple>
 #include <utility>
 
@@ -11,7 +12,7 @@ constexpr int kFrameBits = 40;
 constexpr std::int64_t kMaxFrame = std::int64_t{1} << kFrameBits;
 
 std::string name(SessionId session, std::int64_t id) {
-  return "keyframe " + std::to_string(id) + " of session " + std::to_string(session);
+  return "keyframe " + std::to_string(id) + " of session " + session_name(session);
 }
 
 // The graph with its frame indices moved by `offset` (node ids of the Backend).
@@ -35,6 +36,12 @@ bool same_pose(const core::SE3& a, const core::SE3& b) {
 }
 
 }  // namespace
+
+std::string session_name(SessionId session) {
+  char text[19];
+  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(session));
+  return text;
+}
 
 MapperParameters mapper_parameters(const config::Config& config) {
   MapperParameters p;

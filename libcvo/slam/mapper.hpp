@@ -58,6 +58,9 @@ struct MapperParameters {
   BackendParameters backend;
 };
 
+/// How logs and messages name a session: its 64 bits in hex, "0x0123456789abcdef".
+std::string session_name(SessionId session);
+
 /// The one place the configuration becomes the back end's parameters.
 MapperParameters mapper_parameters(const config::Config& config);
 

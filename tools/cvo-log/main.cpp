@@ -124,7 +124,7 @@ int write_map(const Arguments& a) {
   for (const auto& session : last->sessions) {
     const auto in_session = [&](const slam::MapKeyframe& k) { return k.session == session.session; };
     if (!session.placed) {
-      std::cerr << "cvo-log: session " << cvo::lcm::detail::hex64(static_cast<std::uint64_t>(session.session))
+      std::cerr << "cvo-log: session " << slam::session_name(session.session)
                 << " not placed in the map: its " << std::count_if(last->keyframes.begin(), last->keyframes.end(), in_session)
                 << " keyframes left out\n";
       continue;
@@ -159,7 +159,7 @@ void print_status(const std::string& process, const cvo_lcm::status_t& s, bool j
     std::cout << "],\"detail\":" << io::json_string(s.detail) << "}";
     return;
   }
-  std::cout << process << ":\n  session: " << cvo::lcm::detail::hex64(static_cast<std::uint64_t>(s.session)) << "\n";
+  std::cout << process << ":\n  session: " << slam::session_name(s.session) << "\n";
   for (const auto& [k, v] : fields) std::cout << "  " << k << ": " << io::json_number(v) << "\n";
   std::cout << "  bad_messages:";
   for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) std::cout << " " << s.bad_messages[k];
