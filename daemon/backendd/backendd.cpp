@@ -63,7 +63,8 @@ struct MapSummary {
 MapSummary summarise(const slam::Map& map) {
   MapSummary s;
   s.sessions = map.sessions.size();
-  s.placed = static_cast<std::size_t>(std::count_if(map.sessions.begin(), map.sessions.end(), [](const auto& m) { return m.placed; }));
+  s.placed = static_cast<std::size_t>(
+      std::count_if(map.sessions.begin(), map.sessions.end(), [](const auto& m) { return m.placed; }));
   s.keyframes = map.keyframes.size();
   s.loops = map.loops.size();
   s.loops_across = static_cast<std::size_t>(
@@ -89,8 +90,8 @@ std::string join_text(const slam::Map& map, slam::SessionId session, std::option
     if (std::isnan(first)) first = k.timestamp;  // by id: the session's first keyframe
     if (k.id == at) joined = k.timestamp;
   }
-  std::string out = "session " + session_name(session) + " joined the map at its keyframe " + std::to_string(at) + " (" +
-                    fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
+  std::string out = "session " + slam::session_name(session) + " joined the map at its keyframe " +
+                    std::to_string(at) + " (" + fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
   if (!first_arrival) return out + "its first keyframe replayed from the store)";
   return out + fixed(std::chrono::duration<double>(Clock::now() - *first_arrival).count(), 2) +
          " s after its first keyframe arrived)";
@@ -248,11 +249,13 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       case Admission::kRepeat:
         return note_limited("repeat", describe(*key) + " received again: stored already, not used twice");
       case Admission::kConflict:
-        return refuse(cvo_lcm::status_t::BAD_CONFLICT, describe(*key) + " repeats an existing one with other content: refused");
+        return refuse(cvo_lcm::status_t::BAD_CONFLICT,
+                      describe(*key) + " repeats an existing one with other content: refused");
       case Admission::kNew:
         break;
     }
-    if (!usable(kind, data, size, &error)) return refuse(cvo_lcm::status_t::BAD_CONTENT, "skipped " + channel + ": " + error);
+    if (!usable(kind, data, size, &error))
+      return refuse(cvo_lcm::status_t::BAD_CONTENT, "skipped " + channel + ": " + error);
     QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now()};
     try {
       store_->append(queued.record.kind, queued.record.payload);

@@ -23,12 +23,14 @@ using namespace cvo;
 constexpr std::string_view kUsage =
     R"(usage: cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]... [--print-config]
 
-Receives CVO_KEYFRAME and CVO_LOCAL_GRAPH from cvo-trackerd, stores them durably (a restart
-resumes with every keyframe received), detects and verifies loop closures (ORB bag of words,
-RANSAC + SVD, CVO refinement, the alpha test), optimises the keyframe pose graph with a Cauchy
-kernel on loops, and publishes the optimised keyframe poses and accepted loops on CVO_MAP, with
-a CVO_STATUS heartbeat. On SIGTERM/SIGINT it runs a final global optimisation, publishes the
-final map and exits 0. Under systemd it sends READY, STATUS and WATCHDOG notifications.
+Receives CVO_KEYFRAME and CVO_LOCAL_GRAPH from cvo-trackerd sessions, stores them durably (a
+restart resumes every session received; a keyframe repeated with other content is refused),
+detects and verifies loop closures across every session (ORB bag of words, RANSAC + SVD, CVO
+refinement, the alpha test), joins a new session to the map at its first verified loop, optimises
+the keyframe pose graph with a Cauchy kernel on loops, and publishes the multi-session map on
+CVO_MAP after each change, with a CVO_STATUS heartbeat. On SIGTERM/SIGINT it runs a final global
+optimisation, publishes the final map and exits 0. Under systemd it sends READY, STATUS and
+WATCHDOG notifications.
 
 options:
   --config FILE      YAML configuration (the backendd section; every key: libcvo/config/default.yaml)

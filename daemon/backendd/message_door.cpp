@@ -1,24 +1,17 @@
 #include "daemon/backendd/message_door.hpp"
 
-#include <cstdio>
-
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
+#include "libcvo/slam/mapper.hpp"
 
 namespace cvo::daemon::backendd {
 
-std::string session_name(std::int64_t session) {
-  char text[24];
-  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(session));
-  return text;
-}
-
 std::string describe(const MessageKey& key) {
-  const std::string keyframe = "keyframe " + std::to_string(key.id) + " of session " + session_name(key.session);
+  const std::string keyframe = "keyframe " + std::to_string(key.id) + " of session " + slam::session_name(key.session);
   return key.kind == RecordKind::kKeyframe ? keyframe : "the local graph of " + keyframe;
 }
 
@@ -28,7 +21,8 @@ std::optional<MessageKey> identify(RecordKind kind, const std::uint8_t* data, st
   const auto length = static_cast<int>(size);
   std::optional<MessageKey> key;
   if (kind == RecordKind::kKeyframe) {
-    if (const auto m = lcm::decode<cvo_lcm::keyframe_t>(data, length, error, &failure)) key = MessageKey{kind, m->session, m->id};
+    if (const auto m = lcm::decode<cvo_lcm::keyframe_t>(data, length, error, &failure))
+      key = MessageKey{kind, m->session, m->id};
   } else if (const auto m = lcm::decode<cvo_lcm::local_graph_t>(data, length, error, &failure)) {
     key = MessageKey{kind, m->session, m->keyframe_id};
   }

@@ -22,9 +22,7 @@ struct MessageKey {
   auto operator<=>(const MessageKey&) const = default;
 };
 
-/// "0x" and 16 hex digits: session ids are 64 random bits.
-std::string session_name(std::int64_t session);
-/// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…".
+/// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…" (slam::session_name).
 std::string describe(const MessageKey& key);
 
 /// The name of a CVO_KEYFRAME / CVO_LOCAL_GRAPH payload, decoded as the wire allows (no image is

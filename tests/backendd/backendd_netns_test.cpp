@@ -1,12 +1,20 @@
-// cvo-backendd end to end over real LCM UDP multicast: a tracker recording's keyframes and local
-// graphs are played into the daemon, which is killed (SIGKILL) half-way and restarted; the final
-// CVO_MAP still holds every keyframe sent, and the restart says it recovered them from its store.
+// cvo-backendd end to end over real LCM UDP multicast, fed the keyframes and local graphs of a
+// real cvo-trackerd run on the embedded clip (recorded once through a file:// provider):
+// - killed (SIGKILL) half-way and restarted, its final CVO_MAP still holds every keyframe
+//   (session, id) sent, and the restart says it recovered them from its store;
+// - a CVO_KEYFRAME that repeats an existing (session, id) with other content is refused and
+//   counted (CVO_STATUS bad_messages[BAD_CONFLICT]), a byte-identical repeat is not stored twice,
+//   and the daemon keeps running and using the messages after them; a store that holds a record
+//   twice (written before the door) is replayed once.
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone, no packet can
 // leave the host.
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -15,9 +23,9 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include "tests/daemon/daemon_process.hpp"
-#include "tests/daemon/lcm_log.hpp"
-#include "tests/daemon/private_network.hpp"
+#include "daemon/backendd/keyframe_store.hpp"
+#include "daemon/backendd/message_door.hpp"
+#include "tests/backendd/netns_support.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -26,96 +34,191 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
+using cvo::testing::Captured;
 using cvo::testing::DaemonProcess;
-using cvo::testing::which;
+using cvo::testing::KeyframeName;
+using cvo::testing::kUrl;
+using cvo::testing::LcmCapture;
 
-constexpr const char* kUrl = cvo::testing::kPrivateLcmUrl;
 const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
 
-// The tracker's output on the clip, split into two logs of its keyframes and local graphs.
-std::vector<std::int64_t> tracker_recording(const fs::path& dir, fs::path& first, fs::path& second) {
-  const auto out = dir / "tracker.lcmlog";
-  DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
-                         {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic", "--lcm-url",
-                          "file://" + out.string() + "?mode=w", "--set", "trackerd.paced=false", "--set",
-                          "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
-                         dir / "tracker.txt");
-  EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0);
-  std::vector<std::int64_t> keyframe_ids;
-  ::lcm::LogFile in(out.string(), "r");
-  std::vector<::lcm::LogEvent> events;
-  std::vector<std::vector<std::uint8_t>> data;
-  while (const ::lcm::LogEvent* e = in.readNextEvent()) {
-    if (e->channel != "CVO_KEYFRAME" && e->channel != "CVO_LOCAL_GRAPH") continue;
-    if (e->channel == "CVO_KEYFRAME") {
-      const auto k = cvo::lcm::decode<cvo_lcm::keyframe_t>(e->data, e->datalen, nullptr);
-      keyframe_ids.push_back(k ? k->id : -1);
+struct Message {
+  std::string channel;
+  std::vector<std::uint8_t> bytes;
+};
+
+class BackenddNetns : public ::testing::Test {
+ protected:
+  // The tracker's keyframes and local graphs on the clip, in the order it published them: made
+  // once for every test of the suite.
+  static void SetUpTestSuite() {
+    if (!cvo::testing::udp_test_skip_reason().empty()) return;
+    const cvo::test::TempDir dir("backendd_recording");
+    const auto out = dir.path() / "tracker.lcmlog";
+    DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
+                           {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic", "--lcm-url",
+                            "file://" + out.string() + "?mode=w", "--set", "trackerd.paced=false", "--set",
+                            "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
+                           dir.path() / "tracker.txt");
+    const auto code = trackerd.wait_for(120s);
+    ASSERT_EQ(code.value_or(-9), 0) << cvo::testing::slurp(dir.path() / "tracker.txt");
+    ::lcm::LogFile in(out.string(), "r");
+    while (const ::lcm::LogEvent* e = in.readNextEvent()) {
+      if (e->channel != "CVO_KEYFRAME" && e->channel != "CVO_LOCAL_GRAPH") continue;
+      const auto* data = static_cast<const std::uint8_t*>(e->data);
+      messages_.push_back({e->channel, std::vector<std::uint8_t>(data, data + e->datalen)});
     }
-    events.push_back(*e);
-    data.emplace_back(static_cast<const std::uint8_t*>(e->data), static_cast<const std::uint8_t*>(e->data) + e->datalen);
   }
-  first = dir / "first.lcmlog";
-  second = dir / "second.lcmlog";
-  ::lcm::LogFile a(first.string(), "w"), b(second.string(), "w");
-  std::int64_t t = 0;
-  for (std::size_t i = 0; i < events.size(); ++i) {
-    auto e = events[i];
-    e.data = data[i].data();
-    e.timestamp = t += 200000;  // 5 Hz: the back end keeps up, nothing queues in the socket
-    (i < events.size() / 2 ? a : b).writeEvent(&e);
+
+  void SetUp() override {
+    if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+    ASSERT_GE(keyframes_in(messages_.begin(), messages_.end()).size(), 4u) << "the tracker made too few keyframes";
   }
-  return keyframe_ids;
+
+  using Iterator = std::vector<Message>::const_iterator;
+  static backendd::MessageKey keyframe_key(const Message& m) {
+    const auto key = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+    return key.value_or(backendd::MessageKey{backendd::RecordKind::kKeyframe, -1, -1});
+  }
+  static std::set<KeyframeName> keyframes_in(Iterator begin, Iterator end) {
+    std::set<KeyframeName> names;
+    for (auto it = begin; it != end; ++it)
+      if (it->channel == "CVO_KEYFRAME") names.emplace(keyframe_key(*it).session, keyframe_key(*it).id);
+    return names;
+  }
+
+  // Publishes messages as a tracker would; 10 Hz, so that nothing overflows a socket.
+  static void send(Iterator begin, Iterator end) {
+    ::lcm::LCM lcm(kUrl);
+    for (auto it = begin; it != end; ++it) {
+      lcm.publish(it->channel, it->bytes.data(), static_cast<unsigned int>(it->bytes.size()));
+      std::this_thread::sleep_for(100ms);
+    }
+  }
+
+  // Starts cvo-backendd and waits for its first CVO_STATUS: from then on it receives.
+  static std::unique_ptr<DaemonProcess> start(LcmCapture& capture, const fs::path& store, const fs::path& stderr_file) {
+    auto backendd = cvo::testing::start_backendd(store, stderr_file);
+    const int pid = backendd->pid();
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(pid); }, 60s))
+        << "no CVO_STATUS from cvo-backendd\n" << cvo::testing::slurp(stderr_file);
+    return backendd;
+  }
+
+  // SIGTERM: exit status 0, and the final CVO_STATUS (after the final map) received.
+  static void stop(DaemonProcess& backendd, LcmCapture& capture, const fs::path& stderr_file) {
+    const auto code = cvo::testing::stop(backendd, 120s);
+    ASSERT_TRUE(code) << "cvo-backendd did not stop on SIGTERM\n" << cvo::testing::slurp(stderr_file);
+    EXPECT_EQ(*code, 0) << cvo::testing::slurp(stderr_file);
+    const int pid = backendd.pid();
+    const auto stopping = [&](const Captured& c) { return c.status_from(pid, cvo_lcm::status_t::STATE_STOPPING); };
+    EXPECT_TRUE(capture.wait_until(stopping, 30s))
+        << "no final CVO_STATUS";
+  }
+
+  // Just after the keyframe nearest the middle: the messages before it are in the store once
+  // the back end's map holds that keyframe (one socket, in order, stored before used).
+  static Iterator middle() {
+    auto it = messages_.cbegin() + static_cast<std::ptrdiff_t>(messages_.size() / 2);
+    while (it != messages_.cend() && it->channel != "CVO_KEYFRAME") ++it;
+    return it == messages_.cend() ? it : it + 1;
+  }
+
+  static std::vector<Message> messages_;
+};
+
+std::vector<Message> BackenddNetns::messages_;
+
+TEST_F(BackenddNetns, KilledAndRestartedMidReplayLosesNoKeyframe) {
+  cvo::test::TempDir dir;
+  const auto store = dir.path() / "state" / "keyframes.store";
+  const auto half = middle();
+  LcmCapture capture(dir.path() / "maps.lcmlog");
+  ASSERT_TRUE(capture.good());
+  {
+    const auto err = dir.path() / "backendd1.txt";
+    auto backendd = start(capture, store, err);
+    send(messages_.begin(), half);
+    // Received (the map holds them), then killed with no chance to flush anything.
+    const auto first = keyframes_in(messages_.begin(), half);
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(first); }, 120s)) << cvo::testing::slurp(err);
+    ASSERT_TRUE(backendd->running()) << cvo::testing::slurp(err);
+    backendd->signal(SIGKILL);
+    backendd->wait_for(5s);
+  }
+  const auto err = dir.path() / "backendd2.txt";
+  auto backendd = start(capture, store, err);
+  send(half, messages_.end());
+  stop(*backendd, capture, err);
+  const auto log = cvo::testing::slurp(err);
+  std::smatch recovered;
+  ASSERT_TRUE(std::regex_search(log, recovered, std::regex("\\((\\d+) records recovered\\)"))) << log;
+  EXPECT_EQ(std::stoul(recovered[1]), static_cast<unsigned long>(half - messages_.begin()))
+      << "the restart found every record of the first half in its store";
+
+  const Captured captured = capture.snapshot();
+  ASSERT_TRUE(captured.map) << log;
+  const auto all = keyframes_in(messages_.begin(), messages_.end());
+  EXPECT_TRUE(captured.map_holds(all)) << log;
+  EXPECT_EQ(captured.map->keyframes.size(), all.size());
+  ASSERT_FALSE(captured.backend_statuses.empty());
+  EXPECT_EQ(captured.backend_statuses.back().session, 0) << "the back end is no tracker session";
 }
 
-TEST(BackenddNetns, KilledAndRestartedMidReplayLosesNoKeyframe) {
-  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+TEST_F(BackenddNetns, AKeyframeRepeatedWithOtherContentIsRefusedAndCounted) {
   cvo::test::TempDir dir;
-  fs::path first, second;
-  const auto keyframe_ids = tracker_recording(dir.path(), first, second);
-  ASSERT_GE(keyframe_ids.size(), 4u);
+  const auto store = dir.path() / "keyframes.store";
+  const auto half = middle();
+  // The second keyframe, once as it was and once re-encoded with its pose moved by 5 cm.
+  const auto is_keyframe = [](const Message& m) { return m.channel == "CVO_KEYFRAME"; };
+  const auto kf = std::find_if(std::find_if(messages_.cbegin(), half, is_keyframe) + 1, half, is_keyframe);
+  ASSERT_NE(kf, half);
+  auto changed = lcm::decode<cvo_lcm::keyframe_t>(kf->bytes.data(), static_cast<int>(kf->bytes.size()), nullptr);
+  ASSERT_TRUE(changed);
+  changed->pose.position[0] += 0.05;
+  Message conflicting{"CVO_KEYFRAME", std::vector<std::uint8_t>(static_cast<std::size_t>(changed->getEncodedSize()))};
+  changed->encode(conflicting.bytes.data(), 0, static_cast<int>(conflicting.bytes.size()));
+  const std::vector<Message> repeats{*kf, conflicting};
 
-  const auto store = dir.path() / "state" / "keyframes.store";
-  const auto maps = dir.path() / "maps.lcmlog";
-  const std::vector<std::string> args{"--lcm-url", kUrl, "--store", store.string()};
-  const auto backendd_exe = fs::path(CVO_TOOLS_DIR) / "cvo-backendd";
-  DaemonProcess logger(which("lcm-logger"), {"--lcm-url=" + std::string(kUrl), "-c", "CVO_(MAP|STATUS)", "-f", maps.string()},
-                       dir.path() / "logger.txt");
-  const auto play = [&](const fs::path& log) {
-    DaemonProcess player(which("lcm-logplayer"), {"--lcm-url=" + std::string(kUrl), log.string()}, dir.path() / "player.txt");
-    EXPECT_TRUE(player.wait_for(60s));
-  };
+  LcmCapture capture(dir.path() / "maps.lcmlog");
+  ASSERT_TRUE(capture.good());
+  const auto err = dir.path() / "backendd.txt";
   {
-    DaemonProcess backendd(backendd_exe, args, dir.path() / "backendd1.txt");
-    std::this_thread::sleep_for(1000ms);
-    play(first);
-    std::this_thread::sleep_for(1000ms);
-    ASSERT_TRUE(backendd.running()) << cvo::testing::slurp(dir.path() / "backendd1.txt");
-    backendd.signal(SIGKILL);  // no chance to flush anything
-    backendd.wait_for(5s);
+    auto backendd = start(capture, store, err);
+    send(messages_.begin(), half);
+    send(repeats.begin(), repeats.end());
+    send(half, messages_.end());  // used after the refusal
+    const auto all = keyframes_in(messages_.begin(), messages_.end());
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(all); }, 120s)) << cvo::testing::slurp(err);
+    ASSERT_TRUE(backendd->running()) << cvo::testing::slurp(err);
+    stop(*backendd, capture, err);
   }
-  DaemonProcess backendd(backendd_exe, args, dir.path() / "backendd2.txt");
-  std::this_thread::sleep_for(1500ms);
-  play(second);
-  std::this_thread::sleep_for(2000ms);
-  backendd.signal(SIGTERM);
-  const auto code = backendd.wait_for(30s);
-  const auto err = cvo::testing::slurp(dir.path() / "backendd2.txt");
-  ASSERT_TRUE(code) << err;
-  EXPECT_EQ(*code, 0) << err;
-  EXPECT_EQ(err.find(" 0 records recovered"), std::string::npos) << "the restart found nothing in its store:\n" << err;
-  std::this_thread::sleep_for(300ms);
-  logger.signal(SIGINT);
-  logger.wait_for(5s);
+  const auto log = cvo::testing::slurp(err);
+  const auto status = capture.snapshot().backend_statuses.back();
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_CONFLICT], 1) << log;
+  for (int k = 0; k < cvo_lcm::status_t::BAD_CONFLICT; ++k) EXPECT_EQ(status.bad_messages[k], 0) << "kind " << k;
+  const auto name = backendd::describe(keyframe_key(*kf));
+  EXPECT_NE(log.find(name + " repeats an existing one with other content: refused"), std::string::npos) << log;
 
-  const auto published = cvo::testing::read_published(maps);
-  ASSERT_FALSE(published.maps.empty()) << err;
-  const auto& last = published.maps.back();
-  const std::set<std::int64_t> in_map(last.keyframe_ids.begin(), last.keyframe_ids.end());
-  for (const auto id : keyframe_ids) EXPECT_TRUE(in_map.count(id)) << "keyframe " << id << " lost\n" << err;
-  EXPECT_EQ(in_map.size(), keyframe_ids.size());
-  ASSERT_FALSE(published.statuses.empty());
-  EXPECT_EQ(published.statuses.back().process, "cvo-backendd");
-  EXPECT_EQ(published.statuses.back().state, +cvo_lcm::status_t::STATE_STOPPING);
+  // Every message once in the store: neither the repeat nor the conflicting one.
+  std::vector<backendd::StoredRecord> records;
+  std::string warning;
+  {
+    backendd::KeyframeStore reopened(store, records, warning);
+    EXPECT_EQ(reopened.records(), messages_.size());
+    reopened.append(backendd::RecordKind::kKeyframe, kf->bytes);  // as a store written before the door could hold it
+  }
+
+  // The store with the repeat is replayed once: the same map, the repeat skipped with a note.
+  const auto err2 = dir.path() / "backendd2.txt";
+  auto backendd = start(capture, store, err2);
+  stop(*backendd, capture, err2);
+  const auto log2 = cvo::testing::slurp(err2);
+  EXPECT_NE(log2.find("stored record skipped: " + name + " is in the store twice"), std::string::npos) << log2;
+  EXPECT_EQ(log2.find("not applied"), std::string::npos) << log2;
+  const Captured captured = capture.snapshot();
+  ASSERT_TRUE(captured.map);
+  EXPECT_EQ(captured.map->keyframes.size(), keyframes_in(messages_.begin(), messages_.end()).size());
 }
 
 }  // namespace
