@@ -5,7 +5,9 @@
 // - a CVO_KEYFRAME that repeats an existing (session, id) with other content is refused and
 //   counted (CVO_STATUS bad_messages[BAD_CONFLICT]), a byte-identical repeat is not stored twice,
 //   and the daemon keeps running and using the messages after them; a store that holds a record
-//   twice (written before the door) is replayed once.
+//   twice (written before the door) is replayed once;
+// - its final map's keyframe poses are the ones `cvo-run --mode slam` gives on the same frames:
+//   one back end (slam::Mapper) serves both.
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone, no packet can
 // leave the host.
@@ -25,6 +27,8 @@
 
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
+#include "libcvo/io/trajectory_io.hpp"
+#include "libcvo/lcm/map_conversion.hpp"
 #include "tests/backendd/netns_support.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -58,7 +62,8 @@ class BackenddNetns : public ::testing::Test {
     DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
                            {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic", "--lcm-url",
                             "file://" + out.string() + "?mode=w", "--set", "trackerd.paced=false", "--set",
-                            "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
+                            "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false", "--set",
+                            "trackerd.keyframe_colour_encoding=png"},  // lossless: cvo-run's images exactly
                            dir.path() / "tracker.txt");
     const auto code = trackerd.wait_for(120s);
     ASSERT_EQ(code.value_or(-9), 0) << cvo::testing::slurp(dir.path() / "tracker.txt");
@@ -219,6 +224,43 @@ TEST_F(BackenddNetns, AKeyframeRepeatedWithOtherContentIsRefusedAndCounted) {
   const Captured captured = capture.snapshot();
   ASSERT_TRUE(captured.map);
   EXPECT_EQ(captured.map->keyframes.size(), keyframes_in(messages_.begin(), messages_.end()).size());
+}
+
+// cvo-trackerd --deterministic and cvo-run track the same frames with the same KF-CVO; the daemon's
+// back end and cvo-run's are one slam::Mapper fed the same keyframes (the tracker's own clouds)
+// and local graphs in the same order, so the final maps agree keyframe by keyframe (to the
+// trajectory file's nine decimals).
+TEST_F(BackenddNetns, GivesTheKeyframePosesCvoRunGivesOnTheSameFrames) {
+  cvo::test::TempDir dir;
+  LcmCapture capture(dir.path() / "maps.lcmlog");
+  ASSERT_TRUE(capture.good());
+  const auto err = dir.path() / "backendd.txt";
+  {
+    auto backendd = start(capture, dir.path() / "keyframes.store", err);
+    send(messages_.begin(), messages_.end());
+    const auto all = keyframes_in(messages_.begin(), messages_.end());
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(all); }, 120s)) << cvo::testing::slurp(err);
+    stop(*backendd, capture, err);
+  }
+  const auto captured = capture.snapshot();
+  ASSERT_TRUE(captured.map);
+  std::string error;
+  const auto map = lcm::from_message(*captured.map, &error);
+  ASSERT_TRUE(map) << error;
+
+  const auto traj = dir.path() / "cvo-run.txt";
+  const auto run = cvo::testing::run_tool("cvo-run", cvo::testing::quoted(kClip) + " --mode slam --out " +
+                                                         cvo::testing::quoted(traj), dir.path());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const core::Trajectory frames = io::read_tum_trajectory(traj);
+  ASSERT_GE(map->keyframes.size(), 4u);
+  for (const auto& k : map->keyframes) {
+    const auto at = std::find_if(frames.begin(), frames.end(),
+                                 [&](const core::StampedPose& p) { return std::abs(p.timestamp - k.timestamp) < 1e-5; });
+    ASSERT_NE(at, frames.end()) << "keyframe " << k.id << " at " << k.timestamp << " is no frame of cvo-run's";
+    EXPECT_LT((at->pose.translation() - k.pose.translation()).norm(), 1e-6) << "keyframe " << k.id;
+    EXPECT_LT(at->pose.rotation().angularDistance(k.pose.rotation()), 1e-6) << "keyframe " << k.id;
+  }
 }
 
 }  // namespace
