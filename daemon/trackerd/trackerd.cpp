@@ -98,14 +98,6 @@ Trackerd::SourceFactory configured_source(const config::Config& config) {
   };
 }
 
-odometry::KeyframeOdometryParameters tracker_parameters(const config::Config& config) {
-  odometry::KeyframeOdometryParameters parameters;
-  parameters.selection = config.selection;
-  parameters.cvo = config.cvo;
-  parameters.keyframe = config.keyframe;
-  return parameters;
-}
-
 // Covariance of a frame's pose relative to its keyframe: the inverse CVO Hessian of the keyframe
 // registration (the last keyframe->frame edge), when the frame has one.
 std::optional<core::Matrix6d> keyframe_covariance(const odometry::KeyframeOdometry& tracker, std::uint64_t frame) {
@@ -357,7 +349,7 @@ void Trackerd::track_loop() {
 Trackerd::Pipeline* Trackerd::start_pipeline(const core::RgbdFrame& first) {
   const auto& k = first.intrinsics;
   if (!k.validate().empty() || first.bgr.cols != k.width || first.bgr.rows != k.height) return nullptr;
-  pipeline_ = std::make_unique<Pipeline>(k.width, k.height, tracker_parameters(config_));
+  pipeline_ = std::make_unique<Pipeline>(k.width, k.height, odometry::keyframe_odometry_parameters(config_));
   pipeline_ready_ = true;
   return pipeline_.get();
 }

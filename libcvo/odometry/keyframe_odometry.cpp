@@ -46,6 +46,14 @@ const char* to_string(KeyframeReason reason) {
   return "unknown";
 }
 
+KeyframeOdometryParameters keyframe_odometry_parameters(const config::Config& config) {
+  KeyframeOdometryParameters p;
+  p.selection = config.selection;
+  p.cvo = config.cvo;
+  p.keyframe = config.keyframe;
+  return p;
+}
+
 KeyframeOdometry::KeyframeOdometry(int width, int height, const KeyframeOdometryParameters& parameters)
     : parameters_(parameters),
       selector_(width, height, parameters.selection),

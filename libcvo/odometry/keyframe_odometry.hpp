@@ -44,6 +44,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "libcvo/config/config.hpp"
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
@@ -67,6 +68,10 @@ struct KeyframeOdometryParameters {
   double chain_weight = 2.0;               // scale of the chain edge's information; 0: keyframe edge alone
   double chain_full_weight_deg = 3.0;      // rotation from the keyframe at which the chain weight is full (0: always)
 };
+
+/// The tracker's parameters from the configuration (its selection, cvo and keyframe sections):
+/// one mapping for cvo-trackerd and cvo-run.
+KeyframeOdometryParameters keyframe_odometry_parameters(const config::Config& config);
 
 /// Why the last frame made a new keyframe.
 enum class KeyframeReason { kNone, kFirst, kGamma, kTranslation, kRotation, kKeyframeLost, kRestart, kGraphFull };

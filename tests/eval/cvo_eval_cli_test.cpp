@@ -20,6 +20,8 @@
 namespace cvo::eval {
 namespace {
 
+using cvo::testing::json_value;
+
 namespace fs = std::filesystem;
 using testing::kStep;
 using testing::make;
@@ -48,13 +50,6 @@ class CvoEvalCli : public ::testing::Test {
 
   fs::path dir_, gt_, est_;
 };
-
-// The value of "key": in a one-object JSON text, as written (a number or null).
-std::string json_value(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([^,\\n}]+)"))) return "<missing>";
-  return m[1];
-}
 
 TEST_F(CvoEvalCli, JsonHasTheContractKeysAndTheRightNumbers) {
   const ToolRun r = run(q(gt_) + " " + q(est_) + " --json");

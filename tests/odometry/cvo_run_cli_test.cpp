@@ -21,6 +21,8 @@
 namespace cvo::odometry {
 namespace {
 
+using cvo::testing::json_value;
+
 namespace fs = std::filesystem;
 
 using cvo::testing::run_tool;
@@ -30,13 +32,6 @@ using cvo::testing::ToolRun;
 std::string q(const fs::path& p) { return cvo::testing::quoted(p); }
 
 ToolRun run_tool(const test::TempDir& dir, const std::string& args) { return run_tool("cvo-run", args, dir.path()); }
-
-// The value of "key": in a one-object JSON text, as written (number, null, string or '[').
-std::string json_value(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([^,\\n}]+)"))) return "<missing>";
-  return m[1];
-}
 
 // Poses in a TUM trajectory file ('#' lines are comments).
 std::size_t pose_lines(const fs::path& file) {

@@ -22,6 +22,8 @@
 namespace cvo::odometry {
 namespace {
 
+using cvo::testing::json_value;
+
 namespace fs = std::filesystem;
 using testing::motion_error;
 
@@ -165,13 +167,6 @@ TEST(OpenCvOdometry, Fr1Rpy50RelativePoseError) {
     EXPECT_LT(rpe.rotation_deg.rmse, c.rpe_deg_s) << to_string(variant);
     EXPECT_LT(ate.error.rmse, c.ate_m) << to_string(variant);
   }
-}
-
-// The value of "key": in a one-object JSON text, as written (number, null, string or '[').
-std::string json_value(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([^,\\n}]+)"))) return "<missing>";
-  return m[1];
 }
 
 // cvo-run --mode opencv-rgbd end to end on a rendered folder (40 frames, half-size camera).

@@ -15,17 +15,12 @@
 namespace cvo::slam {
 namespace {
 
+using cvo::testing::json_value;
+
 namespace fs = std::filesystem;
 using cvo::testing::quoted;
 using cvo::testing::run_tool;
 using cvo::testing::ToolRun;
-
-// The value of "key": in a one-object JSON text, as written (number, null, string or '[').
-std::string json_value(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([^,\\n}]+)"))) return "<missing>";
-  return m[1];
-}
 
 // 13 s of the 12 s orbit (390°) at 10 Hz through the textured room, half-size camera, Kinect-like
 // depth noise (so that KF-CVO drifts by millimetres, which loops can remove): ~5 s to render.

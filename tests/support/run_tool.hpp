@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -21,6 +22,14 @@ inline std::string slurp(const std::filesystem::path& file) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+/// The value of "key": in a one-object JSON text (a tool's --json), as written (number, null,
+/// string or '['); "<missing>" when absent.
+inline std::string json_value(const std::string& json, const std::string& key) {
+  std::smatch m;
+  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([^,\\n}]+)"))) return "<missing>";
+  return m[1];
 }
 
 /// Single-quoted for the shell. Built with append(): GCC 12 warns falsely (-Wrestrict) on chained

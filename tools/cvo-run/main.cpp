@@ -217,11 +217,7 @@ Tracker make_tracker(const Arguments& args, const config::Config& config, const 
     return odometry::FrameToFrameOdometry(camera.width, camera.height, parameters);
   }
   if (mode == "kf-cvo") {
-    odometry::KeyframeOdometryParameters parameters;
-    parameters.selection = config.selection;
-    parameters.cvo = config.cvo;
-    parameters.keyframe = config.keyframe;
-    return odometry::KeyframeOdometry(camera.width, camera.height, parameters);
+    return odometry::KeyframeOdometry(camera.width, camera.height, odometry::keyframe_odometry_parameters(config));
   }
   if (mode == "opencv-rgbd" || mode == "opencv-rgbd-icp") {
     odometry::OpenCvOdometryParameters parameters;

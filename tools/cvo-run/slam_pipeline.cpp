@@ -12,19 +12,11 @@ double ms_since(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-odometry::KeyframeOdometryParameters tracker_parameters(const config::Config& config) {
-  odometry::KeyframeOdometryParameters p;
-  p.selection = config.selection;
-  p.cvo = config.cvo;
-  p.keyframe = config.keyframe;
-  return p;
-}
-
 }  // namespace
 
 struct SlamPipeline::Session {
   Session(slam::SessionId session, int width, int height, const config::Config& config)
-      : id(session), tracker(width, height, tracker_parameters(config)), output(width, height) {}
+      : id(session), tracker(width, height, odometry::keyframe_odometry_parameters(config)), output(width, height) {}
   slam::SessionId id;
   odometry::KeyframeOdometry tracker;
   odometry::KeyframeOutput output;
