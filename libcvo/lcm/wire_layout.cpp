@@ -43,8 +43,8 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
   if (type_name == "map_t") return {32, kMapCounts};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
-  // (93), rss_bytes (101), bad_messages[6] (149), then the strings process and detail.
-  if (type_name == "status_t") return {149, {}, 149, 2};
+  // (93), rss_bytes (101), bad_messages[9] (173), 5 int64 (213), then the strings process and detail.
+  if (type_name == "status_t") return {213, {}, 213, 2};
   return {};
 }
 

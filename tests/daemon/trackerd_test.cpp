@@ -161,7 +161,7 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   const auto text = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(out), dir.path());
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_NE(text.out.find("session: " + hex(session)), std::string::npos) << text.out;
-  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0\n"), std::string::npos) << "all six kinds\n" << text.out;
+  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0 0 0 0\n"), std::string::npos) << "all nine kinds\n" << text.out;
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(dir.path() / "missing.lcm") + " --out x", dir.path()).exit_code, 1);
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "frobnicate", dir.path()).exit_code, 2);
 }

@@ -163,6 +163,11 @@ inline cvo_lcm::status_t sample_status() {
   m.queue_depth = 2;
   m.rss_bytes = 123456789;
   for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) m.bad_messages[k] = 10 * k + 1;
+  m.unsaved_records = 3;
+  m.queue_drops = 4;
+  m.keyframes_requested = 5;
+  m.keyframes_recovered = 4;
+  m.keyframes_lost = 1;
   m.process = "cvo-trackerd";
   m.detail = "camera re-opened after unplug";
   return m;

@@ -149,7 +149,11 @@ void print_status(const std::string& process, const cvo_lcm::status_t& s, bool j
       {"deadline_misses", static_cast<double>(s.deadline_misses)}, {"dropped_frames", static_cast<double>(s.dropped_frames)},
       {"failed_frames", static_cast<double>(s.failed_frames)}, {"source_gaps", static_cast<double>(s.source_gaps)},
       {"allocations_after_warmup", static_cast<double>(s.allocations_after_warmup)},
-      {"queue_depth", s.queue_depth}, {"rss_bytes", static_cast<double>(s.rss_bytes)}};
+      {"queue_depth", s.queue_depth}, {"rss_bytes", static_cast<double>(s.rss_bytes)},
+      {"unsaved_records", static_cast<double>(s.unsaved_records)}, {"queue_drops", static_cast<double>(s.queue_drops)},
+      {"keyframes_requested", static_cast<double>(s.keyframes_requested)},
+      {"keyframes_recovered", static_cast<double>(s.keyframes_recovered)},
+      {"keyframes_lost", static_cast<double>(s.keyframes_lost)}};
   if (json) {
     // The session as the 64-bit integer on the wire (a double would round it).
     std::cout << io::json_string(process) << ":{\"session\":" << s.session << ",";
