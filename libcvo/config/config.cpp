@@ -149,6 +149,13 @@ const std::vector<Field>& table() {
           "ORB vocabulary file, or default (the one installed with cvo-slam)"),
       row("backendd.status_period_s", &Config::backendd, &BackenddParameters::status_period_s, kPositive,
           "CVO_STATUS period"),
+      row("backendd.publish_url", &Config::backendd, &BackenddParameters::publish_url, kAny,
+          "LCM provider CVO_MAP and CVO_STATUS go to; lcm_url: the same one (set it when lcm_url is a file:// log)"),
+      row("backendd.exit_on_eof", &Config::backendd, &BackenddParameters::exit_on_eof, kAny,
+          "exit 0 when a file:// lcm_url ends, after the final optimisation and the final map"),
+      row("backendd.queue_max", &Config::backendd, &BackenddParameters::queue_max, kAtLeastOne,
+          "received records waiting for the back end; beyond it a live message is refused and counted "
+          "(asked for again as a gap), a log waits"),
       Field{"camera", Get<std::string>([](Config& c) -> std::string& { return c.camera; }), kAny,
             "tum_fr1, tum_fr2, tum_fr3, synthetic, or a path to an intrinsics file"},
   };

@@ -43,6 +43,9 @@ struct BackenddParameters {
   std::string store = "/var/lib/cvo-slam/keyframes.store";
   std::string vocabulary = "default";  // the installed default (share/cvo-slam/orb_k10_l4.voc), or a file
   double status_period_s = 1.0;
+  std::string publish_url = "lcm_url";  // where CVO_MAP and CVO_STATUS go; "lcm_url": the same provider
+  bool exit_on_eof = false;      // a file:// lcm_url that ends: final optimisation, final map, exit 0
+  std::size_t queue_max = 64;    // records waiting for the back end's thread; more are refused and counted
 };
 
 struct Config {

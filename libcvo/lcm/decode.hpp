@@ -27,6 +27,14 @@ enum class DecodeFailure : std::int32_t {
   kVersion = 3,      // our type, another `version`
 };
 
+/// Why a message that decoded cannot be used (the from_message conversions). The values match
+/// cvo_lcm::status_t's BAD_* indices too.
+enum class ContentFailure : std::int32_t {
+  kContent = 4,      // malformed: sizes that do not match, images that do not decode, ...
+  kNotFinite = 7,    // a NaN or infinite pose, point or number
+  kInformation = 8,  // an information matrix that is not symmetric positive definite
+};
+
 namespace detail {
 std::string hex64(std::uint64_t v);
 inline void set_error(std::string* error, const char* type, const std::string& what) {

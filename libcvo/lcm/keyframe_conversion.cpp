@@ -52,12 +52,21 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
   return m;
 }
 
-std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* error) {
+std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* error, ContentFailure* failure) {
+  const auto kind = [&](ContentFailure f) {
+    if (failure != nullptr) *failure = f;
+  };
+  kind(ContentFailure::kContent);
   if (m.version != cvo_lcm::keyframe_t::SCHEMA_VERSION) return fail(error, "schema version " + std::to_string(m.version));
   if (m.id < 0) return fail(error, "negative keyframe id " + std::to_string(m.id));
   std::string why;
   const auto pose = from_message(m.pose, &why);
-  if (!pose) return fail(error, "pose: " + why);
+  if (!pose) {
+    if (!std::all_of(std::begin(m.pose.position), std::end(m.pose.position), [](double v) { return std::isfinite(v); }) ||
+        !std::all_of(std::begin(m.pose.orientation), std::end(m.pose.orientation), [](double v) { return std::isfinite(v); }))
+      kind(ContentFailure::kNotFinite);
+    return fail(error, "pose: " + why);
+  }
 
   cvo_lcm::rgbd_frame_t frame{};
   frame.version = cvo_lcm::rgbd_frame_t::SCHEMA_VERSION;
@@ -98,7 +107,10 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
       f[c] = m.labels[static_cast<std::size_t>(i)][c];
       finite = finite && std::isfinite(f[c]);
     }
-    if (!finite) return fail(error, "point " + std::to_string(i) + " is not finite");
+    if (!finite) {
+      kind(ContentFailure::kNotFinite);
+      return fail(error, "point " + std::to_string(i) + " is not finite");
+    }
     k.cloud.push_back({p[0], p[1], p[2]}, f);
   }
   return k;

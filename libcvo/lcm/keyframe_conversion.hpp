@@ -9,6 +9,7 @@
 #include "cvo_lcm/keyframe_t.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 
@@ -26,7 +27,9 @@ struct Keyframe {
 std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const RgbdEncoding& encoding,
                                               std::string* error);
 
-/// Fails on another schema version, a bad pose, non-finite points, or images that do not decode.
-std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& message, std::string* error);
+/// Fails on another schema version, a bad pose, non-finite points, or images that do not decode;
+/// *failure (when given) says which kind (not finite: a NaN or infinite pose or point).
+std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& message, std::string* error,
+                                     ContentFailure* failure = nullptr);
 
 }  // namespace cvo::lcm
