@@ -13,9 +13,11 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/map_t.hpp"
+#include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "libcvo/io/input_error.hpp"
@@ -49,6 +51,12 @@ std::string fixed(double value, int digits) {
   std::snprintf(text, sizeof text, "%.*f", digits, value);
   return text;
 }
+
+// Where CVO_MAP and CVO_STATUS go: the input's provider unless told otherwise (a file:// log that
+// is read cannot take them).
+std::string publish_url(const config::BackenddParameters& b) { return b.publish_url == "lcm_url" ? b.lcm_url : b.publish_url; }
+
+bool is_log(const std::string& url) { return url.starts_with("file://"); }
 
 std::string keyframe_name(slam::SessionId session, std::int64_t id) {
   return describe(MessageKey{RecordKind::kKeyframe, session, id});
@@ -106,7 +114,7 @@ std::filesystem::path resolve_vocabulary(const std::string& setting) {
 // Everything the cvo-backend thread owns.
 struct Backendd::Work {
   Work(loop_closure::Vocabulary vocabulary, const config::Config& config)
-      : mapper(std::move(vocabulary), slam::mapper_parameters(config)), lcm(config.backendd.lcm_url) {}
+      : mapper(std::move(vocabulary), slam::mapper_parameters(config)), lcm(publish_url(config.backendd)) {}
 
   slam::Mapper mapper;
   ::lcm::LCM lcm;  // CVO_MAP and CVO_STATUS
@@ -120,11 +128,16 @@ struct Backendd::Work {
 
 Backendd::Backendd(config::Config config) : config_(std::move(config)) {
   const auto& b = config_.backendd;
+  if (b.exit_on_eof && !is_log(b.lcm_url))
+    throw io::InputError("backendd.exit_on_eof", "needs a file:// lcm_url (a log that ends), not '" + b.lcm_url + "'");
   work_ = std::make_unique<Work>(loop_closure::Vocabulary::load(resolve_vocabulary(b.vocabulary)), config_);
-  if (!work_->lcm.good()) throw io::InputError("backendd.lcm_url", "cannot open LCM provider '" + b.lcm_url + "'");
+  if (!work_->lcm.good())
+    throw io::InputError(b.publish_url == "lcm_url" ? "backendd.lcm_url" : "backendd.publish_url",
+                         "cannot open LCM provider '" + publish_url(b) + "'");
   std::string warning;
-  store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning);
+  store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning, b.unsaved_records_max);
   if (!warning.empty()) note("warning: " + warning);
+  note_store_change();  // a new store on a full disk: started degraded
 }
 
 Backendd::~Backendd() = default;
@@ -165,6 +178,7 @@ int Backendd::run() {
       note(std::string("stopping on ") + (*signal == SIGTERM ? "SIGTERM" : "SIGINT"));
       break;
     }
+    if (input_ended_ && config_.backendd.exit_on_eof) break;
     if (const auto period = systemd_.watchdog_period(); period && Clock::now() - last_watchdog >= *period) {
       // The worker may be inside a long optimisation: allow it the watchdog's full interval.
       const auto fresh = [&](const std::atomic<std::int64_t>& heartbeat) {
@@ -203,6 +217,8 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
       continue;
     }
     door_.admit(*key, crc);
+    gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
+               key->session, key->id, Clock::now());  // a gap in the store is asked for too
     queue_.push_back({std::move(record), std::nullopt});
   }
 }
@@ -219,17 +235,37 @@ void Backendd::receive_loop() {
   } keyframes{this, RecordKind::kKeyframe}, local_graphs{this, RecordKind::kLocalGraph};
   lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
   lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &local_graphs);
+  struct PoseHandler {
+    Backendd* self;
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+      self->saw_pose(buffer->data, buffer->data_size);
+    }
+  } poses{this};
+  lcm.subscribe("CVO_POSE", &PoseHandler::handle, &poses);
+  const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
     receive_heartbeat_ns_ = now_ns();
-    if (lcm.handleTimeout(100) < 0) {
-      note("LCM receive failed; retrying");
-      std::this_thread::sleep_for(100ms);
+    retry_store(false);
+    ask_for_missing(lcm, false);
+    if (input_ended_) {  // a log that ended: nothing more will come; wait for the stop
+      std::this_thread::sleep_for(50ms);
+      continue;
     }
+    if (lcm.handleTimeout(100) >= 0) continue;
+    if (log) {
+      note("end of " + config_.backendd.lcm_url + (config_.backendd.exit_on_eof ? ": finishing" : ""));
+      input_ended_ = true;
+      continue;
+    }
+    note_limited("receive failed", "LCM receive failed; retrying");
+    std::this_thread::sleep_for(100ms);
   }
   // What is in the socket was sent before the stop (a tracker's last keyframe and local graph):
   // it is taken in and used too.
-  for (int n = 0; n < kMaxDrainMessages && lcm.handleTimeout(0) > 0; ++n) {
+  for (int n = 0; !log && n < kMaxDrainMessages && lcm.handleTimeout(0) > 0; ++n) {
   }
+  retry_store(true);
+  ask_for_missing(lcm, true);
   receiver_done_ = true;
 }
 
@@ -254,15 +290,27 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       case Admission::kNew:
         break;
     }
-    if (!usable(kind, data, size, &error))
-      return refuse(cvo_lcm::status_t::BAD_CONTENT, "skipped " + channel + ": " + error);
-    QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now()};
-    try {
-      store_->append(queued.record.kind, queued.record.payload);
-    } catch (const std::exception& e) {
-      note(std::string("warning: not stored (will be lost on restart): ") + e.what());
+    if (!usable(kind, data, size, &error, &bad)) return refuse(bad, "skipped " + channel + ": " + error);
+    // A graph is applied to its keyframe: one that never came is asked for again (a gap), and the
+    // tracker sends the keyframe, then the graph.
+    if (kind == RecordKind::kLocalGraph && !door_.knows({RecordKind::kKeyframe, key->session, key->id})) {
+      gaps_.seen(KeyframeGaps::Seen::kGraphWithoutKeyframe, key->session, key->id, Clock::now());
+      return refuse(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME, "skipped " + describe(*key) + ": its keyframe never came");
     }
+    if (!wait_for_queue_space()) {
+      ++queue_drops_;
+      return note_limited("queue full", describe(*key) + " refused: " + std::to_string(config_.backendd.queue_max) +
+                                            " records wait for the back end already");
+    }
+    QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now()};
+    // Used in any case; what the store cannot write now it holds and writes later, within a bound.
+    if (store_->append(queued.record.kind, queued.record.payload) == Appended::kNotDurable)
+      note_limited("not stored", "warning: " + describe(*key) + " used but not stored (lost on restart): " +
+                                     describe(store_->health()) + " (backendd.unsaved_records_max)");
+    note_store_change();
     door_.admit(*key, crc);
+    gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
+               key->session, key->id, Clock::now());
     {
       const std::lock_guard lock(queue_mutex_);
       queue_.push_back(std::move(queued));
@@ -271,6 +319,94 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
   } catch (const std::exception& e) {  // out of memory, most likely: this message is lost, not the daemon
     note_limited("receive failure", "skipped " + channel + ": " + e.what());
   }
+}
+
+// CVO_POSE names the keyframe each frame was tracked against: a keyframe lost in transport is
+// noticed while its tracker still runs, even a session's newest one.
+void Backendd::saw_pose(const void* data, std::size_t size) {
+  std::string error;
+  auto failure = lcm::DecodeFailure::kBody;
+  const auto pose = lcm::decode<cvo_lcm::pose_t>(data, static_cast<int>(size), &error, &failure);
+  if (!pose) {
+    const auto why = static_cast<std::size_t>(failure);
+    ++bad_messages_[why];
+    return note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
+  }
+  gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
+}
+
+// A log cannot answer: what it lacks is lost as soon as it is noticed.
+GapPolicy Backendd::gap_policy(const config::Config& config) {
+  GapPolicy policy;
+  if (is_log(config.backendd.lcm_url)) policy.requests = 0;
+  policy.ids_per_round = std::min<std::size_t>(policy.ids_per_round, cvo_lcm::keyframe_request_t::MAX_IDS);
+  return policy;
+}
+
+// cvo-receive: the requests due go out on CVO_KEYFRAME_REQUEST, what was given up is noted; at the
+// stop everything still waited for is given up. The counts go to CVO_STATUS.
+void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
+  const auto round = stopping ? KeyframeGaps::Round{{}, gaps_.give_up_all()} : gaps_.due(Clock::now());
+  for (const auto& request : round.requests) {
+    cvo_lcm::keyframe_request_t m{};
+    m.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
+    m.utime = wall_utime();
+    m.session = request.session;
+    m.ids = request.ids;
+    m.num_ids = static_cast<std::int32_t>(m.ids.size());
+    lcm.publish("CVO_KEYFRAME_REQUEST", &m);
+    std::string ids;
+    for (const auto id : request.ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
+    note_limited("keyframe request", "asking session " + slam::session_name(request.session) +
+                                         " again for keyframes " + ids + " (lost in transport)");
+  }
+  for (const auto& g : round.given_up) {
+    const std::string which = g.first == g.last ? "keyframe " + std::to_string(g.first)
+                                                : "keyframes " + std::to_string(g.first) + "-" + std::to_string(g.last);
+    note_limited("keyframes lost", "gave up on " + which + " of session " + slam::session_name(g.session) + ": never came (lost)");
+  }
+  if (gaps_.recovered() > keyframes_recovered_)
+    note_limited("keyframes recovered", std::to_string(gaps_.recovered()) + " keyframes recovered after a loss in transport");
+  keyframes_requested_ = gaps_.requested();
+  keyframes_recovered_ = gaps_.recovered();
+  keyframes_lost_ = gaps_.lost();
+  if (stopping && gaps_.requested() + gaps_.lost() > 0)
+    note("keyframes lost in transport: " + std::to_string(gaps_.requested()) + " asked for again, " +
+         std::to_string(gaps_.recovered()) + " recovered, " + std::to_string(gaps_.lost()) + " lost");
+}
+
+// The store's state after an append or a retry, noted when it changes (cvo-receive).
+void Backendd::note_store_change() {
+  const auto health = store_->health();
+  if (health.failing && !store_failing_)
+    note("warning: " + describe(health) + ": accepted records are used and held in memory (at most " +
+         std::to_string(config_.backendd.unsaved_records_max) + "), and stored in order when the store works again");
+  else if (!health.failing && store_failing_)
+    note("store " + store_->file().string() + " works again: every held record is stored (" +
+         std::to_string(store_->records()) + " records)");
+  store_failing_ = health.failing;
+}
+
+// Held records are written as soon as the store works again: tried once a second, and at the
+// stop, where what is still unsaved is said.
+void Backendd::retry_store(bool final) {
+  const auto now = Clock::now();
+  if (!final && now - store_retried_ < 1s) return;
+  store_retried_ = now;
+  store_->retry();
+  note_store_change();
+  if (const auto health = store_->health(); final && health.degraded())
+    note("warning: stopping with the " + describe(health) + "; what is unsaved is lost on restart");
+}
+
+// Live input that outruns the back end is refused (counted; a gap the tracker is asked to fill),
+// so memory stays bounded; a log is read no faster than the back end works.
+bool Backendd::wait_for_queue_space() {
+  std::unique_lock lock(queue_mutex_);
+  const auto room = [&] { return queue_.size() < config_.backendd.queue_max; };
+  if (!is_log(config_.backendd.lcm_url)) return room();
+  while (!room() && !stop_) queue_space_.wait_for(lock, 100ms);
+  return room();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -288,6 +424,7 @@ void Backendd::work_loop() {
       if (!queue_.empty()) {
         queued = std::move(queue_.front());
         queue_.pop_front();
+        queue_space_.notify_one();
       } else if (receiver_done_) {
         break;
       }
@@ -361,7 +498,10 @@ void Backendd::publish_status(std::int8_t state) {
   s.session = 0;  // the back end is no tracker session
   s.utime = wall_utime();
   s.pid = static_cast<std::int32_t>(getpid());
-  s.state = state;
+  // A store that does not keep every record is the daemon's degraded state (the stop says itself).
+  const auto store = store_->health();
+  s.state = store.degraded() && state != cvo_lcm::status_t::STATE_STOPPING ? cvo_lcm::status_t::STATE_DEGRADED : state;
+  s.unsaved_records = static_cast<std::int64_t>(store.unsaved);
   const double elapsed = std::chrono::duration<double>(now - w.last_status).count();
   s.rate_hz = elapsed > 0 ? static_cast<double>(w.processed - w.processed_at_last_status) / elapsed : 0;
   {
@@ -370,13 +510,17 @@ void Backendd::publish_status(std::int8_t state) {
   }
   s.rss_bytes = resident_bytes();
   for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = bad_messages_[k];
+  s.queue_drops = queue_drops_;
+  s.keyframes_requested = keyframes_requested_;
+  s.keyframes_recovered = keyframes_recovered_;
+  s.keyframes_lost = keyframes_lost_;
   s.process = kProcess;
   {
     const std::lock_guard lock(detail_mutex_);
     s.detail = detail_;
   }
   w.lcm.publish("CVO_STATUS", &s);
-  systemd_.status(text(w.summary));
+  systemd_.status(store.degraded() ? "degraded: " + describe(store) + "; " + text(w.summary) : text(w.summary));
   w.processed_at_last_status = w.processed;
   w.last_status = now;
 }

@@ -5,7 +5,9 @@
 //   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded and checked -> the door (each
 //                 keyframe (session, id) and local graph once; a repeat with other content is
 //                 refused, message_door.hpp) -> appended to the keyframe store (durable before
-//                 anything else happens) -> work queue
+//                 anything else happens) -> work queue; what never came of a session (a gap in its
+//                 keyframe ids, a local graph or CVO_POSE naming an unknown keyframe) is asked for
+//                 again on CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
 //   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
 //                 keyframe-graph optimisation) -> CVO_MAP after each change; CVO_STATUS once a
 //                 period
@@ -29,10 +31,15 @@
 #include <vector>
 
 #include "cvo_lcm/status_t.hpp"
+#include "daemon/backendd/keyframe_gaps.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
 #include "daemon/common/systemd_notify.hpp"
 #include "libcvo/config/config.hpp"
+
+namespace lcm {
+class LCM;
+}
 
 namespace cvo::daemon::backendd {
 
@@ -63,6 +70,12 @@ class Backendd {
   void let_in_recovered(std::vector<StoredRecord> recovered);
   void receive_loop();
   void receive(RecordKind kind, const std::uint8_t* data, std::size_t size);
+  void saw_pose(const void* data, std::size_t size);
+  void ask_for_missing(::lcm::LCM& lcm, bool stopping);
+  static GapPolicy gap_policy(const config::Config& config);
+  bool wait_for_queue_space();
+  void note_store_change();
+  void retry_store(bool final);
   void work_loop();
   void process(const QueuedRecord& queued);
   void apply_keyframe(const QueuedRecord& queued);
@@ -79,14 +92,23 @@ class Backendd {
   SystemdNotifier systemd_;
   std::unique_ptr<KeyframeStore> store_;
   std::vector<StoredRecord> recovered_;
+  // cvo-receive only: whether the store was failing when last noted, and when held records were
+  // last retried.
+  bool store_failing_ = false;
+  std::chrono::steady_clock::time_point store_retried_{};
   MessageDoor door_;            // cvo-receive only (filled from the store before it starts)
+  KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
   std::unique_ptr<Work> work_;  // the mapper and what the daemon reports of it; cvo-backend only
 
   std::mutex queue_mutex_;
-  std::condition_variable queue_ready_;
+  std::condition_variable queue_ready_, queue_space_;
   std::deque<QueuedRecord> queue_;
   std::atomic<bool> stop_{false}, receiver_done_{false};
+  std::atomic<bool> input_ended_{false};  // a file:// input log was read to its end
+  std::atomic<std::int64_t> queue_drops_{0};
   std::atomic<std::int64_t> bad_messages_[cvo_lcm::status_t::NUM_BAD_KINDS]{};
+  // Keyframes lost in transport (gaps_'s counts, for CVO_STATUS): asked for, recovered, given up.
+  std::atomic<std::int64_t> keyframes_requested_{0}, keyframes_recovered_{0}, keyframes_lost_{0};
   std::atomic<std::int64_t> receive_heartbeat_ns_{0}, work_heartbeat_ns_{0};
 
   struct NoteLimit {

@@ -1,6 +1,8 @@
 #include "daemon/backendd/keyframe_store.hpp"
 
 #include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -8,14 +10,19 @@
 #include <array>
 #include <cerrno>
 #include <cstring>
+#include <ctime>
+#include <optional>
 
 #include "libcvo/io/input_error.hpp"
 
 namespace cvo::daemon::backendd {
 namespace {
 
-constexpr std::array<char, 8> kFileMagic{'C', 'V', 'O', 'K', 'F', 'S', '1', '\n'};
+namespace fs = std::filesystem;
+
+constexpr std::array<std::uint8_t, 8> kFileMagic{'C', 'V', 'O', 'K', 'F', 'S', '1', '\n'};
 constexpr std::uint32_t kRecordMagic = 0x4B465243;
+constexpr std::array<std::uint8_t, 4> kRecordMagicBytes{0x43, 0x52, 0x46, 0x4B};  // kRecordMagic, little-endian
 constexpr std::size_t kHeaderBytes = 16;
 constexpr std::uint32_t kMaxPayload = 256u << 20;  // far above any keyframe; bounds a corrupt length
 
@@ -32,27 +39,242 @@ std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size
   return crc32_of(payload, size, crc32_of(&kind, 1));
 }
 
-bool read_exactly(int fd, void* buffer, std::size_t size) {
-  auto* p = static_cast<std::uint8_t*>(buffer);
-  while (size > 0) {
-    const ssize_t n = ::read(fd, p, size);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
-    p += n;
-    size -= static_cast<std::size_t>(n);
-  }
-  return true;
+bool known_kind(std::uint8_t kind) {
+  return kind == static_cast<std::uint8_t>(RecordKind::kKeyframe) || kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph);
 }
 
-bool write_all(int fd, const std::uint8_t* p, std::size_t size) {
+std::vector<std::uint8_t> encode_record(RecordKind kind, const std::vector<std::uint8_t>& payload) {
+  std::vector<std::uint8_t> record(kHeaderBytes + payload.size());
+  put32(record.data(), kRecordMagic);
+  record[4] = static_cast<std::uint8_t>(kind);
+  put32(record.data() + 8, static_cast<std::uint32_t>(payload.size()));
+  put32(record.data() + 12, checksum(static_cast<std::uint8_t>(kind), payload.data(), payload.size()));
+  std::copy(payload.begin(), payload.end(), record.begin() + kHeaderBytes);
+  return record;
+}
+
+// 0, or the errno of the failure (after a partial write: of the call that failed).
+int write_all_at(int fd, const std::uint8_t* p, std::size_t size, off_t at) {
   while (size > 0) {
-    const ssize_t n = ::write(fd, p, size);
+    const ssize_t n = ::pwrite(fd, p, size, at);
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return false;
+    if (n < 0) return errno;
+    if (n == 0) return EIO;
     p += n;
+    at += n;
     size -= static_cast<std::size_t>(n);
   }
-  return true;
+  return 0;
+}
+
+// A new or renamed file's name survives a crash only once its folder is flushed too.
+void fsync_folder(const fs::path& file) {
+  const auto folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;  // nothing more can be done; the file's own data is durable
+  if (::fsync(fd) != 0) { /* as above */ }
+  ::close(fd);
+}
+
+std::string count(std::size_t n, const char* one, const char* many) { return std::to_string(n) + " " + (n == 1 ? one : many); }
+
+// ---------------------------------------------------------------------------------------------
+// Reading back
+
+// Whether a valid record starts at `at`: why not ("" when it does), its size, and whether it looks
+// like a record the end of the file cut short (a torn write) rather than damage.
+struct Check {
+  std::string why;
+  std::size_t total = 0;
+  bool cut_short = false;
+};
+
+Check check_record(const std::uint8_t* data, std::size_t size, std::size_t at) {
+  const std::uint8_t* h = data + at;
+  const std::size_t left = size - at, have = std::min(left, kHeaderBytes);
+  // Only the header bytes the file still has are checked before calling a cut a torn write.
+  for (std::size_t i = 0; i < std::min<std::size_t>(have, 4); ++i)
+    if (h[i] != kRecordMagicBytes[i]) return {"bad record magic"};
+  if (have > 4 && !known_kind(h[4])) return {"unknown record kind " + std::to_string(h[4])};
+  for (std::size_t i = 5; i < std::min<std::size_t>(have, 8); ++i)
+    if (h[i] != 0) return {"bad record header"};
+  if (have < kHeaderBytes) return {"record header cut short", 0, true};
+  const auto bytes = get32(h + 8);
+  if (bytes > kMaxPayload) return {"impossible record length " + std::to_string(bytes)};
+  if (bytes > left - kHeaderBytes)
+    return {"record of " + std::to_string(bytes) + " bytes runs past the end of the file", 0, true};
+  if (checksum(h[4], h + kHeaderBytes, bytes) != get32(h + 12)) return {"checksum mismatch"};
+  return {{}, kHeaderBytes + bytes, false};
+}
+
+// Where the next valid record starts after `from` (`size` when none does): the record magic with
+// a header, a length and a checksum that hold. Magic bytes inside a payload fail the checksum.
+std::size_t resync(const std::uint8_t* data, std::size_t size, std::size_t from) {
+  for (std::size_t at = from; at < size; ++at) {
+    at = static_cast<std::size_t>(
+        std::search(data + at, data + size, kRecordMagicBytes.begin(), kRecordMagicBytes.end()) - data);
+    if (at < size && check_record(data, size, at).why.empty()) return at;
+  }
+  return size;
+}
+
+struct Stretch {  // bytes skipped
+  std::size_t at = 0, bytes = 0;
+  std::string why;  // of its first byte
+};
+
+struct Scan {
+  std::vector<Stretch> damaged;  // in file order
+  std::optional<Stretch> torn;   // a last record cut short by the end of the file
+};
+
+// Every intact record into `recovered`, in order, and the stretches skipped between them.
+Scan scan(const std::uint8_t* data, std::size_t size, std::vector<StoredRecord>& recovered) {
+  Scan s;
+  std::size_t at = kFileMagic.size();
+  while (at < size) {
+    const auto check = check_record(data, size, at);
+    if (check.why.empty()) {
+      const std::uint8_t* payload = data + at + kHeaderBytes;
+      recovered.push_back({static_cast<RecordKind>(data[at + 4]), {payload, data + at + check.total}});
+      at += check.total;
+      continue;
+    }
+    const auto next = resync(data, size, at + 1);
+    Stretch stretch{at, next - at, check.why};
+    if (next == size && check.cut_short) s.torn = std::move(stretch);
+    else s.damaged.push_back(std::move(stretch));
+    at = next;
+  }
+  return s;
+}
+
+struct Range {
+  std::size_t at = 0, bytes = 0;
+};
+
+// The file's bytes outside every skipped stretch (after its magic): its intact records, in order.
+std::vector<Range> intact_ranges(const Scan& s, std::size_t size) {
+  std::vector<Range> out;
+  std::size_t from = kFileMagic.size();
+  const auto add = [&](std::size_t to) {
+    if (to > from) out.push_back({from, to - from});
+  };
+  for (const auto& d : s.damaged) {
+    add(d.at);
+    from = d.at + d.bytes;
+  }
+  add(s.torn ? s.torn->at : size);
+  return out;
+}
+
+// Built with append(): GCC 12 warns falsely (-Wrestrict) on chains of operator+.
+std::string damage_report(const fs::path& file, const Scan& s, std::size_t kept) {
+  std::string out = file.string();
+  out.append(":");
+  if (!s.damaged.empty()) {
+    std::size_t bytes = 0;
+    for (const auto& d : s.damaged) bytes += d.bytes;
+    out.append(" ").append(count(s.damaged.size(), "damaged stretch", "damaged stretches"));
+    out.append(" skipped (").append(count(bytes, "byte", "bytes"));
+    out.append("; the first at byte ").append(std::to_string(s.damaged.front().at));
+    out.append(": ").append(s.damaged.front().why).append(");");
+  }
+  if (s.torn) {
+    out.append(" the last record was cut short (").append(count(s.torn->bytes, "byte", "bytes"));
+    out.append(" at byte ").append(std::to_string(s.torn->at));
+    out.append(", as a crash during a write leaves it) and is cut off;");
+  }
+  return out.append(" ").append(count(kept, "intact record", "intact records")).append(" kept");
+}
+
+// The file, mapped read-only while it is read back (no copy of a large store in memory).
+class Mapping {
+ public:
+  Mapping(int fd, std::size_t size, const fs::path& file) : size_(size) {
+    if (size == 0) return;
+    void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (p == MAP_FAILED) throw io::InputError(file, std::string("cannot read keyframe store: ") + std::strerror(errno));
+    data_ = static_cast<const std::uint8_t*>(p);
+  }
+  ~Mapping() {
+    if (data_ != nullptr) ::munmap(const_cast<std::uint8_t*>(data_), size_);
+  }
+  Mapping(const Mapping&) = delete;
+  Mapping& operator=(const Mapping&) = delete;
+  [[nodiscard]] const std::uint8_t* data() const { return data_; }
+
+ private:
+  const std::uint8_t* data_ = nullptr;
+  std::size_t size_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Replacing a damaged store
+
+std::string utc_stamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y%m%dT%H%M%SZ", &utc);
+  return text;
+}
+
+// The damaged original under a new name, FILE.damaged-<UTC time>[-N]: a hard link, so that FILE
+// still holds it until the clean copy replaces it. Empty with `error` when it cannot be made.
+fs::path keep_aside(const fs::path& file, std::string& error) {
+  const std::string base = file.string() + ".damaged-" + utc_stamp();
+  for (int n = 1; n < 100; ++n) {
+    const std::string name = n == 1 ? base : base + "-" + std::to_string(n);
+    if (::link(file.c_str(), name.c_str()) == 0) return name;
+    if (errno != EEXIST) {
+      error = "cannot keep the damaged original as " + name + ": " + std::strerror(errno);
+      return {};
+    }
+  }
+  error = "too many damaged copies named " + base;
+  return {};
+}
+
+struct CleanCopy {
+  int fd = -1;  // the clean store, now at FILE; -1 with `error` when there is none
+  off_t size = 0;
+  fs::path aside;
+  std::string error;
+};
+
+// Writes the intact ranges of `data` to FILE.recovering, makes it durable, keeps the original
+// aside and renames the copy over FILE. A crash at any point leaves FILE whole (the original or
+// the complete copy); on a failure nothing but FILE is left.
+CleanCopy replace_with_clean_copy(const fs::path& file, const std::uint8_t* data, const std::vector<Range>& intact,
+                                  mode_t mode) {
+  const fs::path temp = file.string() + ".recovering";
+  CleanCopy copy;
+  copy.fd = ::open(temp.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, mode & 07777);
+  if (copy.fd < 0) return {-1, 0, {}, "cannot create " + temp.string() + ": " + std::strerror(errno)};
+  int error = write_all_at(copy.fd, kFileMagic.data(), kFileMagic.size(), 0);
+  copy.size = static_cast<off_t>(kFileMagic.size());
+  for (const auto& r : intact) {
+    if (error == 0) error = write_all_at(copy.fd, data + r.at, r.bytes, copy.size);
+    copy.size += static_cast<off_t>(r.bytes);
+  }
+  if (error == 0 && ::fsync(copy.fd) != 0) error = errno;
+  if (error != 0) copy.error = "cannot write " + temp.string() + ": " + std::strerror(error);
+  else copy.aside = keep_aside(file, copy.error);
+  if (!copy.aside.empty() && ::rename(temp.c_str(), file.c_str()) != 0) {
+    const int rename_error = errno;
+    copy.error = "cannot rename " + temp.string() + ": " + std::strerror(rename_error);
+    ::unlink(copy.aside.c_str());
+    copy.aside.clear();
+  }
+  if (copy.aside.empty()) {
+    ::close(copy.fd);
+    ::unlink(temp.c_str());
+    return {-1, 0, {}, copy.error};
+  }
+  fsync_folder(file);
+  return copy;
 }
 
 }  // namespace
@@ -68,77 +290,146 @@ std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t
   return static_cast<std::uint32_t>(c);
 }
 
-KeyframeStore::KeyframeStore(const std::filesystem::path& file, std::vector<StoredRecord>& recovered,
-                             std::string& warning)
-    : file_(file) {
+std::string describe(const StoreHealth& health) {
+  std::string out;
+  if (health.failing) {
+    const char* what = health.error == ENOSPC || health.error == EDQUOT ? "store full"
+                       : health.error == EFBIG                          ? "store at the file size limit"
+                                                                        : "store failing";
+    out = std::string(what) + " (" + count(health.unsaved, "record", "records") + " unsaved): " + std::strerror(health.error);
+  }
+  if (health.not_durable > 0)
+    out += (out.empty() ? "store: " : "; ") + count(health.not_durable, "record", "records") +
+           " not kept (the unsaved records were at their bound): lost on restart";
+  return out.empty() ? "store writable" : out;
+}
+
+KeyframeStore::KeyframeStore(const fs::path& file, std::vector<StoredRecord>& recovered, std::string& warning,
+                             std::size_t unsaved_records_max)
+    : file_(file), held_max_(unsaved_records_max) {
   std::error_code ec;
-  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path(), ec);
+  if (file.has_parent_path()) fs::create_directories(file.parent_path(), ec);
   fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0640);
   if (fd_ < 0) throw io::InputError(file, std::string("cannot open keyframe store: ") + std::strerror(errno));
-
-  const off_t size = ::lseek(fd_, 0, SEEK_END);
-  ::lseek(fd_, 0, SEEK_SET);
-  if (size == 0) {
-    if (!write_all(fd_, reinterpret_cast<const std::uint8_t*>(kFileMagic.data()), kFileMagic.size()) || ::fdatasync(fd_) != 0)
-      throw io::InputError(file, std::string("cannot write keyframe store: ") + std::strerror(errno));
-    return;
-  }
-  std::array<char, 8> magic{};
-  if (!read_exactly(fd_, magic.data(), magic.size()) || magic != kFileMagic) {
+  try {
+    recover(recovered, warning);
+  } catch (...) {
     ::close(fd_);
-    fd_ = -1;
-    throw io::InputError(file, "not a cvo-backendd keyframe store (wrong magic); move it away to start afresh");
+    throw;
   }
-
-  off_t good_end = static_cast<off_t>(kFileMagic.size());
-  while (good_end < size) {
-    std::array<std::uint8_t, kHeaderBytes> header{};
-    const auto why = [&]() -> std::string {
-      if (!read_exactly(fd_, header.data(), header.size())) return "record header cut short";
-      if (get32(header.data()) != kRecordMagic) return "bad record magic";
-      const auto kind = header[4];
-      if (kind != static_cast<std::uint8_t>(RecordKind::kKeyframe) && kind != static_cast<std::uint8_t>(RecordKind::kLocalGraph))
-        return "unknown record kind " + std::to_string(kind);
-      const auto bytes = get32(header.data() + 8);
-      if (bytes > kMaxPayload || static_cast<off_t>(bytes) > size - good_end - static_cast<off_t>(kHeaderBytes))
-        return "record of " + std::to_string(bytes) + " bytes runs past the end of the file";
-      StoredRecord record{static_cast<RecordKind>(kind), std::vector<std::uint8_t>(bytes)};
-      if (!read_exactly(fd_, record.payload.data(), bytes)) return "record cut short";
-      if (checksum(kind, record.payload.data(), bytes) != get32(header.data() + 12)) return "checksum mismatch";
-      recovered.push_back(std::move(record));
-      return {};
-    }();
-    if (!why.empty()) {
-      warning = file.string() + ": dropped " + std::to_string(size - good_end) + " bytes after record " +
-                std::to_string(records_) + " (" + why + ")";
-      if (::ftruncate(fd_, good_end) != 0 || ::fdatasync(fd_) != 0)
-        throw io::InputError(file, std::string("cannot truncate the corrupt tail: ") + std::strerror(errno));
-      break;
-    }
-    good_end = ::lseek(fd_, 0, SEEK_CUR);
-    ++records_;
-  }
-  ::lseek(fd_, good_end, SEEK_SET);
 }
 
 KeyframeStore::~KeyframeStore() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {
-  std::vector<std::uint8_t> record(kHeaderBytes + payload.size());
-  put32(record.data(), kRecordMagic);
-  record[4] = static_cast<std::uint8_t>(kind);
-  put32(record.data() + 8, static_cast<std::uint32_t>(payload.size()));
-  put32(record.data() + 12, checksum(static_cast<std::uint8_t>(kind), payload.data(), payload.size()));
-  std::copy(payload.begin(), payload.end(), record.begin() + kHeaderBytes);
-  const off_t start = ::lseek(fd_, 0, SEEK_END);
-  if (!write_all(fd_, record.data(), record.size()) || ::fdatasync(fd_) != 0) {
-    const std::string error = std::strerror(errno);
-    if (::ftruncate(fd_, start) != 0) { /* the next open() drops the partial record */ }
-    throw io::InputError(file_, "cannot append a record: " + error);
+// A new store (or one whose creation was cut short inside the magic): the magic is written, or
+// held like a record when even that cannot be written: the daemon starts degraded rather than not
+// at all.
+void KeyframeStore::create() {
+  end_ = 0;
+  if (::ftruncate(fd_, 0) != 0) { /* write_held() writes over what is there */ }
+  write_held();
+}
+
+void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& warning) {
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) throw io::InputError(file_, std::string("cannot read keyframe store: ") + std::strerror(errno));
+  const auto size = static_cast<std::size_t>(st.st_size);
+  const Mapping map(fd_, size, file_);
+  const std::uint8_t* data = map.data();
+  if (!std::equal(data, data + std::min(size, kFileMagic.size()), kFileMagic.begin()))
+    throw io::InputError(file_, "not a cvo-backendd keyframe store (wrong magic); move it away to start afresh");
+  if (size < kFileMagic.size()) return create();
+
+  const auto first = recovered.size();
+  const Scan s = scan(data, size, recovered);
+  records_ = recovered.size() - first;
+  end_ = static_cast<off_t>(size);
+  if (s.damaged.empty() && !s.torn) return;
+  warning = damage_report(file_, s, records_);
+  if (!s.damaged.empty()) {
+    const auto copy = replace_with_clean_copy(file_, data, intact_ranges(s, size), st.st_mode);
+    if (copy.fd >= 0) {
+      ::close(fd_);
+      fd_ = copy.fd;
+      end_ = copy.size;
+      warning += "; the damaged original is kept as " + copy.aside.string() + ", and " + file_.string() +
+                 " now holds the intact records";
+      return;
+    }
+    warning += "; no clean copy could be written (" + copy.error + "): the damaged stretches stay in " +
+               file_.string() + " and are skipped at every start";
   }
-  ++records_;
+  if (s.torn) {
+    // Shrinking needs no space. Should it fail, the next record is written over the cut one.
+    end_ = static_cast<off_t>(s.torn->at);
+    if (::ftruncate(fd_, end_) != 0 || ::fdatasync(fd_) != 0)
+      warning += "; cutting off the cut record failed (" + std::string(std::strerror(errno)) + ")";
+  }
+}
+
+// The file's magic if it is not on disk yet, then the held records, oldest first. Under mutex_
+// (or in the constructor).
+bool KeyframeStore::write_held() {
+  const auto failed = [&](int error) {
+    health_.failing = true;
+    health_.error = error;
+    return false;
+  };
+  if (end_ == 0) {
+    if (const int error = write_at_end(kFileMagic.data(), kFileMagic.size()); error != 0) return failed(error);
+    fsync_folder(file_);
+  }
+  while (!held_.empty()) {
+    if (const int error = write_at_end(held_.front().data(), held_.front().size()); error != 0) return failed(error);
+    held_.pop_front();
+    ++records_;
+  }
+  health_.failing = false;
+  health_.error = 0;
+  return true;
+}
+
+// Writes at the end of the last complete record and flushes: 0, or the errno. A failure cuts the
+// file back there, so that no torn record stays in front of the next one.
+int KeyframeStore::write_at_end(const std::uint8_t* data, std::size_t size) {
+  int error = write_all_at(fd_, data, size, end_);
+  if (error == 0 && ::fdatasync(fd_) != 0) error = errno;
+  if (error == 0) {
+    end_ += static_cast<off_t>(size);
+    return 0;
+  }
+  if (::ftruncate(fd_, end_) != 0) { /* the next write at end_ goes over what is left */ }
+  return error;
+}
+
+Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {
+  auto record = encode_record(kind, payload);
+  const std::lock_guard lock(mutex_);
+  held_.push_back(std::move(record));  // behind every record held before it: the order is kept
+  if (write_held()) return Appended::kStored;
+  if (held_.size() <= held_max_) return Appended::kHeld;
+  held_.pop_back();
+  ++health_.not_durable;
+  return Appended::kNotDurable;
+}
+
+bool KeyframeStore::retry() {
+  const std::lock_guard lock(mutex_);
+  return !health_.failing || write_held();
+}
+
+StoreHealth KeyframeStore::health() const {
+  const std::lock_guard lock(mutex_);
+  StoreHealth h = health_;
+  h.unsaved = held_.size();
+  return h;
+}
+
+std::uint64_t KeyframeStore::records() const {
+  const std::lock_guard lock(mutex_);
+  return records_;
 }
 
 }  // namespace cvo::daemon::backendd

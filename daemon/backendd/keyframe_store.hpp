@@ -6,14 +6,30 @@
 // File: the 8-byte magic "CVOKFS1\n", then records
 //     u32 magic 0x4B465243 ("KFRC")  u8 kind  u8[3] zero  u32 payload bytes  u32 CRC-32 (zlib) of
 //     kind + payload bytes, then the payload: the message's LCM encoding (fingerprint included)
-// all little-endian. Records are only appended and flushed to disk (fdatasync) before append()
-// returns, so a crash can only leave a partial last record. open() reads every record back; at
-// the first one that is cut short or fails its checksum it stops, says so, and truncates the file
-// there: a corrupt tail is dropped with a message, never loaded, and new records follow the last
-// good one.
+// all little-endian. Records are only appended, each written at the end of the last complete one
+// and flushed to disk (fdatasync) before it counts as stored.
+//
+// Reading back keeps every intact record. A damaged stretch (bad magic, kind, length or checksum)
+// is skipped and reading resynchronises on the next valid record (magic, plausible header, length
+// within the file, checksum). Then the damaged original is kept under a new name
+// (FILE.damaged-<UTC time>, a hard link) and a clean store of every intact record is written in
+// its place (temporary file, fsync, rename: FILE is at every moment the original or the complete
+// copy). Where no clean copy can be written (no space), the original stays as it is and is read
+// the same way at every start. A last record cut short by the end of the file (what a crash
+// during a write leaves; it holds nothing intact) is cut off in place: copying a whole store
+// after every such crash would cost its size each time.
+//
+// A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
+// write is cut back so no torn record stays in front of the next one, and the record is held in
+// memory, up to a bound, and written in order, before any newer one, once writing works again
+// (on the next append or retry()). Until then the store is degraded (health()).
+#include <sys/types.h>
+
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -30,27 +46,66 @@ struct StoredRecord {
   std::vector<std::uint8_t> payload;
 };
 
+/// What became of an appended record.
+enum class Appended {
+  kStored,     // on disk
+  kHeld,       // not written (the store fails); held in memory, written in order when it works again
+  kNotDurable  // not written and the held records are at their bound: used this run, lost on restart
+};
+
+/// Whether the store keeps what it is given: for CVO_STATUS, systemd and the log.
+struct StoreHealth {
+  bool failing = false;           // the last write failed; new records are held
+  int error = 0;                  // its errno (ENOSPC, EFBIG, EIO, ...)
+  std::uint64_t unsaved = 0;      // records held in memory, not yet on disk
+  std::uint64_t not_durable = 0;  // records of this run that could not be held: lost on restart
+  /// Degraded while failing, and for the rest of the run once a record could not be kept.
+  [[nodiscard]] bool degraded() const { return failing || not_durable > 0; }
+};
+
+/// "store full (12 records unsaved): No space left on device", "store at the file size limit
+/// (...)", "store failing (...)", with what was lost ("3 records not kept: lost on restart");
+/// "store writable" when healthy.
+std::string describe(const StoreHealth& health);
+
 class KeyframeStore {
  public:
   /// Opens (creating it and its folder if needed) the store at `file` and reads it back. Throws
-  /// io::InputError when the file cannot be created or read, or is not a keyframe store (wrong
-  /// magic). `recovered` receives every intact record in order; `warning` says what was dropped
-  /// ("" when nothing was).
-  KeyframeStore(const std::filesystem::path& file, std::vector<StoredRecord>& recovered, std::string& warning);
+  /// io::InputError when the file cannot be opened or read, or is not a keyframe store (wrong
+  /// magic). `recovered` receives every intact record in order; `warning` says what was damaged,
+  /// what was kept and where the damaged original went ("" when nothing was damaged). At most
+  /// `unsaved_records_max` records are held in memory while writing fails (0: none).
+  KeyframeStore(const std::filesystem::path& file, std::vector<StoredRecord>& recovered, std::string& warning,
+                std::size_t unsaved_records_max = 0);
   ~KeyframeStore();
   KeyframeStore(const KeyframeStore&) = delete;
   KeyframeStore& operator=(const KeyframeStore&) = delete;
 
-  /// Appends one record durably; throws io::InputError on a write error (disk full, ...).
-  void append(RecordKind kind, const std::vector<std::uint8_t>& payload);
+  /// Writes the held records, then this one, durably; never throws for a write error (only
+  /// std::bad_alloc): the record is held, or counted as not durable (see Appended).
+  Appended append(RecordKind kind, const std::vector<std::uint8_t>& payload);
+  /// Writes the held records, oldest first, as far as the store allows; true when none is left.
+  bool retry();
+  [[nodiscard]] StoreHealth health() const;
 
   [[nodiscard]] const std::filesystem::path& file() const { return file_; }
-  [[nodiscard]] std::uint64_t records() const { return records_; }
+  /// Records on disk.
+  [[nodiscard]] std::uint64_t records() const;
 
  private:
+  void create();
+  void recover(std::vector<StoredRecord>& recovered, std::string& warning);
+  int write_at_end(const std::uint8_t* data, std::size_t size);
+  bool write_held();
+
   std::filesystem::path file_;
+  std::size_t held_max_;
   int fd_ = -1;
-  std::uint64_t records_ = 0;
+  mutable std::mutex mutex_;                     // cvo-receive appends; cvo-backend reads health()
+  off_t end_ = 0;                                // end of the last complete record (0: magic not written yet)
+  std::uint64_t records_ = 0;                    // on disk
+  std::deque<std::vector<std::uint8_t>> held_;  // encoded records not yet written, oldest first
+  StoreHealth health_;
 };
 
 }  // namespace cvo::daemon::backendd

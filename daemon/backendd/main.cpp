@@ -3,8 +3,10 @@
 //
 // A contract that scripts and the systemd unit rely on (extras may be added, nothing changed):
 //   cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]...
-//   exit status 0 after SIGTERM/SIGINT; 1 when the configuration, the store or the vocabulary is
+//                [--publish-url URL] [--exit-on-eof]
+//   exit status 0 after SIGTERM/SIGINT (or the end of a file:// input with --exit-on-eof); 1 when the configuration, the store or the vocabulary is
 //   unusable (the message says which); 2 on a usage error.
+#include <csignal>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -22,6 +24,7 @@ using namespace cvo;
 
 constexpr std::string_view kUsage =
     R"(usage: cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]... [--print-config]
+                    [--publish-url URL] [--exit-on-eof]
 
 Receives CVO_KEYFRAME and CVO_LOCAL_GRAPH from cvo-trackerd sessions, stores them durably (a
 restart resumes every session received; a keyframe repeated with other content is refused),
@@ -36,6 +39,9 @@ options:
   --config FILE      YAML configuration (the backendd section; every key: libcvo/config/default.yaml)
   --lcm-url URL      LCM provider (backendd.lcm_url)
   --store FILE       the keyframe store (backendd.store)
+  --publish-url URL  LCM provider CVO_MAP and CVO_STATUS go to (backendd.publish_url; default: --lcm-url)
+  --exit-on-eof      with a file:// --lcm-url (a recording): at its end, the final optimisation, the
+                     final map, exit 0 (backendd.exit_on_eof)
   --set key=value    override one configuration key (repeatable)
   --print-config     print the effective configuration as YAML and exit
   --help             this text
@@ -43,7 +49,8 @@ options:
 
 struct Arguments {
   bool help = false, print_config = false;
-  std::optional<std::string> config_file, lcm_url, store;
+  std::optional<std::string> config_file, lcm_url, store, publish_url;
+  bool exit_on_eof = false;
   std::vector<std::string> sets;
 };
 
@@ -58,6 +65,8 @@ Arguments parse_arguments(int argc, char** argv) {
     if (a == "--help" || a == "-h") args.help = true;
     else if (a == "--config") args.config_file = value();
     else if (a == "--lcm-url") args.lcm_url = value();
+    else if (a == "--publish-url") args.publish_url = value();
+    else if (a == "--exit-on-eof") args.exit_on_eof = true;
     else if (a == "--store") args.store = value();
     else if (a == "--set") args.sets.push_back(value());
     else if (a == "--print-config") args.print_config = true;
@@ -71,11 +80,16 @@ int run(const Arguments& args) {
   for (const auto& s : args.sets) config::apply_override(config, s);
   if (args.lcm_url) config::apply_override(config, "backendd.lcm_url=" + *args.lcm_url);
   if (args.store) config::apply_override(config, "backendd.store=" + *args.store);
+  if (args.publish_url) config::apply_override(config, "backendd.publish_url=" + *args.publish_url);
+  if (args.exit_on_eof) config::apply_override(config, "backendd.exit_on_eof=true");
   if (args.print_config) {
     std::cout << config::dump_config(config);
     return 0;
   }
   daemon::block_stop_signals();
+  // A file-size limit (ulimit -f, LimitFSIZE=) must fail a store write with EFBIG, which the store
+  // survives (it holds the record), rather than kill the daemon with SIGXFSZ.
+  std::signal(SIGXFSZ, SIG_IGN);
   daemon::backendd::Backendd backendd(std::move(config));
   return backendd.run();
 }

@@ -30,14 +30,19 @@ std::optional<MessageKey> identify(RecordKind kind, const std::uint8_t* data, st
   return key;
 }
 
-bool usable(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error) {
+bool usable(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error, std::size_t* bad) {
   const auto length = static_cast<int>(size);
+  auto failure = lcm::ContentFailure::kContent;
+  bool ok = false;
   if (kind == RecordKind::kKeyframe) {
     const auto m = lcm::decode<cvo_lcm::keyframe_t>(data, length, error);
-    return m && lcm::from_message(*m, error).has_value();
+    ok = m && lcm::from_message(*m, error, &failure).has_value();
+  } else {
+    const auto m = lcm::decode<cvo_lcm::local_graph_t>(data, length, error);
+    ok = m && lcm::from_message(*m, error, &failure).has_value();
   }
-  const auto m = lcm::decode<cvo_lcm::local_graph_t>(data, length, error);
-  return m && lcm::from_message(*m, error).has_value();
+  if (!ok && bad != nullptr) *bad = static_cast<std::size_t>(failure);
+  return ok;
 }
 
 Admission MessageDoor::check(const MessageKey& key, std::uint32_t crc) const {

@@ -31,14 +31,18 @@ std::optional<MessageKey> identify(RecordKind kind, const std::uint8_t* data, st
                                    std::size_t* bad);
 
 /// Whether the payload's content is usable (images decode, poses and points are finite, the graph
-/// is well formed): what the back end will need of it. false with *error.
-bool usable(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error);
+/// is well formed, its information matrices positive definite): what the back end will need of
+/// it. false with *error and *bad, the status_t::BAD_* index (BAD_CONTENT, BAD_NOT_FINITE,
+/// BAD_INFORMATION).
+bool usable(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error, std::size_t* bad);
 
 enum class Admission { kNew, kRepeat, kConflict };
 
 class MessageDoor {
  public:
   [[nodiscard]] Admission check(const MessageKey& key, std::uint32_t crc) const;
+  /// Whether a message of this name was let in.
+  [[nodiscard]] bool knows(const MessageKey& key) const { return crc_.contains(key); }
   /// Remembers a message that was let in (stored); a name already known keeps its first CRC.
   void admit(const MessageKey& key, std::uint32_t crc) { crc_.try_emplace(key, crc); }
   [[nodiscard]] std::size_t size() const { return crc_.size(); }

@@ -23,7 +23,10 @@ int Outbox::acquire(std::vector<char>& used, bool wait) {
   const auto free_slot = [&] { return std::find(used.begin(), used.end(), 0); };
   if (wait) room_.wait(lock, [&] { return free_slot() != used.end(); });
   const auto slot = free_slot();
-  if (slot == used.end()) return -1;
+  if (slot == used.end()) {
+    ++lost_;
+    return -1;
+  }
   *slot = 1;
   return static_cast<int>(slot - used.begin());
 }
@@ -36,6 +39,7 @@ bool Outbox::push(const Event& event, bool wait) {
   if (wait) room_.wait(lock, [&] { return closed_ || count_ < events_.size(); });
   if (closed_ || count_ == events_.size()) {
     ++dropped_;
+    lost_ += (event.keyframe_slot >= 0 ? 1 : 0) + (event.graph_slot >= 0 ? 1 : 0);
     if (event.keyframe_slot >= 0) keyframe_used_[static_cast<std::size_t>(event.keyframe_slot)] = 0;
     if (event.graph_slot >= 0) graph_used_[static_cast<std::size_t>(event.graph_slot)] = 0;
     return false;
@@ -84,6 +88,11 @@ bool Outbox::finished() const {
 std::int64_t Outbox::dropped() const {
   const std::lock_guard lock(mutex_);
   return dropped_;
+}
+
+std::int64_t Outbox::lost() const {
+  const std::lock_guard lock(mutex_);
+  return lost_;
 }
 
 }  // namespace cvo::daemon::trackerd

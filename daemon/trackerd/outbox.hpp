@@ -5,7 +5,8 @@
 // same-sized image and vector assignment within capacity do not allocate).
 //
 // The tracking thread never waits on the publisher unless asked to (deterministic replay): when
-// the outbox is full the event is dropped and counted, the frame's pose is still tracked.
+// the outbox is full the event is dropped and counted, the frame's pose is still tracked; a
+// keyframe or local graph that finds no slot, or whose event is dropped, is counted lost.
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
@@ -62,9 +63,10 @@ class Outbox {
   Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t cloud_capacity,
          std::size_t graph_capacity);
 
-  // Tracking thread: reserve pool slots (-1 when the pool is exhausted, unless `wait` is set:
-  // then it waits for the publisher to release one), fill them, then push the event. push()
-  // returns false (counted in dropped()) when full, unless `wait` is set: then it waits for room.
+  // Tracking thread: reserve pool slots (-1 when the pool is exhausted, counted in lost(), unless
+  // `wait` is set: then it waits for the publisher to release one), fill them, then push the
+  // event. push() returns false (counted in dropped(), its slots in lost()) when full, unless
+  // `wait` is set: then it waits for room.
   int acquire_keyframe_slot(bool wait);
   int acquire_graph_slot(bool wait);
   [[nodiscard]] KeyframeSlot& keyframe(int slot) { return keyframes_[static_cast<std::size_t>(slot)]; }
@@ -78,6 +80,7 @@ class Outbox {
 
   [[nodiscard]] bool finished() const;  // closed and empty
   [[nodiscard]] std::int64_t dropped() const;
+  [[nodiscard]] std::int64_t lost() const;  // keyframes and local graphs that could not go out
 
  private:
   int acquire(std::vector<char>& used, bool wait);
@@ -88,7 +91,7 @@ class Outbox {
   std::vector<LocalGraphSlot> graphs_;
   std::vector<char> keyframe_used_, graph_used_;
   bool closed_ = false;
-  std::int64_t dropped_ = 0;
+  std::int64_t dropped_ = 0, lost_ = 0;
   mutable std::mutex mutex_;
   std::condition_variable ready_, room_;
 };

@@ -10,10 +10,12 @@
 #include <cmath>
 #include <iostream>
 #include <optional>
+#include <span>
 #include <utility>
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/map_t.hpp"
@@ -22,6 +24,7 @@
 #include "daemon/common/latency_window.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
+#include "daemon/trackerd/keyframe_history.hpp"
 #include "drivers/reconnecting_source.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -133,21 +136,51 @@ cvo_lcm::pose_t pose_message(const Event& event) {
   return m;
 }
 
+// Room for the largest CVO_KEYFRAME a pipeline can publish: every point, the images raw plus an
+// eighth for the encoders' own overhead (a compressed image larger than that is pathological, and
+// not kept); and for a full local graph (a node and two edges per frame).
+std::size_t max_keyframe_bytes(int width, int height, const odometry::KeyframeOdometryParameters& parameters) {
+  const auto pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  const std::size_t images = pixels * (3 + 2);  // BGR8 and 16-bit depth
+  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.max_points * (3 + 5) * sizeof(float) +
+         images + images / 8;
+}
+
+std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& parameters) {
+  cvo_lcm::local_graph_t graph{};
+  const auto empty = static_cast<std::size_t>(graph.getEncodedSize());
+  graph.num_nodes = 1;
+  graph.nodes.resize(1);
+  const auto node = static_cast<std::size_t>(graph.getEncodedSize()) - empty;
+  graph.num_edges = 1;
+  graph.edges.resize(1);
+  const auto edge = static_cast<std::size_t>(graph.getEncodedSize()) - empty - node;
+  return empty + parameters.local_graph_capacity * (node + 2 * edge);
+}
+
+std::string id_list(const std::vector<std::int64_t>& ids) {
+  std::string out;
+  for (const auto id : ids) out += (out.empty() ? "" : ", ") + std::to_string(id);
+  return out;
+}
+
 }  // namespace
 
 // Everything sized by the first frame. Owned by Trackerd; the tracking thread uses the tracker
-// and the keyframe output, both threads the outbox (thread-safe).
+// and the keyframe output, both threads the outbox (thread-safe), the publisher the history.
 struct Trackerd::Pipeline {
-  Pipeline(int w, int h, const odometry::KeyframeOdometryParameters& parameters)
+  Pipeline(int w, int h, const odometry::KeyframeOdometryParameters& parameters, std::size_t history_keyframes)
       : width(w),
         height(h),
         tracker(w, h, parameters),
         output(w, h),
-        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.max_points, parameters.local_graph_capacity) {}
+        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.max_points, parameters.local_graph_capacity),
+        history(history_keyframes, max_keyframe_bytes(w, h, parameters), max_local_graph_bytes(parameters)) {}
   int width, height;
   odometry::KeyframeOdometry tracker;
   odometry::KeyframeOutput output;  // which frame each keyframe is, and its id in the session
   Outbox outbox;
+  KeyframeHistory history;  // what was published, for CVO_KEYFRAME_REQUEST
   std::int64_t session_frames = 0;  // frames tracked in the running session
   std::uint64_t connection = 0;     // the source connection they came from (RingSlot::connection)
 };
@@ -331,7 +364,7 @@ void Trackerd::track_loop() {
     Event event;
     track_frame(*p, *slot, event);
     ring_->end_read();
-    p->outbox.push(event, t.deterministic);
+    p->outbox.push(event, t.deterministic);  // when full, dropped: counted, with what it carried
     ++p->session_frames;
     ++counters_.frames_tracked;
     if (++frames == static_cast<std::int64_t>(t.warmup_frames)) allocations_at_warmup = thread_allocations();
@@ -349,7 +382,8 @@ void Trackerd::track_loop() {
 Trackerd::Pipeline* Trackerd::start_pipeline(const core::RgbdFrame& first) {
   const auto& k = first.intrinsics;
   if (!k.validate().empty() || first.bgr.cols != k.width || first.bgr.rows != k.height) return nullptr;
-  pipeline_ = std::make_unique<Pipeline>(k.width, k.height, odometry::keyframe_odometry_parameters(config_));
+  pipeline_ = std::make_unique<Pipeline>(k.width, k.height, odometry::keyframe_odometry_parameters(config_),
+                                         config_.trackerd.keyframe_history);
   pipeline_ready_ = true;
   return pipeline_.get();
 }
@@ -381,6 +415,7 @@ void Trackerd::track_frame(Pipeline& p, const RingSlot& slot, Event& event) {
   if (const auto covariance = keyframe_covariance(p.tracker, frame.index)) e.covariance = *covariance;
   if (!result.tracked()) ++counters_.failed_frames;
 
+  // A graph or keyframe that finds no slot (the publisher is behind) is counted lost by the outbox.
   if (step.closed_graph != nullptr && (event.graph_slot = p.outbox.acquire_graph_slot(wait)) >= 0) {
     auto& g = p.outbox.graph(event.graph_slot);
     g.keyframe_id = step.closed_graph_keyframe;
@@ -444,6 +479,9 @@ struct Trackerd::Publisher {
   lcm::RgbdEncoding encoding;
   std::int64_t session;  // of the last event published
   std::int64_t published = 0, published_at_last_status = 0, deadline_misses = 0, failed_at_last_status = 0;
+  std::int64_t unsent = 0;               // keyframes that could not be encoded (lost before publication)
+  std::int64_t outbox_lost_noted = 0;    // the outbox's lost() when last noted
+  std::int64_t requests_answered = 0;
   Clock::time_point last_status = Clock::now(), last_frame = Clock::now();
 };
 
@@ -459,9 +497,19 @@ void Trackerd::publish_loop() {
       self->apply_map(buffer->data, static_cast<int>(buffer->data_size));
     }
   } map_handler{this};
+  struct RequestHandler {
+    Trackerd* self;
+    Publisher* out;
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+      self->answer_request(*out, buffer->data, static_cast<int>(buffer->data_size));
+    }
+  } request_handler{this, &out};
   // A file:// output is a log being written: nothing comes back on it.
   const bool receives = !t.lcm_url.starts_with("file://");
-  if (receives) out.lcm.subscribe("CVO_MAP", &MapHandler::handle, &map_handler);
+  if (receives) {
+    out.lcm.subscribe("CVO_MAP", &MapHandler::handle, &map_handler);
+    out.lcm.subscribe("CVO_KEYFRAME_REQUEST", &RequestHandler::handle, &request_handler);
+  }
 
   const int fd = receives ? out.lcm.getFileno() : -1;
   Event event;
@@ -475,7 +523,7 @@ void Trackerd::publish_loop() {
     } else {
       std::this_thread::sleep_for(10ms);
     }
-    if (fd >= 0) {  // CVO_MAP, without blocking the poses
+    if (fd >= 0) {  // CVO_MAP and CVO_KEYFRAME_REQUEST, without blocking the poses
       pollfd pfd{fd, POLLIN, 0};
       while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) out.lcm.handle();
     }
@@ -491,18 +539,16 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
     out.session = event.session;
     note("camera re-initialised: new session " + slam::session_name(event.session));
   }
-  if (event.graph_slot >= 0) {
+  if (event.has_pose && event.pose.keyframe_id >= 0) p.history.made(event.session, event.pose.keyframe_id);
+  if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = p.outbox.graph(event.graph_slot);
-    const auto message = lcm::to_message(g.graph, event.session, g.keyframe_id, wall_utime());
-    out.lcm.publish("CVO_LOCAL_GRAPH", &message);
+    const auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, wall_utime()));
+    out.lcm.publish("CVO_LOCAL_GRAPH", bytes.data(), static_cast<unsigned>(bytes.size()));
+    p.history.keep_graph(event.session, g.keyframe_id, bytes);
   }
-  if (event.keyframe_slot >= 0) {
-    const auto& k = p.outbox.keyframe(event.keyframe_slot);
-    std::string error;
-    const lcm::Keyframe keyframe{event.session, k.id, k.frame, k.pose, k.cloud};
-    if (const auto message = lcm::to_message(keyframe, out.encoding, &error)) out.lcm.publish("CVO_KEYFRAME", &*message);
-    else note("keyframe " + std::to_string(k.id) + " not published: " + error);
-  }
+  if (event.keyframe_slot >= 0) publish_keyframe(out, event);
+  else if (event.has_pose && event.pose.is_keyframe)  // no outbox slot: counted by the outbox
+    p.history.never_sent(event.session, event.pose.keyframe_id);
   if (event.has_pose) {
     const cvo_lcm::pose_t m = pose_message(event);
     out.lcm.publish("CVO_POSE", &m);
@@ -512,6 +558,60 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
     out.last_frame = Clock::now();
   }
   p.outbox.release(event);
+}
+
+void Trackerd::publish_keyframe(Publisher& out, const Event& event) {
+  Pipeline& p = *pipeline_;
+  const auto& k = p.outbox.keyframe(event.keyframe_slot);
+  std::string error;
+  const lcm::Keyframe keyframe{event.session, k.id, k.frame, k.pose, k.cloud};
+  const auto message = lcm::to_message(keyframe, out.encoding, &error);
+  if (!message) {
+    ++out.unsent;
+    p.history.never_sent(event.session, k.id);
+    note("keyframe " + std::to_string(k.id) + " not published (lost): " + error);
+    return;
+  }
+  const auto bytes = lcm::encode(*message);
+  out.lcm.publish("CVO_KEYFRAME", bytes.data(), static_cast<unsigned>(bytes.size()));
+  if (!p.history.keep_keyframe(event.session, k.id, bytes) && p.history.capacity() > 0)
+    note("keyframe " + std::to_string(k.id) + " (" + std::to_string(bytes.size()) +
+         " bytes) is larger than a history slot: it cannot be sent again");
+}
+
+// CVO_KEYFRAME_REQUEST: the back end missed keyframes of a session; those of this tracker's sessions
+// that the history still holds go out again as first sent (keyframe, then its local graph).
+// Requests for other sessions are other trackers'.
+void Trackerd::answer_request(Publisher& out, const void* data, int size) {
+  std::string error;
+  auto failure = lcm::DecodeFailure::kBody;
+  const auto request = lcm::decode<cvo_lcm::keyframe_request_t>(data, size, &error, &failure);
+  if (!request) return count_bad(static_cast<int>(failure), "skipped CVO_KEYFRAME_REQUEST", error);
+  const std::string what = "CVO_KEYFRAME_REQUEST for session " + slam::session_name(request->session);
+  if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS)
+    return count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
+                     std::to_string(request->num_ids) + " ids, more than " +
+                         std::to_string(cvo_lcm::keyframe_request_t::MAX_IDS));
+  if (!pipeline_ready_) {  // nothing made yet: only a request for the running session concerns us
+    if (request->session == session_.load()) count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what, "no keyframe made yet");
+    return;
+  }
+  const auto send = [&](const char* channel, std::span<const std::uint8_t> bytes) {
+    out.lcm.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  };
+  const auto answer = pipeline_->history.answer(request->session, request->ids, send);
+  if (!answer.ours) return;
+  if (!answer.never.empty())
+    count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped part of " + what, "keyframes " + id_list(answer.never) + " were never made");
+  if (answer.sent.empty() && answer.lost.empty()) return;
+  const auto n = ++out.requests_answered;
+  if (n > 10 && (n & (n - 1)) != 0) return;  // the first ones, then fewer: a lossy link must not flood the log
+  std::string done = answer.sent.empty() ? "" : "sent " + id_list(answer.sent);
+  if (!answer.lost.empty())
+    done += (done.empty() ? "" : "; ") + std::string("lost (not in the history of ") +
+            std::to_string(pipeline_->history.capacity()) + "): " + id_list(answer.lost);
+  note("the back end asked again for keyframes of session " + slam::session_name(request->session) + " (#" +
+       std::to_string(n) + "): " + done);
 }
 
 void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
@@ -534,6 +634,13 @@ void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
   s.queue_depth = static_cast<std::int32_t>(ring_->waiting());
   s.rss_bytes = resident_bytes();
   for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = counters_.bad_messages[k];
+  const std::int64_t outbox_lost = pipeline_ready_ ? pipeline_->outbox.lost() : 0;
+  if (outbox_lost > out.outbox_lost_noted) {  // noted here: the tracking thread does not allocate
+    note(std::to_string(outbox_lost) + " keyframes or local graphs lost before publication (the publisher fell behind)");
+    out.outbox_lost_noted = outbox_lost;
+  }
+  s.keyframes_requested = pipeline_ready_ ? pipeline_->history.resent() : 0;
+  s.keyframes_lost = outbox_lost + out.unsent + (pipeline_ready_ ? pipeline_->history.lost() : 0);
   s.process = kProcess;
   {
     const std::lock_guard lock(detail_mutex_);

@@ -4,7 +4,9 @@
 //   cvo-acquire   frame source (drivers/) -> FrameRing          re-opens a lost device with back-off
 //   cvo-track     FrameRing -> KeyframeOdometry -> Outbox        SCHED_FIFO, pinned, no allocation
 //   cvo-publish   Outbox -> LCM CVO_POSE / CVO_KEYFRAME / CVO_LOCAL_GRAPH, 1 Hz CVO_STATUS;
-//                 CVO_MAP in -> MapCorrection (read by cvo-track for the map pose)
+//                 CVO_MAP in -> MapCorrection (read by cvo-track for the map pose);
+//                 CVO_KEYFRAME_REQUEST in -> what the back end missed, again from the
+//                 KeyframeHistory of what was published (keyframe_history.hpp)
 //
 // The caller's thread (run()) waits for SIGTERM/SIGINT or the end of a finite source, pets the
 // systemd watchdog while the workers are alive, and shuts down in order: acquisition stops, the
@@ -44,7 +46,7 @@ struct Counters {
   std::atomic<std::int64_t> source_gaps{0};
   std::atomic<std::int64_t> source_lost_frames{0};  // frames the source saw missing (FrameSource::lost_frames)
   std::atomic<std::int64_t> allocations_after_warmup{0};
-  std::atomic<std::int64_t> bad_messages[cvo_lcm::status_t::NUM_BAD_KINDS]{};  // by BAD_* (frames and CVO_MAP)
+  std::atomic<std::int64_t> bad_messages[cvo_lcm::status_t::NUM_BAD_KINDS]{};  // by BAD_* (frames, CVO_MAP, requests)
   std::atomic<bool> source_connected{false};
 };
 
@@ -78,6 +80,8 @@ class Trackerd {
   struct Publisher;
   void publish_loop();
   void publish_event(Publisher& out, const Event& event);
+  void publish_keyframe(Publisher& out, const Event& event);
+  void answer_request(Publisher& out, const void* data, int size);
   void publish_status(Publisher& out, std::int8_t state_override);
   void apply_map(const void* data, int size);
   void count_bad(int kind, const std::string& what, const std::string& why);  // by BAD_*; notes the first ones

@@ -141,6 +141,9 @@ const std::vector<Field>& table() {
           "colour image encoding of CVO_KEYFRAME: raw, jpeg or png"),
       row("trackerd.status_period_s", &Config::trackerd, &TrackerdParameters::status_period_s, kPositive,
           "CVO_STATUS period"),
+      row("trackerd.keyframe_history", &Config::trackerd, &TrackerdParameters::keyframe_history, kNonNegative,
+          "last keyframes and their local graphs kept to send again when the back end asks (CVO_KEYFRAME_REQUEST); "
+          "each preallocated, about 2.2 MB at 640x480; 0: none"),
       row("backendd.lcm_url", &Config::backendd, &BackenddParameters::lcm_url, kAny,
           "LCM provider keyframes and local graphs come from, and CVO_MAP goes to"),
       row("backendd.store", &Config::backendd, &BackenddParameters::store, kAny,
@@ -156,6 +159,9 @@ const std::vector<Field>& table() {
       row("backendd.queue_max", &Config::backendd, &BackenddParameters::queue_max, kAtLeastOne,
           "received records waiting for the back end; beyond it a live message is refused and counted "
           "(asked for again as a gap), a log waits"),
+      row("backendd.unsaved_records_max", &Config::backendd, &BackenddParameters::unsaved_records_max, kNonNegative,
+          "records held in memory while the store cannot be written (disk full), saved in order when it can; "
+          "beyond it a record is used but lost on restart"),
       Field{"camera", Get<std::string>([](Config& c) -> std::string& { return c.camera; }), kAny,
             "tum_fr1, tum_fr2, tum_fr3, synthetic, or a path to an intrinsics file"},
   };

@@ -35,6 +35,9 @@ struct TrackerdParameters {
   std::size_t warmup_frames = 30;
   std::string keyframe_colour_encoding = "jpeg";
   double status_period_s = 1.0;
+  // Keyframes (with their local graphs) kept, as sent, to answer CVO_KEYFRAME_REQUEST; each slot is
+  // preallocated for the largest message (about 2.2 MB at 640x480).
+  std::size_t keyframe_history = 32;
 };
 
 /// cvo-backendd's own settings (daemon/backendd).
@@ -46,6 +49,10 @@ struct BackenddParameters {
   std::string publish_url = "lcm_url";  // where CVO_MAP and CVO_STATUS go; "lcm_url": the same provider
   bool exit_on_eof = false;      // a file:// lcm_url that ends: final optimisation, final map, exit 0
   std::size_t queue_max = 64;    // records waiting for the back end's thread; more are refused and counted
+  // Accepted records held in memory while the keyframe store cannot be written (disk full, file
+  // size limit), written in order when it works again; beyond this they are used but not stored.
+  // A 640x480 keyframe with JPEG colour is about 300 kB.
+  std::size_t unsaved_records_max = 512;
 };
 
 struct Config {

@@ -62,9 +62,7 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   std::string why;
   const auto pose = from_message(m.pose, &why);
   if (!pose) {
-    if (!std::all_of(std::begin(m.pose.position), std::end(m.pose.position), [](double v) { return std::isfinite(v); }) ||
-        !std::all_of(std::begin(m.pose.orientation), std::end(m.pose.orientation), [](double v) { return std::isfinite(v); }))
-      kind(ContentFailure::kNotFinite);
+    if (!is_finite(m.pose)) kind(ContentFailure::kNotFinite);
     return fail(error, "pose: " + why);
   }
 

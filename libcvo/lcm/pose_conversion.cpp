@@ -1,6 +1,8 @@
 #include "libcvo/lcm/pose_conversion.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace cvo::lcm {
 
@@ -45,5 +47,11 @@ core::Matrix6d matrix6_from_message(const double (&in)[36]) {
 
 std::int64_t to_utime(double seconds) { return std::llround(seconds * 1e6); }
 double from_utime(std::int64_t utime) { return static_cast<double>(utime) / 1e6; }
+
+bool is_finite(const cvo_lcm::pose3d_t& p) {
+  const auto finite = [](double v) { return std::isfinite(v); };
+  return std::all_of(std::begin(p.position), std::end(p.position), finite) &&
+         std::all_of(std::begin(p.orientation), std::end(p.orientation), finite);
+}
 
 }  // namespace cvo::lcm

@@ -18,6 +18,8 @@ cvo_lcm::pose3d_t to_message(const core::SE3& pose);
 /// within 1e-6 (a sender that normalises, as SE3 does, is far closer); the quaternion is then
 /// normalised, so a pose survives a round trip exactly.
 std::optional<core::SE3> from_message(const cvo_lcm::pose3d_t& message, std::string* error);
+/// Every number of the pose is finite (a refusal of kind ContentFailure::kNotFinite when not).
+bool is_finite(const cvo_lcm::pose3d_t& message);
 
 void matrix6_to_message(const core::Matrix6d& matrix, double (&out)[36]);
 core::Matrix6d matrix6_from_message(const double (&in)[36]);

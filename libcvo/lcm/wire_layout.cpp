@@ -29,6 +29,8 @@ constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
 constexpr int kMapLoop = 8 + 8 + kGraphEdge;
 constexpr std::array kMapCounts{CountField{"num_sessions", 20, kMapSession}, CountField{"num_keyframes", 24, kMapKeyframe},
                                 CountField{"num_loops", 28, kMapLoop}};
+// keyframe_request_t: version, utime, session (20), then the count of int64 ids.
+constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}};
 
 std::int32_t read_be32(const std::uint8_t* p) {
   return static_cast<std::int32_t>((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
@@ -42,6 +44,7 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "keyframe_t") return {194, kKeyframeCounts};
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
   if (type_name == "map_t") return {32, kMapCounts};
+  if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
   // (93), rss_bytes (101), bad_messages[9] (173), 5 int64 (213), then the strings process and detail.
   if (type_name == "status_t") return {213, {}, 213, 2};

@@ -14,10 +14,10 @@ namespace cvo::posegraph::detail {
 
 class CholmodCommon {
  public:
-  CholmodCommon() {
-    cholmod_l_start(&common_);
-    common_.print = 1;  // errors only: a not-positive-definite warning is handled by the caller
-  }
+  /// Started with CHOLMOD's output sent to standard error (send_cholmod_messages_to_stderr) and
+  /// only real errors logged: a warning (status > 0: not positive definite) is the caller's to
+  /// handle, and CHOLMOD's print level 1 would print it as an error anyway.
+  CholmodCommon();
   ~CholmodCommon() { cholmod_l_finish(&common_); }
   CholmodCommon(const CholmodCommon&) = delete;
   CholmodCommon& operator=(const CholmodCommon&) = delete;

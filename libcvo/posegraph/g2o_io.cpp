@@ -8,6 +8,7 @@
 
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/text_lines.hpp"
+#include "libcvo/posegraph/information.hpp"
 
 namespace cvo::posegraph {
 namespace {
@@ -41,6 +42,40 @@ void expect_fields(const std::vector<std::string>& fields, std::size_t n, const 
                                          std::to_string(fields.size() - 1));
 }
 
+// EDGE_SE3:QUAT i j x y z qx qy qz qw I11 .. I66 (fields already counted).
+Edge parse_edge(const std::vector<std::string>& fields, const std::filesystem::path& name, std::size_t line) {
+  Edge e;
+  e.from = parse_id(fields[1], name, line);
+  e.to = parse_id(fields[2], name, line);
+  e.measurement = parse_pose(fields, 3, name, line);
+  std::size_t k = 10;
+  for (int r = 0; r < 6; ++r)
+    for (int c = r; c < 6; ++c) e.information(r, c) = e.information(c, r) = io::parse_finite(fields[k++], name, line);
+  return e;
+}
+
+// The repairs of one file (see the header): made edge by edge, reported once at the end.
+struct Repairs {
+  G2oRepairs summary;
+  InformationCheck first;  // what was wrong with the first repaired edge
+
+  void repair(Edge& e, std::size_t line) {
+    const InformationCheck check = check_information(e.information);
+    if (check.ok()) return;
+    if (summary.edges++ == 0) {
+      summary.first_line = line;
+      first = check;
+    }
+    e.information = nearest_information(e.information);
+  }
+
+  void warn(std::ostream& out, const std::filesystem::path& name, std::size_t edges) const {
+    if (summary.edges == 0) return;
+    out << name.string() << ':' << summary.first_line << ": warning: " << first.why() << "; " << summary.edges << " of "
+        << edges << " edges like this one repaired to the nearest positive-definite matrix\n";
+  }
+};
+
 std::string number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -56,7 +91,7 @@ void write_pose(std::ostream& out, const core::SE3& T) {
 
 }  // namespace
 
-PoseGraph parse_g2o(std::istream& in, const std::filesystem::path& name) {
+PoseGraph parse_g2o(std::istream& in, const std::filesystem::path& name, std::ostream& warnings, G2oRepairs* repairs) {
   PoseGraph graph;
   struct PendingEdge {
     Edge edge;
@@ -64,6 +99,7 @@ PoseGraph parse_g2o(std::istream& in, const std::filesystem::path& name) {
   };
   std::vector<PendingEdge> edges;  // added after all vertices, so edges may come first in a file
   std::vector<std::pair<NodeId, std::size_t>> fixes;
+  Repairs repaired;
   io::for_each_data_line(in, name, [&](std::size_t line, const std::vector<std::string>& f) {
     const std::string& tag = f[0];
     if (tag == "VERTEX_SE3:QUAT") {
@@ -73,14 +109,8 @@ PoseGraph parse_g2o(std::istream& in, const std::filesystem::path& name) {
       graph.add_node(id, parse_pose(f, 2, name, line));
     } else if (tag == "EDGE_SE3:QUAT") {
       expect_fields(f, 31, name, line);
-      Edge e;
-      e.from = parse_id(f[1], name, line);
-      e.to = parse_id(f[2], name, line);
-      e.measurement = parse_pose(f, 3, name, line);
-      std::size_t k = 10;
-      for (int r = 0; r < 6; ++r)
-        for (int c = r; c < 6; ++c) e.information(r, c) = e.information(c, r) = io::parse_finite(f[k++], name, line);
-      edges.push_back({e, line});
+      edges.push_back({parse_edge(f, name, line), line});
+      repaired.repair(edges.back().edge, line);
     } else if (tag == "FIX") {
       if (f.size() < 2) throw io::InputError(name, line, "FIX needs at least one vertex id");
       for (std::size_t k = 1; k < f.size(); ++k) fixes.emplace_back(parse_id(f[k], name, line), line);
@@ -99,13 +129,15 @@ PoseGraph parse_g2o(std::istream& in, const std::filesystem::path& name) {
     if (!graph.contains(id)) throw io::InputError(name, line, "FIX names an unknown vertex");
     graph.set_fixed(id, true);
   }
+  repaired.warn(warnings, name, edges.size());
+  if (repairs != nullptr) *repairs = repaired.summary;
   return graph;
 }
 
-PoseGraph read_g2o(const std::filesystem::path& file) {
+PoseGraph read_g2o(const std::filesystem::path& file, std::ostream& warnings, G2oRepairs* repairs) {
   std::ifstream in(file);
   if (!in) throw io::InputError(file, "cannot open");
-  return parse_g2o(in, file);
+  return parse_g2o(in, file, warnings, repairs);
 }
 
 void write_g2o(std::ostream& out, const PoseGraph& graph) {

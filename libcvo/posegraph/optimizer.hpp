@@ -80,4 +80,11 @@ class Optimizer {
 /// One-shot convenience: a fresh Optimizer.
 OptimizationReport optimize(PoseGraph& graph, const OptimizerOptions& options = {});
 
+/// CHOLMOD prints through one process-wide printf, to standard output by default, which puts its
+/// messages ("matrix not positive definite") in the middle of a program's output (pgo-bench
+/// --json). This points it at standard error, the log, for every CHOLMOD user in the process
+/// (Ceres too). Every Optimizer calls it; a program that uses CHOLMOD through another library
+/// calls it first. Idempotent and thread-safe.
+void send_cholmod_messages_to_stderr();
+
 }  // namespace cvo::posegraph

@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "libcvo/posegraph/information.hpp"
+
 namespace cvo::posegraph {
 
 void PoseGraph::add_node(NodeId id, const core::SE3& pose, bool fixed) {
@@ -15,13 +17,11 @@ void PoseGraph::add_edge(const Edge& edge) {
   const std::string name = "pose graph: edge " + std::to_string(edge.from) + " -> " + std::to_string(edge.to);
   if (!contains(edge.from) || !contains(edge.to)) throw std::invalid_argument(name + " names an unknown node");
   if (edge.from == edge.to) throw std::invalid_argument(name + " joins a node to itself");
-  if (!edge.measurement.is_finite() || !edge.information.allFinite())
-    throw std::invalid_argument(name + " is not finite");
-  // A non-symmetric information would make the normal equations non-symmetric; refuse it rather
-  // than silently using one triangle.
-  const double scale = edge.information.cwiseAbs().maxCoeff();
-  if ((edge.information - edge.information.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
-    throw std::invalid_argument(name + " has a non-symmetric information matrix");
+  if (!edge.measurement.is_finite()) throw std::invalid_argument(name + " is not finite");
+  // A non-symmetric information would make the normal equations non-symmetric, an indefinite one
+  // the cost unbounded below (information.hpp): refuse both rather than optimise a wrong problem.
+  if (const auto check = check_information(edge.information); !check.ok())
+    throw std::invalid_argument(name + ": " + check.why());
   edges_.push_back(edge);
 }
 

@@ -34,8 +34,9 @@ class PoseGraph {
  public:
   /// Throws std::invalid_argument when the id exists already or the pose is not finite.
   void add_node(NodeId id, const core::SE3& pose, bool fixed = false);
-  /// Both nodes must exist, from != to, and the information must be finite and symmetric;
-  /// throws std::invalid_argument otherwise.
+  /// Both nodes must exist, from != to, the measurement must be finite and the information pass
+  /// check_information (information.hpp: finite, symmetric, positive semi-definite); throws
+  /// std::invalid_argument otherwise.
   void add_edge(const Edge& edge);
 
   void set_pose(NodeId id, const core::SE3& pose);  // throws std::out_of_range for an unknown id

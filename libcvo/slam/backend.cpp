@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "libcvo/posegraph/cost.hpp"
+#include "libcvo/posegraph/information.hpp"
 
 namespace cvo::slam {
 namespace {
@@ -22,6 +23,13 @@ core::Matrix6d information_into(const LocalSolution& s, NodeId keyframe, NodeId 
   }
   if (into == nullptr) throw std::invalid_argument("local graph: no edge into frame " + std::to_string(to));
   return into->information;
+}
+
+// Incoming information must pass posegraph::check_information (finite, symmetric, positive
+// semi-definite): one that does not would make the graph's cost unbounded below.
+void require_information(const std::string& edge, const core::Matrix6d& information) {
+  if (const auto check = posegraph::check_information(information); !check.ok())
+    throw std::invalid_argument("backend: " + edge + ": " + check.why());
 }
 
 }  // namespace
@@ -82,6 +90,8 @@ const LocalSolution& Backend::add_local_graph(SessionId session_id, NodeId keyfr
     if (const auto it = session_of_node_.find(static_cast<NodeId>(n.frame_index));
         it != session_of_node_.end() && it->second != session_id)
       throw std::invalid_argument("backend: frame " + std::to_string(n.frame_index) + " belongs to another session");
+  for (const auto& e : graph.edges())
+    require_information("local graph edge " + std::to_string(e.from) + " -> " + std::to_string(e.to), e.information);
 
   LocalSolution solution = optimise_local_graph(graph, optimizer_options());
   add_session(session_id);
@@ -140,9 +150,9 @@ void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
 
 bool Backend::add_loop(const loop_closure::LoopClosure& loop) {
   if (loop.from == loop.to) throw std::invalid_argument("backend: loop from keyframe " + std::to_string(loop.from) + " to itself");
-  if (!loop.measurement.is_finite() || !loop.information.allFinite())
-    throw std::invalid_argument("backend: loop " + std::to_string(loop.from) + " -> " + std::to_string(loop.to) +
-                                " is not finite");
+  const std::string name = "loop " + std::to_string(loop.from) + " -> " + std::to_string(loop.to);
+  if (!loop.measurement.is_finite()) throw std::invalid_argument("backend: " + name + " is not finite");
+  require_information(name, loop.information);
   if (insert_loop(loop)) return true;
   pending_.push_back(loop);
   return false;

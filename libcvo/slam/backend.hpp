@@ -94,14 +94,16 @@ class Backend {
   /// Adds a closed local graph of `session` whose keyframe (first node) is node `keyframe_id`;
   /// returns its local solution (valid until the next add_local_graph or optimise_all). Throws
   /// std::invalid_argument when the graph is empty, its first node is not `keyframe_id`, that
-  /// keyframe's graph was added already, a node belongs to another session, or the graph is
-  /// malformed (local_optimisation.hpp).
+  /// keyframe's graph was added already, a node belongs to another session, the graph is
+  /// malformed (local_optimisation.hpp), or an information matrix is one posegraph's
+  /// check_information refuses.
   const LocalSolution& add_local_graph(SessionId session, posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
   /// One session (the first registered, else 0).
   const LocalSolution& add_local_graph(posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
 
   /// Adds a loop as a robust edge (or keeps it waiting, see above); true when it entered the
-  /// graph now. Throws std::invalid_argument for from == to or a non-finite measurement.
+  /// graph now. Throws std::invalid_argument for from == to, a non-finite measurement or an
+  /// information matrix posegraph's check_information refuses.
   bool add_loop(const loop_closure::LoopClosure& loop);
 
   /// Optimises the keyframe graph; does nothing (an empty report) with fewer than two nodes.

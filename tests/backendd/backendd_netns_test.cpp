@@ -30,6 +30,7 @@
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "tests/backendd/netns_support.hpp"
+#include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -46,10 +47,7 @@ using cvo::testing::LcmCapture;
 
 const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
 
-struct Message {
-  std::string channel;
-  std::vector<std::uint8_t> bytes;
-};
+using cvo::testing::Message;
 
 class BackenddNetns : public ::testing::Test {
  protected:
@@ -58,21 +56,8 @@ class BackenddNetns : public ::testing::Test {
   static void SetUpTestSuite() {
     if (!cvo::testing::udp_test_skip_reason().empty()) return;
     const cvo::test::TempDir dir("backendd_recording");
-    const auto out = dir.path() / "tracker.lcmlog";
-    DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
-                           {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic", "--lcm-url",
-                            "file://" + out.string() + "?mode=w", "--set", "trackerd.paced=false", "--set",
-                            "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false", "--set",
-                            "trackerd.keyframe_colour_encoding=png"},  // lossless: cvo-run's images exactly
-                           dir.path() / "tracker.txt");
-    const auto code = trackerd.wait_for(120s);
-    ASSERT_EQ(code.value_or(-9), 0) << cvo::testing::slurp(dir.path() / "tracker.txt");
-    ::lcm::LogFile in(out.string(), "r");
-    while (const ::lcm::LogEvent* e = in.readNextEvent()) {
-      if (e->channel != "CVO_KEYFRAME" && e->channel != "CVO_LOCAL_GRAPH") continue;
-      const auto* data = static_cast<const std::uint8_t*>(e->data);
-      messages_.push_back({e->channel, std::vector<std::uint8_t>(data, data + e->datalen)});
-    }
+    // PNG, lossless: cvo-run's images exactly.
+    messages_ = cvo::testing::tracker_recording(dir.path(), {"trackerd.keyframe_colour_encoding=png"});
   }
 
   void SetUp() override {

@@ -1,8 +1,19 @@
-// KeyframeStore: records survive a reopen in order; a corrupt or cut tail is dropped with a
-// message (never loaded) and appending continues after the last good record; a foreign file is
-// refused.
+// KeyframeStore: records survive a reopen in order; damage in the middle (any header field, the
+// payload, garbage between records) costs only the damaged record, the damaged original is kept
+// aside and a clean store written in its place; a last record cut short costs only itself;
+// writes that fail (EFBIG under a file-size limit, as a full disk) lose nothing: records are held
+// in order, within a bound that is counted, and written once writing works again; a foreign file
+// is refused.
+#include <signal.h>
+#include <sys/resource.h>
+
+#include <cerrno>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -13,84 +24,208 @@
 namespace cvo::daemon::backendd {
 namespace {
 
+namespace fs = std::filesystem;
+
 std::vector<std::uint8_t> payload(int n, std::uint8_t seed) {
   std::vector<std::uint8_t> p(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) p[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(seed + 7 * i);
   return p;
 }
 
-std::vector<StoredRecord> reopen(const std::filesystem::path& file, std::string& warning) {
+std::vector<StoredRecord> reopen(const fs::path& file, std::string& warning) {
   std::vector<StoredRecord> records;
   KeyframeStore store(file, records, warning);
   return records;
 }
 
+std::string bytes_of(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void write_bytes(const fs::path& file, const std::string& bytes) {
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// A store of `n` records of different sizes and both kinds, and where each starts.
+struct Written {
+  std::vector<StoredRecord> records;
+  std::vector<std::size_t> starts;
+  std::size_t end = 0;
+};
+
+RecordKind kind_of(std::size_t i) { return i % 2 == 0 ? RecordKind::kKeyframe : RecordKind::kLocalGraph; }
+
+Written write_store(const fs::path& file, int n) {
+  Written w;
+  std::vector<StoredRecord> none;
+  std::string warning;
+  KeyframeStore store(file, none, warning);
+  for (int i = 0; i < n; ++i) {
+    w.starts.push_back(fs::file_size(file));
+    w.records.push_back({kind_of(w.records.size()), payload(300 + 37 * i, static_cast<std::uint8_t>(i))});
+    EXPECT_EQ(store.append(w.records.back().kind, w.records.back().payload), Appended::kStored);
+  }
+  w.end = fs::file_size(file);
+  return w;
+}
+
+// The records read back are the written ones but those at `missing`, in order.
+void expect_all_but(const std::vector<StoredRecord>& got, const Written& w, const std::set<std::size_t>& missing) {
+  std::vector<StoredRecord> expected;
+  for (std::size_t i = 0; i < w.records.size(); ++i)
+    if (!missing.count(i)) expected.push_back(w.records[i]);
+  ASSERT_EQ(got.size(), expected.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].kind, expected[i].kind) << "record " << i;
+    EXPECT_EQ(got[i].payload, expected[i].payload) << "record " << i;
+  }
+}
+
+std::vector<fs::path> damaged_copies(const fs::path& file) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::directory_iterator(file.parent_path()))
+    if (e.path().filename().string().starts_with(file.filename().string() + ".damaged-")) out.push_back(e.path());
+  return out;
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// After a recovery: the store holds the intact records alone (it reads back without a warning),
+// and a new record follows the last of them.
+void expect_clean_and_appendable(const fs::path& file, const std::vector<StoredRecord>& intact) {
+  std::string warning;
+  std::vector<StoredRecord> records;
+  {
+    KeyframeStore store(file, records, warning);
+    EXPECT_TRUE(warning.empty()) << warning;
+    EXPECT_EQ(records.size(), intact.size());
+    EXPECT_EQ(store.append(RecordKind::kLocalGraph, payload(20, 99)), Appended::kStored);
+  }
+  records = reopen(file, warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  ASSERT_EQ(records.size(), intact.size() + 1);
+  EXPECT_EQ(records.back().payload, payload(20, 99));
+}
+
 TEST(KeyframeStore, RecordsSurviveAReopenInOrder) {
   cvo::test::TempDir dir;
   const auto file = dir.path() / "state" / "keyframes.store";
-  {
-    std::vector<StoredRecord> none;
-    std::string warning;
-    KeyframeStore store(file, none, warning);
-    EXPECT_TRUE(none.empty());
-    EXPECT_TRUE(warning.empty());
-    store.append(RecordKind::kKeyframe, payload(1000, 1));
-    store.append(RecordKind::kLocalGraph, payload(10, 2));
-    store.append(RecordKind::kKeyframe, payload(0, 3));
-  }
+  const auto written = write_store(file, 3);
   std::string warning;
   const auto records = reopen(file, warning);
   EXPECT_TRUE(warning.empty()) << warning;
-  ASSERT_EQ(records.size(), 3u);
-  EXPECT_EQ(records[0].kind, RecordKind::kKeyframe);
-  EXPECT_EQ(records[0].payload, payload(1000, 1));
-  EXPECT_EQ(records[1].kind, RecordKind::kLocalGraph);
-  EXPECT_EQ(records[1].payload, payload(10, 2));
-  EXPECT_TRUE(records[2].payload.empty());
+  expect_all_but(records, written, {});
 }
 
-TEST(KeyframeStore, ACutOrCorruptTailIsDroppedWithAMessageAndAppendingGoesOn) {
+// Each field of the third record of twenty damaged in turn (one bit or byte): the 19 others are
+// read back, the damaged original is kept byte for byte beside the store, and the store is clean.
+TEST(KeyframeStore, DamageInAMiddleRecordCostsThatRecordAlone) {
+  struct Damage {
+    const char* what;
+    std::size_t offset;  // in the record
+    std::uint8_t flip;   // xor mask
+    const char* why;     // as the warning says it
+  };
+  const std::vector<Damage> damages{
+      {"a payload bit", 16 + 100, 0x08, "checksum mismatch"},
+      {"a checksum bit", 12, 0x01, "checksum mismatch"},
+      {"the record magic", 0, 0x20, "bad record magic"},
+      {"the kind", 4, 0x04, "unknown record kind"},
+      {"an impossible length", 11, 0xF0, "impossible record length"},
+      {"a length beyond the file", 10, 0x01, "runs past the end of the file"},
+      {"a length one off", 8, 0x01, "checksum mismatch"},
+  };
+  for (const auto& damage : damages) {
+    SCOPED_TRACE(damage.what);
+    cvo::test::TempDir dir;
+    const auto file = dir.path() / "keyframes.store";
+    const auto written = write_store(file, 20);
+    auto bytes = bytes_of(file);
+    bytes[written.starts[2] + damage.offset] = static_cast<char>(bytes[written.starts[2] + damage.offset] ^ damage.flip);
+    write_bytes(file, bytes);
+
+    std::string warning;
+    const auto records = reopen(file, warning);
+    expect_all_but(records, written, {2});
+    const auto skipped = written.starts[3] - written.starts[2];
+    EXPECT_TRUE(contains(warning, "1 damaged stretch skipped (" + std::to_string(skipped) + " bytes; the first at byte " +
+                                      std::to_string(written.starts[2]) + ": "))
+        << warning;
+    EXPECT_TRUE(contains(warning, damage.why)) << warning;
+    EXPECT_TRUE(contains(warning, "19 intact records kept")) << warning;
+    const auto copies = damaged_copies(file);
+    ASSERT_EQ(copies.size(), 1u);
+    EXPECT_TRUE(contains(warning, "the damaged original is kept as " + copies[0].string())) << warning;
+    EXPECT_TRUE(bytes_of(copies[0]) == bytes) << "the damaged original, unchanged";
+    EXPECT_FALSE(fs::exists(file.string() + ".recovering"));
+    expect_clean_and_appendable(file, records);
+  }
+}
+
+// Garbage between records (with the record magic in it, and a whole plausible header whose
+// checksum fails) and a second damaged record: every other record is kept, resynchronised on the
+// next valid one each time.
+TEST(KeyframeStore, GarbageBetweenRecordsIsSkipped) {
   cvo::test::TempDir dir;
   const auto file = dir.path() / "keyframes.store";
-  std::uintmax_t two_records = 0;
-  {
-    std::vector<StoredRecord> none;
-    std::string warning;
-    KeyframeStore store(file, none, warning);
-    store.append(RecordKind::kKeyframe, payload(500, 1));
-    store.append(RecordKind::kKeyframe, payload(500, 2));
-    two_records = std::filesystem::file_size(file);
-    store.append(RecordKind::kKeyframe, payload(500, 3));
-  }
-  // A crash in the middle of the third record: only part of it reached the disk.
-  std::filesystem::resize_file(file, two_records + 100);
+  const auto written = write_store(file, 20);
+  auto bytes = bytes_of(file);
+  bytes[written.starts[12] + 40] = static_cast<char>(bytes[written.starts[12] + 40] ^ 0x40);
+  std::string garbage(1000, '\x5a');
+  const std::string fake_header("CRFK\x01\0\0\0\x20\0\0\0\x12\x34\x56\x78", 16);  // 32 bytes, wrong checksum
+  garbage.replace(100, 4, "CRFK");
+  garbage.replace(500, fake_header.size(), fake_header);
+  bytes.insert(written.starts[6], garbage);
+  write_bytes(file, bytes);
+
   std::string warning;
-  auto records = reopen(file, warning);
-  EXPECT_EQ(records.size(), 2u);
-  EXPECT_NE(warning.find("dropped 100 bytes after record 2"), std::string::npos) << warning;
-  EXPECT_EQ(std::filesystem::file_size(file), two_records) << "the tail is truncated away";
+  const auto records = reopen(file, warning);
+  expect_all_but(records, written, {12});
+  const auto damaged_record = written.starts[13] - written.starts[12];
+  EXPECT_TRUE(contains(warning, "2 damaged stretches skipped (" + std::to_string(1000 + damaged_record) +
+                                    " bytes; the first at byte " + std::to_string(written.starts[6]) + ": bad record magic"))
+      << warning;
+  EXPECT_TRUE(contains(warning, "19 intact records kept")) << warning;
+  ASSERT_EQ(damaged_copies(file).size(), 1u);
+  expect_clean_and_appendable(file, records);
+}
 
-  // New records follow the last good one.
-  {
-    std::vector<StoredRecord> again;
-    std::string w;
-    KeyframeStore store(file, again, w);
-    store.append(RecordKind::kLocalGraph, payload(20, 9));
-  }
-  records = reopen(file, warning);
-  ASSERT_EQ(records.size(), 3u);
-  EXPECT_EQ(records[2].payload, payload(20, 9));
+// What a crash during a write leaves: the last record cut short, in its payload or its header.
+// Every complete record is kept, the cut one (nothing intact in it) is cut off in place.
+TEST(KeyframeStore, ATruncatedTailKeepsTheRest) {
+  for (const std::size_t cut : {std::size_t{16 + 200}, std::size_t{9}, std::size_t{2}}) {
+    SCOPED_TRACE("cut " + std::to_string(cut) + " bytes into the last record");
+    cvo::test::TempDir dir;
+    const auto file = dir.path() / "keyframes.store";
+    const auto written = write_store(file, 20);
+    fs::resize_file(file, written.starts[19] + cut);
 
-  // A flipped byte in the last record's payload: its checksum fails, it is not loaded.
-  {
-    std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(static_cast<std::streamoff>(std::filesystem::file_size(file)) - 5);
-    f.put('\x5a');
+    std::string warning;
+    const auto records = reopen(file, warning);
+    expect_all_but(records, written, {19});
+    EXPECT_TRUE(contains(warning, "the last record was cut short (" + std::to_string(cut) + " bytes at byte " +
+                                      std::to_string(written.starts[19])))
+        << warning;
+    EXPECT_TRUE(contains(warning, "19 intact records kept")) << warning;
+    EXPECT_EQ(fs::file_size(file), written.starts[19]) << "only the cut record is cut off";
+    EXPECT_TRUE(damaged_copies(file).empty());
+    expect_clean_and_appendable(file, records);
   }
-  warning.clear();
-  records = reopen(file, warning);
-  EXPECT_EQ(records.size(), 2u);
-  EXPECT_NE(warning.find("checksum mismatch"), std::string::npos) << warning;
+}
+
+// A tail that is no cut record (zeros, as a file system can leave after a crash) is damage: kept
+// aside like any other.
+TEST(KeyframeStore, AZeroedTailIsKeptAside) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  const auto written = write_store(file, 5);
+  write_bytes(file, bytes_of(file) + std::string(4096, '\0'));
+  std::string warning;
+  const auto records = reopen(file, warning);
+  expect_all_but(records, written, {});
+  EXPECT_TRUE(contains(warning, "1 damaged stretch skipped (4096 bytes")) << warning;
+  EXPECT_EQ(damaged_copies(file).size(), 1u);
+  expect_clean_and_appendable(file, records);
 }
 
 TEST(KeyframeStore, AForeignFileIsRefusedNotOverwritten) {
@@ -100,10 +235,130 @@ TEST(KeyframeStore, AForeignFileIsRefusedNotOverwritten) {
   std::vector<StoredRecord> records;
   std::string warning;
   EXPECT_THROW(KeyframeStore(file, records, warning), io::InputError);
-  std::ifstream in(file);
-  std::string line;
-  std::getline(in, line);
-  EXPECT_EQ(line, "not a keyframe store");
+  EXPECT_EQ(bytes_of(file), "not a keyframe store\n");
+  EXPECT_TRUE(damaged_copies(file).empty());
+}
+
+// Under a file-size limit writes fail with EFBIG (SIGXFSZ ignored, as cvo-backendd does): the
+// same path as a full disk, without needing a file system to fill. Restores both on the way out.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    getrlimit(RLIMIT_FSIZE, &saved_);
+    previous_ = signal(SIGXFSZ, SIG_IGN);
+    set(bytes);
+  }
+  ~FileSizeLimit() {
+    setrlimit(RLIMIT_FSIZE, &saved_);
+    signal(SIGXFSZ, previous_);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+  void set(rlim_t bytes) {
+    rlimit limit = saved_;
+    limit.rlim_cur = bytes;
+    ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
+  }
+  void lift() { setrlimit(RLIMIT_FSIZE, &saved_); }
+
+ private:
+  rlimit saved_{};
+  sighandler_t previous_ = SIG_DFL;
+};
+
+// Records that cannot be written are held in order, no torn record stays in the file (one was
+// half written when the limit struck), at most the bound is held and what is beyond is counted;
+// once writing works every held record is on disk, in order, before the next one.
+TEST(KeyframeStore, RecordsThatCannotBeWrittenAreHeldAndWrittenLaterInOrder) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  std::vector<StoredRecord> none;
+  std::string warning;
+  KeyframeStore store(file, none, warning, 4);
+  std::vector<std::vector<std::uint8_t>> payloads;
+  for (int i = 0; i < 11; ++i) payloads.push_back(payload(1000 + i, static_cast<std::uint8_t>(i)));
+  ASSERT_EQ(store.append(RecordKind::kKeyframe, payloads[0]), Appended::kStored);
+  const auto one = fs::file_size(file);
+  std::vector<Appended> results;
+  {
+    FileSizeLimit limit(one + 1500);  // the next record fits; the one after only in part
+    for (std::size_t i = 1; i < 8; ++i) results.push_back(store.append(RecordKind::kKeyframe, payloads[i]));
+    EXPECT_EQ(fs::file_size(file), one + 16 + payloads[1].size()) << "no torn record left behind";
+    const auto health = store.health();
+    EXPECT_TRUE(health.failing);
+    EXPECT_EQ(health.error, EFBIG);
+    EXPECT_EQ(health.unsaved, 4u);
+    EXPECT_EQ(health.not_durable, 2u);
+    EXPECT_TRUE(contains(describe(health), "store at the file size limit (4 records unsaved)")) << describe(health);
+    EXPECT_FALSE(store.retry()) << "still limited";
+    limit.lift();
+    EXPECT_TRUE(store.retry());
+  }
+  EXPECT_EQ(results, (std::vector<Appended>{Appended::kStored, Appended::kHeld, Appended::kHeld, Appended::kHeld,
+                                            Appended::kHeld, Appended::kNotDurable, Appended::kNotDurable}));
+  const auto health = store.health();
+  EXPECT_FALSE(health.failing);
+  EXPECT_EQ(health.unsaved, 0u);
+  EXPECT_TRUE(health.degraded()) << "two records of this run are not on disk";
+  EXPECT_EQ(store.append(RecordKind::kKeyframe, payloads[8]), Appended::kStored);
+  EXPECT_EQ(store.records(), 7u);
+
+  const auto records = reopen(file, warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  std::vector<std::vector<std::uint8_t>> got;
+  for (const auto& r : records) got.push_back(r.payload);
+  EXPECT_EQ(got, (std::vector<std::vector<std::uint8_t>>{payloads[0], payloads[1], payloads[2], payloads[3],
+                                                          payloads[4], payloads[5], payloads[8]}));
+}
+
+// A new store that cannot even take its magic starts degraded instead of failing to start, and
+// holds what it is given until it can write it.
+TEST(KeyframeStore, ANewStoreThatCannotBeWrittenStartsDegraded) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  {
+    std::vector<StoredRecord> none;
+    std::string warning;
+    FileSizeLimit limit(4);
+    KeyframeStore store(file, none, warning, 8);
+    EXPECT_TRUE(store.health().failing);
+    EXPECT_EQ(store.append(RecordKind::kLocalGraph, payload(50, 1)), Appended::kHeld);
+    limit.lift();
+    EXPECT_TRUE(store.retry());
+    EXPECT_FALSE(store.health().degraded());
+  }
+  std::string warning;
+  const auto records = reopen(file, warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].payload, payload(50, 1));
+}
+
+// Where no clean copy fits, the damaged store stays as it was (nothing half-written left beside
+// it) and is read the same way; once there is room the next start replaces it.
+TEST(KeyframeStore, WithoutRoomForACleanCopyTheDamagedStoreStaysAndIsStillRead) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  const auto written = write_store(file, 20);
+  auto bytes = bytes_of(file);
+  bytes[written.starts[2] + 16] = static_cast<char>(bytes[written.starts[2] + 16] ^ 0x01);
+  write_bytes(file, bytes);
+  {
+    FileSizeLimit limit(written.end / 2);
+    std::string warning;
+    const auto records = reopen(file, warning);
+    expect_all_but(records, written, {2});
+    EXPECT_TRUE(contains(warning, "no clean copy could be written")) << warning;
+  }
+  EXPECT_TRUE(bytes_of(file) == bytes) << "the damaged store is left as it was";
+  EXPECT_TRUE(damaged_copies(file).empty());
+  EXPECT_FALSE(fs::exists(file.string() + ".recovering"));
+
+  std::string warning;
+  const auto records = reopen(file, warning);
+  expect_all_but(records, written, {2});
+  EXPECT_EQ(damaged_copies(file).size(), 1u) << warning;
+  expect_clean_and_appendable(file, records);
 }
 
 }  // namespace

@@ -68,10 +68,17 @@ TEST(MessageDoor, ANameIsLetInOnceAndOtherContentUnderItIsAConflict) {
 TEST(MessageDoor, ContentIsCheckedAsTheBackEndWillUseIt) {
   const auto graph = encoded(cvo::test::sample_local_graph());
   std::string error;
-  EXPECT_TRUE(usable(RecordKind::kLocalGraph, graph.data(), graph.size(), &error)) << error;
+  std::size_t bad = 0;
+  EXPECT_TRUE(usable(RecordKind::kLocalGraph, graph.data(), graph.size(), &error, &bad)) << error;
   const auto keyframe = encoded(cvo::test::sample_keyframe());  // its "JPEG" is a few bytes of header
-  EXPECT_FALSE(usable(RecordKind::kKeyframe, keyframe.data(), keyframe.size(), &error));
+  EXPECT_FALSE(usable(RecordKind::kKeyframe, keyframe.data(), keyframe.size(), &error, &bad));
   EXPECT_FALSE(error.empty());
+  EXPECT_EQ(bad, +cvo_lcm::status_t::BAD_CONTENT);
+  auto indefinite = cvo::test::sample_local_graph();
+  indefinite.edges[1].information[7] = -3.0;  // a negative variance
+  const auto bytes = encoded(indefinite);
+  EXPECT_FALSE(usable(RecordKind::kLocalGraph, bytes.data(), bytes.size(), &error, &bad));
+  EXPECT_EQ(bad, +cvo_lcm::status_t::BAD_INFORMATION) << error;
 }
 
 }  // namespace

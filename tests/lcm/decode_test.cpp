@@ -28,6 +28,7 @@ TEST(Decode, EveryTruncationOfEveryTypeFails) {
   expect_every_truncation_fails(test::sample_local_graph());
   expect_every_truncation_fails(test::sample_map());
   expect_every_truncation_fails(test::sample_status());
+  expect_every_truncation_fails(test::sample_keyframe_request());
 }
 
 TEST(Decode, ShortBufferSaysSo) {
@@ -158,6 +159,7 @@ TEST(Decode, RandomGarbageNeverCrashes) {
     expect_garbage_fails<cvo_lcm::local_graph_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::map_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::status_t>(rng, keep);
+    expect_garbage_fails<cvo_lcm::keyframe_request_t>(rng, keep);
   }
 }
 

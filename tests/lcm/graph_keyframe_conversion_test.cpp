@@ -13,6 +13,7 @@
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/registration/point_selection.hpp"
+#include "lcm/sample_messages.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -136,6 +137,63 @@ TEST(LocalGraphConversion, EdgesToUnknownFramesAndBadInformationAreRefused) {
   empty.nodes.clear();
   empty.num_nodes = 0;
   EXPECT_FALSE(from_message(empty, &error));
+}
+
+// The sample every encoding and door test uses is a graph the back end accepts.
+TEST(LocalGraphConversion, TheSampleMessageIsUsable) {
+  std::string error;
+  EXPECT_TRUE(from_message(test::sample_local_graph(), &error)) << error;
+}
+
+// Which check refused a graph (the back end counts each kind in CVO_STATUS): an indefinite or
+// non-symmetric information matrix, a NaN, or a malformed graph.
+TEST(LocalGraphConversion, RefusalsSayWhichKind) {
+  const auto message = to_message(sample_graph(), 1, 3, 0);
+  std::string error;
+  auto failure = ContentFailure::kContent;
+
+  // Edge 10->12 with the translation x-y block [[12, 13], [13, 12]]: eigenvalues 25 and -1.
+  auto indefinite = message;
+  indefinite.edges[2].information[1] = indefinite.edges[2].information[6] = 13;
+  EXPECT_FALSE(from_message(indefinite, &error, &failure));
+  EXPECT_EQ(failure, ContentFailure::kInformation);
+  EXPECT_NE(error.find("edge 10->12: information is not positive semi-definite (eigenvalues -1 .. 25)"),
+            std::string::npos)
+      << error;
+
+  auto asymmetric = message;
+  asymmetric.edges[1].information[6 * 4 + 2] = 0.5;  // (4, 2) but not (2, 4)
+  EXPECT_FALSE(from_message(asymmetric, &error, &failure));
+  EXPECT_EQ(failure, ContentFailure::kInformation);
+  EXPECT_NE(error.find("edge 10->11: information is not symmetric"), std::string::npos) << error;
+
+  auto nan = message;
+  nan.edges[3].information[0] = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(from_message(nan, &error, &failure));
+  EXPECT_EQ(failure, ContentFailure::kNotFinite);
+
+  auto nan_pose = message;
+  nan_pose.nodes[2].pose.position[1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(from_message(nan_pose, &error, &failure));
+  EXPECT_EQ(failure, ContentFailure::kNotFinite);
+  EXPECT_NE(error.find("node 12"), std::string::npos) << error;
+
+  auto not_unit = message;
+  not_unit.edges[0].measurement.orientation[0] = 3;
+  EXPECT_FALSE(from_message(not_unit, &error, &failure));
+  EXPECT_EQ(failure, ContentFailure::kContent);
+
+  auto dangling = message;
+  dangling.edges[1].to = 99;
+  failure = ContentFailure::kInformation;
+  EXPECT_FALSE(from_message(dangling, &error, &failure));
+  EXPECT_EQ(failure, ContentFailure::kContent);
+
+  // Semi-definite is information too: a direction without any (a registration on a flat wall).
+  auto semi = message;
+  for (double& v : semi.edges[0].information) v = 0;
+  semi.edges[0].information[0] = semi.edges[0].information[7] = 1e4;
+  EXPECT_TRUE(from_message(semi, &error)) << error;
 }
 
 }  // namespace

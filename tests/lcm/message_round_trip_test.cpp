@@ -17,11 +17,13 @@ template <> struct Sample<cvo_lcm::keyframe_t> { static auto make() { return tes
 template <> struct Sample<cvo_lcm::local_graph_t> { static auto make() { return test::sample_local_graph(); } };
 template <> struct Sample<cvo_lcm::map_t> { static auto make() { return test::sample_map(); } };
 template <> struct Sample<cvo_lcm::status_t> { static auto make() { return test::sample_status(); } };
+template <> struct Sample<cvo_lcm::keyframe_request_t> { static auto make() { return test::sample_keyframe_request(); } };
 
 template <class T>
 class MessageRoundTrip : public ::testing::Test {};
 using ChannelTypes = ::testing::Types<cvo_lcm::rgbd_frame_t, cvo_lcm::pose_t, cvo_lcm::keyframe_t,
-                                      cvo_lcm::local_graph_t, cvo_lcm::map_t, cvo_lcm::status_t>;
+                                      cvo_lcm::local_graph_t, cvo_lcm::map_t, cvo_lcm::status_t,
+                                      cvo_lcm::keyframe_request_t>;
 TYPED_TEST_SUITE(MessageRoundTrip, ChannelTypes);
 
 TYPED_TEST(MessageRoundTrip, DecodesToTheSameMessage) {

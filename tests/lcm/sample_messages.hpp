@@ -1,8 +1,10 @@
 #pragma once
 // One message of each cvo_lcm type with every field set to a distinct, non-default value and every
 // array non-empty, so that a round trip or a truncation exercises the whole encoding.
+#include <algorithm>
 #include <cstdint>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/map_t.hpp"
@@ -29,7 +31,12 @@ inline cvo_lcm::graph_edge_t sample_edge(std::int64_t from, std::int64_t to) {
   e.from = from;
   e.to = to;
   e.measurement = sample_pose(0.1 * static_cast<double>(to));
-  for (int i = 0; i < 36; ++i) e.information[i] = i % 7 == 0 ? 100.0 + i : 0.25 * i;
+  // Symmetric and diagonally dominant, so positive definite: an information matrix the back end's
+  // door accepts (posegraph/information.hpp). Entry (r, c) off the diagonal is 0.25 (6 min + max).
+  for (int i = 0; i < 36; ++i) {
+    const int r = i / 6, c = i % 6;
+    e.information[i] = r == c ? 100.0 + i : 0.25 * (6 * std::min(r, c) + std::max(r, c));
+  }
   return e;
 }
 
@@ -170,6 +177,16 @@ inline cvo_lcm::status_t sample_status() {
   m.keyframes_lost = 1;
   m.process = "cvo-trackerd";
   m.detail = "camera re-opened after unplug";
+  return m;
+}
+
+inline cvo_lcm::keyframe_request_t sample_keyframe_request() {
+  cvo_lcm::keyframe_request_t m{};
+  m.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
+  m.utime = 1305031299500000;
+  m.session = 0x5e5510'0000'0001;
+  m.ids = {3, 7, 12};
+  m.num_ids = static_cast<std::int32_t>(m.ids.size());
   return m;
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -280,6 +281,46 @@ TEST(Backend, BadInputIsRefused) {
   EXPECT_EQ(empty.optimise_all().iterations, 0);
   EXPECT_TRUE(empty.frame_trajectory().empty());
   EXPECT_EQ(empty.odometry_correction().translation().norm(), 0.0);
+}
+
+// An information matrix that is not positive semi-definite would make the keyframe graph's cost
+// unbounded below (posegraph/information.hpp): the loop and the local graph are refused, naming
+// the edge, and nothing of them enters the graphs.
+TEST(Backend, IndefiniteInformationIsRefused) {
+  const SyntheticRun run = make_run(square(), 5, kBias, kInformation);
+  Backend backend;
+  backend.add_local_graph(0, run.graphs[0]);
+  auto indefinite = loop(run, 0, 5, kInformation);
+  indefinite.information(0, 1) = indefinite.information(1, 0) = 1.2 * kInformation;  // eigenvalue -0.2 kInformation
+  try {
+    backend.add_loop(indefinite);
+    FAIL() << "a loop with an indefinite information matrix was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("loop 0 -> 5: information is not positive semi-definite"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(backend.loops().empty());
+  EXPECT_EQ(backend.pending_loops(), 0u);
+
+  odometry::LocalGraph bad(run.graphs[1].nodes().size());
+  for (const auto& n : run.graphs[1].nodes()) bad.add_node(n);
+  for (auto e : run.graphs[1].edges()) {
+    if (bad.edges().empty()) e.information(3, 4) = e.information(4, 3) = 2 * kInformation;  // eigenvalue -kInformation
+    bad.add_edge(e);
+  }
+  const auto keyframe = static_cast<posegraph::NodeId>(bad.keyframe().frame_index);
+  try {
+    backend.add_local_graph(keyframe, bad);
+    FAIL() << "a local graph with an indefinite information matrix was accepted";
+  } catch (const std::invalid_argument& e) {
+    const std::string edge = "local graph edge " + std::to_string(bad.edges()[0].from) + " -> " +
+                             std::to_string(bad.edges()[0].to) + ": information is not positive semi-definite";
+    EXPECT_NE(std::string(e.what()).find(edge), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(backend.local_graphs(), 1u);
+  backend.add_local_graph(keyframe, run.graphs[1]);  // the good graph of that keyframe is still welcome
+  EXPECT_EQ(backend.local_graphs(), 2u);
+  EXPECT_TRUE(backend.add_loop(loop(run, 0, 5, kInformation)));
 }
 
 }  // namespace

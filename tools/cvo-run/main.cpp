@@ -262,7 +262,7 @@ core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::T
   core::Trajectory all;
   for (std::size_t k = 0; k < sequences.size(); ++k) {
     const auto& gt = sequences[k].groundtruth();
-    if (!gt.empty()) source += (source.empty() ? "" : " ") + (args.sequences[k] / "groundtruth.txt").string();
+    if (!gt.empty()) source.append(source.empty() ? "" : " ").append((args.sequences[k] / "groundtruth.txt").string());
     all.insert(all.end(), gt.begin(), gt.end());
   }
   std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
@@ -394,7 +394,8 @@ int run(const Arguments& args) {
                      " has no groundtruth.txt and no --groundtruth was given");
   if (!std::ofstream(args.out)) throw io::InputError(args.out, "cannot write the trajectory here");
   report.mode = args.mode;
-  for (const auto& folder : args.sequences) report.sequence += (report.sequence.empty() ? "" : " ") + folder.string();
+  // append(), not operator+ of short strings: GCC 12 warns falsely (-Wrestrict) on that.
+  for (const auto& folder : args.sequences) report.sequence.append(report.sequence.empty() ? "" : " ").append(folder.string());
   report.trajectory = args.out.string();
 
   core::Trajectory trajectory;

@@ -14,6 +14,10 @@
 // JSON as solver_cost. --robust puts a Cauchy kernel (delta = 2, Ceres' CauchyLoss(2)) on every
 // edge in both.
 //
+// Information matrices that are not positive semi-definite are repaired by the reader, with one
+// warning on standard error (g2o_io.hpp); --json counts them (repaired_information). CHOLMOD's
+// own messages go to standard error too, so standard output holds only the report.
+//
 // Exit status: 0 done, 1 bad input file, 2 bad command line.
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +27,7 @@
 #include <string>
 #include <string_view>
 
+#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
 #include "libcvo/core/parameters.hpp"
@@ -81,6 +86,15 @@ struct PoseGraph3dErrorTerm {
   }
 };
 
+// A square root S (S^T S = Omega) that exists for every information the graph holds, semi-definite
+// ones too (information.hpp), which have no Cholesky factor: V sqrt(Lambda) V^T, with round-off
+// below zero clamped.
+Eigen::Matrix<double, 6, 6> square_root(const Eigen::Matrix<double, 6, 6>& omega) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(omega);
+  const Eigen::Matrix<double, 6, 6>& V = eigen.eigenvectors();
+  return V * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal() * V.transpose();
+}
+
 Result run_ours(PoseGraph graph, const Options& options) {
   cvo::posegraph::OptimizerOptions o;
   o.max_iterations = options.max_iterations;
@@ -104,7 +118,7 @@ Result run_ceres(PoseGraph graph, const Options& options) {
   const double delta = cvo::core::PoseGraphParameters{}.cauchy_delta;
   for (const Edge& e : graph.edges()) {
     auto* cost = new ceres::AutoDiffCostFunction<PoseGraph3dErrorTerm, 6, 3, 4, 3, 4>(new PoseGraph3dErrorTerm{
-        e.measurement.translation(), e.measurement.rotation(), e.information.llt().matrixU()});
+        e.measurement.translation(), e.measurement.rotation(), square_root(e.information)});
     ceres::LossFunction* loss = e.robust ? new ceres::CauchyLoss(delta) : nullptr;
     Block& a = blocks.at(e.from);
     Block& b = blocks.at(e.to);
@@ -147,8 +161,11 @@ Optimises the pose graph of FILE.g2o (VERTEX_SE3:QUAT / EDGE_SE3:QUAT) twice fro
 guess, first pose fixed: with cvo::posegraph (Levenberg-Marquardt on SE(3), CHOLMOD) and with Ceres
 Solver (quaternion + translation blocks, sparse normal Cholesky). Both final costs are computed by
 one function, 1/2 sum rho(e' Omega e) with e = [t_E; 2 vec(q_E)], E = Z^-1 Ti^-1 Tj.
+An information matrix that is not positive semi-definite is replaced by the nearest positive-
+definite one, with one warning on standard error.
 
-  --json              one JSON object: per solver initial_cost, final_cost, iterations, seconds
+  --json              one JSON object: repaired_information (edges), per solver initial_cost,
+                      final_cost, iterations, seconds
   --max-iterations N  iteration cap of both solvers (default 100)
   --robust            Cauchy kernel (delta 2) on every edge
   -h, --help          this text
@@ -187,7 +204,9 @@ Options parse_arguments(int argc, char** argv) {
 }
 
 int run(const Options& options) {
-  PoseGraph graph = cvo::posegraph::read_g2o(options.file);
+  cvo::posegraph::send_cholmod_messages_to_stderr();  // before Ceres starts CHOLMOD too
+  cvo::posegraph::G2oRepairs repairs;
+  PoseGraph graph = cvo::posegraph::read_g2o(options.file, std::cerr, &repairs);
   if (options.robust) {
     PoseGraph robust;
     for (const auto& [id, node] : graph.nodes()) robust.add_node(id, node.pose, node.fixed);
@@ -203,7 +222,8 @@ int run(const Options& options) {
   using cvo::io::json_string;
   if (options.json) {
     std::cout << "{\"file\": " << json_string(options.file) << ", \"nodes\": " << graph.nodes().size()
-              << ", \"edges\": " << graph.edges().size() << ", \"robust\": " << (options.robust ? "true" : "false")
+              << ", \"edges\": " << graph.edges().size() << ", \"repaired_information\": " << repairs.edges
+              << ", \"robust\": " << (options.robust ? "true" : "false")
               << ", \"max_iterations\": " << options.max_iterations << ", \"solvers\": {";
     for (std::size_t k = 0; k < 2; ++k) {
       const Result& r = results[k];

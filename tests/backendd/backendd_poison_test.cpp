@@ -1,0 +1,208 @@
+// cvo-backendd fed a poison recording: a real tracker's keyframes and local graphs with hostile
+// messages among them (a keyframe repeating an id with other content, a local graph for a keyframe
+// that never came, a NaN pose, an indefinite information matrix, another schema version, a
+// truncated message, another message type). Read from a file:// log with --exit-on-eof, it keeps
+// going, counts each refusal by kind in CVO_STATUS, stores none of them, and its final map is the
+// one the clean recording gives: every good message was used.
+//
+// No network: the input is a log and the output another (file:// providers both ways).
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "cvo_lcm/keyframe_t.hpp"
+#include "cvo_lcm/local_graph_t.hpp"
+#include "cvo_lcm/pose_t.hpp"
+#include "cvo_lcm/status_t.hpp"
+#include "daemon/backendd/keyframe_store.hpp"
+#include "libcvo/lcm/decode.hpp"
+#include "tests/daemon/daemon_process.hpp"
+#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace cvo::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using cvo::testing::DaemonProcess;
+
+struct Event {
+  std::string channel;
+  std::vector<std::uint8_t> bytes;
+};
+
+template <class T>
+Event event(const std::string& channel, const T& message) {
+  Event e{channel, std::vector<std::uint8_t>(static_cast<std::size_t>(message.getEncodedSize()))};
+  message.encode(e.bytes.data(), 0, static_cast<int>(e.bytes.size()));
+  return e;
+}
+
+template <class T>
+T decoded(const Event& e) {
+  auto m = lcm::decode<T>(e.bytes.data(), static_cast<int>(e.bytes.size()), nullptr);
+  EXPECT_TRUE(m) << e.channel;
+  return m.value_or(T{});
+}
+
+// The tracker's keyframes and local graphs on the embedded clip, in the order it published them.
+std::vector<Event> tracker_recording(const fs::path& dir) {
+  const auto out = dir / "tracker.lcmlog";
+  DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
+                         {"--source", "tum:" + (fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").string(), "--exit-on-eof",
+                          "--deterministic", "--lcm-url", "file://" + out.string() + "?mode=w", "--set",
+                          "trackerd.paced=false", "--set", "trackerd.realtime_priority=0", "--set",
+                          "trackerd.lock_memory=false"},
+                         dir / "tracker.txt");
+  EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0) << cvo::testing::slurp(dir / "tracker.txt");
+  std::vector<Event> events;
+  ::lcm::LogFile in(out.string(), "r");
+  while (const ::lcm::LogEvent* e = in.readNextEvent()) {
+    if (e->channel != "CVO_KEYFRAME" && e->channel != "CVO_LOCAL_GRAPH") continue;
+    const auto* data = static_cast<const std::uint8_t*>(e->data);
+    events.push_back({e->channel, std::vector<std::uint8_t>(data, data + e->datalen)});
+  }
+  return events;
+}
+
+// Where the poison goes into the recording: a third of the way.
+std::size_t poison_at(const std::vector<Event>& good) { return good.size() / 3; }
+
+// One of each kind of poison, made from the recording's own messages. The conflicting keyframe
+// repeats one sent before the poison; the indefinite graph is the twin of one sent after it (so
+// the good one is new when it comes).
+std::vector<std::pair<Event, int>> poison(const std::vector<Event>& good) {
+  const auto first_of = [&](const std::string& channel, int skip, std::size_t from = 0) {
+    for (std::size_t i = from; i < good.size(); ++i)
+      if (good[i].channel == channel && skip-- == 0) return good[i];
+    return Event{};
+  };
+  std::vector<std::pair<Event, int>> out;
+  auto moved = decoded<cvo_lcm::keyframe_t>(first_of("CVO_KEYFRAME", 1));
+  moved.pose.position[0] += 0.05;  // keyframe 1 again, elsewhere
+  out.emplace_back(event("CVO_KEYFRAME", moved), cvo_lcm::status_t::BAD_CONFLICT);
+  auto orphan = decoded<cvo_lcm::local_graph_t>(first_of("CVO_LOCAL_GRAPH", 0));
+  orphan.keyframe_id = 999;  // no such keyframe
+  out.emplace_back(event("CVO_LOCAL_GRAPH", orphan), cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME);
+  auto nan = decoded<cvo_lcm::keyframe_t>(first_of("CVO_KEYFRAME", 0));
+  nan.id = 1000;
+  nan.pose.position[1] = std::numeric_limits<double>::quiet_NaN();
+  out.emplace_back(event("CVO_KEYFRAME", nan), cvo_lcm::status_t::BAD_NOT_FINITE);
+  auto indefinite = decoded<cvo_lcm::local_graph_t>(first_of("CVO_LOCAL_GRAPH", 0, poison_at(good)));
+  indefinite.edges.front().information[0] = -1.0;  // a negative variance
+  out.emplace_back(event("CVO_LOCAL_GRAPH", indefinite), cvo_lcm::status_t::BAD_INFORMATION);
+  auto future = decoded<cvo_lcm::keyframe_t>(first_of("CVO_KEYFRAME", 0));
+  future.id = 1001;
+  future.version = cvo_lcm::keyframe_t::SCHEMA_VERSION + 1;
+  out.emplace_back(event("CVO_KEYFRAME", future), cvo_lcm::status_t::BAD_VERSION);
+  Event cut = first_of("CVO_KEYFRAME", 2);
+  cut.bytes.resize(cut.bytes.size() / 2);
+  out.emplace_back(cut, cvo_lcm::status_t::BAD_BODY);
+  cvo_lcm::pose_t pose{};
+  pose.version = cvo_lcm::pose_t::SCHEMA_VERSION;
+  out.emplace_back(event("CVO_KEYFRAME", pose), cvo_lcm::status_t::BAD_FINGERPRINT);
+  return out;
+}
+
+void write_log(const fs::path& file, const std::vector<Event>& good, const std::vector<std::pair<Event, int>>& bad) {
+  ::lcm::LogFile log(file.string(), "w");
+  std::int64_t t = 0;
+  const auto write = [&](const Event& e) {
+    ::lcm::LogEvent le{};
+    le.timestamp = t += 1000;
+    le.channel = e.channel;
+    le.datalen = static_cast<std::int32_t>(e.bytes.size());
+    le.data = const_cast<std::uint8_t*>(e.bytes.data());
+    log.writeEvent(&le);
+  };
+  const std::size_t at = poison_at(good);
+  for (std::size_t i = 0; i < good.size(); ++i) {
+    if (i == at)
+      for (const auto& [e, kind] : bad) write(e);
+    write(good[i]);
+  }
+}
+
+struct Outcome {
+  int exit_code = -1;
+  std::string log;
+  cvo::testing::PublishedLog published;
+  std::uint64_t records = 0;
+};
+
+Outcome run_backendd(const fs::path& dir, const std::string& name, const fs::path& input) {
+  const auto out = dir / (name + ".out.lcmlog");
+  const auto store = dir / (name + ".store");
+  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
+                         {"--lcm-url", "file://" + input.string() + "?speed=0", "--publish-url",
+                          "file://" + out.string() + "?mode=w", "--store", store.string(), "--exit-on-eof"},
+                         dir / (name + ".txt"));
+  Outcome o;
+  o.exit_code = backendd.wait_for(300s).value_or(-9);
+  o.log = cvo::testing::slurp(dir / (name + ".txt"));
+  o.published = cvo::testing::read_published(out);
+  std::vector<backendd::StoredRecord> records;
+  std::string warning;
+  o.records = backendd::KeyframeStore(store, records, warning).records();
+  return o;
+}
+
+TEST(BackenddPoison, EveryRefusalIsCountedByKindAndEveryGoodMessageIsUsed) {
+  const cvo::test::TempDir dir("backendd_poison");
+  const auto good = tracker_recording(dir.path());
+  ASSERT_GE(good.size(), 8u);
+  const auto bad = poison(good);
+  write_log(dir.path() / "clean.lcmlog", good, {});
+  write_log(dir.path() / "poison.lcmlog", good, bad);
+
+  const Outcome clean = run_backendd(dir.path(), "clean", dir.path() / "clean.lcmlog");
+  const Outcome poisoned = run_backendd(dir.path(), "poisoned", dir.path() / "poison.lcmlog");
+  ASSERT_EQ(clean.exit_code, 0) << clean.log;
+  ASSERT_EQ(poisoned.exit_code, 0) << "the end of the log is a clean end\n" << poisoned.log;
+
+  ASSERT_FALSE(poisoned.published.statuses.empty()) << poisoned.log;
+  const auto& status = poisoned.published.statuses.back();
+  EXPECT_EQ(status.state, +cvo_lcm::status_t::STATE_STOPPING);
+  int expected[cvo_lcm::status_t::NUM_BAD_KINDS] = {};
+  for (const auto& [e, kind] : bad) ++expected[kind];
+  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k)
+    EXPECT_EQ(status.bad_messages[k], expected[k]) << "refusals of kind " << k << "\n" << poisoned.log;
+  for (const auto& s : clean.published.statuses)
+    for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) EXPECT_EQ(s.bad_messages[k], 0);
+
+  // Nothing refused was stored; every good message was, and was used: the same final map.
+  EXPECT_EQ(poisoned.records, good.size());
+  EXPECT_EQ(clean.records, good.size());
+  ASSERT_FALSE(clean.published.maps.empty());
+  ASSERT_FALSE(poisoned.published.maps.empty());
+  const auto& a = clean.published.maps.back();
+  const auto& b = poisoned.published.maps.back();
+  ASSERT_EQ(a.keyframes.size(), b.keyframes.size());
+  for (std::size_t i = 0; i < a.keyframes.size(); ++i) {
+    EXPECT_EQ(a.keyframes[i].id, b.keyframes[i].id);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(a.keyframes[i].pose.position[c], b.keyframes[i].pose.position[c], 1e-9) << "keyframe " << i;
+  }
+  EXPECT_EQ(a.num_loops, b.num_loops);
+}
+
+TEST(BackenddPoison, ExitOnEofNeedsALog) {
+  const cvo::test::TempDir dir("backendd_poison");
+  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
+                         {"--lcm-url", "udpm://239.255.76.67:7667?ttl=0", "--store", (dir.path() / "s").string(),
+                          "--exit-on-eof"},
+                         dir.path() / "err.txt");
+  EXPECT_EQ(backendd.wait_for(60s).value_or(-9), 1);
+  EXPECT_NE(cvo::testing::slurp(dir.path() / "err.txt").find("backendd.exit_on_eof"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace cvo::daemon

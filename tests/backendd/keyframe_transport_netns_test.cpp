@@ -1,0 +1,234 @@
+// No keyframe lost in transport: a real cvo-trackerd on the embedded clip publishes on one LCM
+// multicast group, a real cvo-backendd listens on another, and a relay between them (this test)
+// loses every third CVO_KEYFRAME the first time it is sent, as an overflowing socket buffer would;
+// re-sends pass. The relay forwards CVO_KEYFRAME, CVO_LOCAL_GRAPH and CVO_POSE to the back end,
+// CVO_KEYFRAME_REQUEST and CVO_MAP to the tracker. The back end notices each gap, asks the tracker
+// again, and its final map (after SIGTERM) holds every keyframe the tracker made; both processes'
+// CVO_STATUS count what was asked for and recovered, and nothing lost.
+//
+// Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone, no packet can
+// leave the host.
+#include <pthread.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <mutex>
+#include <optional>
+#include <regex>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include "cvo_lcm/keyframe_t.hpp"
+#include "cvo_lcm/pose_t.hpp"
+#include "cvo_lcm/status_t.hpp"
+#include "libcvo/lcm/decode.hpp"
+#include "tests/backendd/netns_support.hpp"
+#include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace cvo::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using cvo::testing::Captured;
+using cvo::testing::DaemonProcess;
+using cvo::testing::KeyframeName;
+using cvo::testing::LcmCapture;
+
+const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
+// The tracker's side of the relay: another group and port than the back end's (cvo::testing::kUrl).
+constexpr const char* kTrackerUrl = "udpm://239.255.76.68:7668?ttl=0&recv_buf_size=8388608";
+
+// What the relay saw and did; read under Relay::mutex_.
+struct RelayLog {
+  std::set<KeyframeName> made;          // every keyframe the tracker's poses name (ids from 0)
+  std::set<KeyframeName> sent;          // every CVO_KEYFRAME the tracker sent
+  std::set<KeyframeName> dropped;       // lost on purpose, the first time each was sent
+  int resent = 0;                       // CVO_KEYFRAMEs sent again (passed)
+  int requests = 0;                     // CVO_KEYFRAME_REQUESTs passed to the tracker
+  std::int64_t last_frame = -1;         // the newest frame index of the tracker's poses
+  std::optional<cvo_lcm::status_t> tracker_status;  // the tracker's newest CVO_STATUS
+};
+
+class Relay {
+ public:
+  Relay() : tracker_side_(kTrackerUrl), backend_side_(cvo::testing::kUrl) {
+    for (const char* channel : {"CVO_KEYFRAME", "CVO_LOCAL_GRAPH", "CVO_POSE", "CVO_STATUS"})
+      tracker_side_.subscribe(channel, &Relay::from_tracker, this);
+    for (const char* channel : {"CVO_KEYFRAME_REQUEST", "CVO_MAP"})
+      backend_side_.subscribe(channel, &Relay::from_backend, this);
+    threads_.emplace_back([this] { run(tracker_side_, "relay-tracker"); });
+    threads_.emplace_back([this] { run(backend_side_, "relay-backend"); });
+  }
+  ~Relay() {
+    stop_ = true;
+    for (auto& t : threads_) t.join();
+  }
+  Relay(const Relay&) = delete;
+  Relay& operator=(const Relay&) = delete;
+
+  [[nodiscard]] bool good() { return tracker_side_.good() && backend_side_.good(); }
+  RelayLog snapshot() {
+    const std::lock_guard lock(mutex_);
+    return log_;
+  }
+  /// True once `condition` holds for what the relay saw; false when `limit` passed first.
+  bool wait_until(const std::function<bool(const RelayLog&)>& condition, std::chrono::seconds limit) {
+    std::unique_lock lock(mutex_);
+    return changed_.wait_for(lock, limit, [&] { return condition(log_); });
+  }
+
+ private:
+  void run(::lcm::LCM& lcm, const char* name) {
+    pthread_setname_np(pthread_self(), name);
+    while (!stop_) lcm.handleTimeout(50);
+  }
+
+  void from_tracker(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    const auto size = static_cast<int>(buffer->data_size);
+    if (channel == "CVO_STATUS") {  // for the test; the back end has no use for it
+      if (auto s = lcm::decode<cvo_lcm::status_t>(buffer->data, size, nullptr); s && s->process == "cvo-trackerd") {
+        const std::lock_guard lock(mutex_);
+        log_.tracker_status = std::move(*s);
+      }
+      changed_.notify_all();
+      return;
+    }
+    if (channel == "CVO_POSE") note_pose(buffer->data, size);
+    if (channel == "CVO_KEYFRAME" && !pass_keyframe(buffer->data, size)) return;
+    backend_side_.publish(channel, buffer->data, buffer->data_size);
+  }
+
+  void from_backend(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    if (channel == "CVO_KEYFRAME_REQUEST") {
+      const std::lock_guard lock(mutex_);
+      ++log_.requests;
+    }
+    tracker_side_.publish(channel, buffer->data, buffer->data_size);
+  }
+
+  void note_pose(const void* data, int size) {
+    const auto pose = lcm::decode<cvo_lcm::pose_t>(data, size, nullptr);
+    if (!pose) return;
+    {
+      const std::lock_guard lock(mutex_);
+      for (std::int64_t id = 0; id <= pose->keyframe_id; ++id) log_.made.emplace(pose->session, id);
+      log_.last_frame = std::max(log_.last_frame, pose->frame_index);
+    }
+    changed_.notify_all();
+  }
+
+  // Every third keyframe is lost the first time it is sent; re-sends pass.
+  bool pass_keyframe(const void* data, int size) {
+    const auto keyframe = lcm::decode<cvo_lcm::keyframe_t>(data, size, nullptr);
+    if (!keyframe) return true;
+    const KeyframeName name{keyframe->session, keyframe->id};
+    const std::lock_guard lock(mutex_);
+    if (!log_.sent.insert(name).second) {
+      ++log_.resent;
+      return true;
+    }
+    if (log_.sent.size() % 3 != 0) return true;
+    log_.dropped.insert(name);
+    return false;
+  }
+
+  ::lcm::LCM tracker_side_, backend_side_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  RelayLog log_;
+  std::atomic<bool> stop_{false};
+  std::vector<std::thread> threads_;
+};
+
+TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeLeavesTheMapWhole) {
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+  cvo::test::TempDir dir;
+  LcmCapture capture(dir.path() / "maps.lcmlog");
+  ASSERT_TRUE(capture.good());
+  Relay relay;
+  ASSERT_TRUE(relay.good());
+
+  const auto backend_err = dir.path() / "backendd.txt", tracker_err = dir.path() / "trackerd.txt";
+  auto backendd = cvo::testing::start_backendd(dir.path() / "keyframes.store", backend_err);
+  const int backend_pid = backendd->pid();
+  ASSERT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(backend_pid); }, 60s))
+      << cvo::testing::slurp(backend_err);
+
+  // A live tracker at the clip's 30 Hz that stays up after its last frame (as a robot's does), so
+  // that it can still answer for its newest keyframes.
+  DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
+                         {"--source", "tum:" + kClip.string(), "--lcm-url", kTrackerUrl, "--deterministic", "--set",
+                          "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
+                         tracker_err);
+  const auto logs = [&] { return cvo::testing::slurp(tracker_err) + cvo::testing::slurp(backend_err); };
+
+  // Every frame tracked (the clip has 50), then every keyframe it made in the back end's map.
+  ASSERT_TRUE(relay.wait_until([](const RelayLog& r) { return r.last_frame == 49; }, 120s)) << logs();
+  const RelayLog seen = relay.snapshot();
+  ASSERT_GE(seen.made.size(), 6u) << "too few keyframes for every third to matter";
+  EXPECT_EQ(seen.dropped.size(), seen.made.size() / 3);
+  EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(seen.made); }, 120s)) << logs();
+
+  const auto tracker_code = cvo::testing::stop(trackerd, 60s);
+  EXPECT_EQ(tracker_code.value_or(-9), 0) << logs();
+  EXPECT_TRUE(relay.wait_until(
+      [](const RelayLog& r) { return r.tracker_status && r.tracker_status->state == cvo_lcm::status_t::STATE_STOPPING; },
+      30s))
+      << "no final CVO_STATUS from the tracker";
+  const auto backend_code = cvo::testing::stop(*backendd, 120s);
+  EXPECT_EQ(backend_code.value_or(-9), 0) << logs();
+  ASSERT_TRUE(capture.wait_until(
+      [&](const Captured& c) { return c.status_from(backend_pid, cvo_lcm::status_t::STATE_STOPPING); }, 30s));
+
+  // The final map (published before the final CVO_STATUS) holds every keyframe the tracker made.
+  const Captured captured = capture.snapshot();
+  ASSERT_TRUE(captured.map);
+  EXPECT_TRUE(captured.map_holds(seen.made)) << logs();
+  EXPECT_EQ(captured.map->keyframes.size(), seen.made.size());
+  // And every keyframe's local graph, those refused while their keyframe was missing included.
+  const auto backend_log = cvo::testing::slurp(backend_err);
+  std::smatch graphs;
+  ASSERT_TRUE(std::regex_search(backend_log, graphs, std::regex("; (\\d+) local graphs;"))) << backend_log;
+  EXPECT_EQ(std::stoul(graphs[1]), seen.made.size()) << backend_log;
+
+  const RelayLog relayed = relay.snapshot();
+  EXPECT_EQ(relayed.sent, seen.made) << "the tracker sent every keyframe it made";
+  const auto& backend = captured.backend_statuses.back();
+  ASSERT_TRUE(relayed.tracker_status);
+  const auto& tracker = *relayed.tracker_status;
+  const auto dropped = static_cast<std::int64_t>(relayed.dropped.size());
+  std::cout << "keyframes made " << seen.made.size() << ", dropped by the relay " << dropped
+            << "; back end: requested " << backend.keyframes_requested << ", recovered "
+            << backend.keyframes_recovered << ", lost " << backend.keyframes_lost << ", local graphs refused "
+            << backend.bad_messages[cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME] << "; tracker: sent again "
+            << tracker.keyframes_requested << ", lost " << tracker.keyframes_lost << "; requests relayed "
+            << relayed.requests << ", keyframes re-sent " << relayed.resent << std::endl;
+  EXPECT_GE(backend.keyframes_requested, dropped) << "each dropped keyframe asked for";
+  EXPECT_EQ(backend.keyframes_recovered, backend.keyframes_requested) << logs();
+  EXPECT_EQ(backend.keyframes_lost, 0) << logs();
+  EXPECT_GE(tracker.keyframes_requested, dropped) << "the tracker answered from its history";
+  EXPECT_EQ(tracker.keyframes_lost, 0) << logs();
+  EXPECT_GE(relayed.resent, dropped);
+  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) {
+    // A dropped keyframe's local graph may arrive before the keyframe is recovered: refused, sent again.
+    if (k == cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME) continue;
+    EXPECT_EQ(backend.bad_messages[k], 0) << "kind " << k;
+  }
+}
+
+}  // namespace
+}  // namespace cvo::daemon
