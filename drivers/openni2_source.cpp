@@ -6,6 +6,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <cctype>
 #include <climits>
 #include <cmath>
 #include <optional>
@@ -15,13 +16,19 @@
 
 #include "drivers/frame_gaps.hpp"
 #include "drivers/read_result.hpp"
+#include "drivers/usb_cameras.hpp"
 
 namespace cvo::drivers {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::string openni_error() { return std::string("OpenNI: ") + openni::OpenNI::getExtendedError(); }
+// OpenNI's text ends in a newline; trimmed, so that more can follow on the same line.
+std::string openni_error() {
+  std::string text = std::string("OpenNI: ") + openni::OpenNI::getExtendedError();
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())) != 0) text.pop_back();
+  return text;
+}
 
 // OpenNI is one library per process (shutdown() forbids any later call), so it is initialised on
 // first use and shut down at exit.
@@ -110,7 +117,7 @@ class OpenNi2Source final : public FrameSource {
     const bool any = uri.empty() || uri == "any";
     if (device_.open(any ? openni::ANY_DEVICE : uri.c_str()) != openni::STATUS_OK)
       throw SourceError(spec_, "cannot open " + (any ? std::string("a device") : "'" + uri + "'") + ": " +
-                                   openni_error());
+                                   openni_error() + "; " + usb_open_hint(spec_));
     watch_.watch(device_.getDeviceInfo().getUri());
     create(depth_, openni::SENSOR_DEPTH, "depth");
     create(colour_, openni::SENSOR_COLOR, "colour");

@@ -9,18 +9,28 @@
 // with the error; the reads that retry while the source stays away return kTimeout with the latest
 // error as the message. kEndOfStream, kBadInput and frames pass through unchanged.
 //
+// Opened by spec, it also listens for libusb hot-plug arrivals of the cameras that spec's scheme
+// opens (cameras.tsv): an arrival makes the next attempt due at once (a waiting read wakes for it)
+// and restarts the back-off from its initial wait. The back-off keeps running as the backstop:
+// where the platform has no hot-plug, and for devices whose ids the table does not know. Once
+// open, describe() adds the camera's USB identity (ids, serial, speed, port) when libusb finds it.
+//
 // Each disconnection is a gap: when it began and ended and why, so the daemon can report it. The
 // time before the first successful open is a gap too (the camera was not there at start).
 // Like every source, one thread uses it.
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/usb_cameras.hpp"
 
 namespace cvo::drivers {
 
@@ -40,12 +50,23 @@ class ReconnectingSource final : public FrameSource {
  public:
   using Opener = std::function<std::unique_ptr<FrameSource>()>;  // throws SourceError
 
-  /// Opens open_source(spec, options).
+  /// Opens open_source(spec, options); watches for the spec's cameras arriving (see the top).
   ReconnectingSource(std::string spec, SourceOptions options, Backoff backoff = {});
   /// Opens whatever `open` returns; `name` stands for it in describe().
   ReconnectingSource(std::string name, Opener open, Backoff backoff = {});
 
+  ~ReconnectingSource() override;
+  ReconnectingSource(const ReconnectingSource&) = delete;
+  ReconnectingSource& operator=(const ReconnectingSource&) = delete;
+
   ReadResult read(core::RgbdFrame& frame, std::chrono::milliseconds timeout) override;
+  /// The camera was plugged in: the next open attempt is due now. Any thread may call it (the
+  /// hot-plug handler does, from libusb's thread).
+  void device_arrived();
+  /// Whether libusb hot-plug events are being watched (false: back-off only).
+  [[nodiscard]] bool watching_hotplug() const { return watch_ != nullptr; }
+  /// Arrivals seen so far.
+  [[nodiscard]] std::uint64_t arrivals() const { return arrivals_; }
   /// The open source's description, or the name and why it is disconnected.
   [[nodiscard]] std::string describe() const override;
   /// Of every source opened so far.
@@ -66,12 +87,17 @@ class ReconnectingSource final : public FrameSource {
  private:
   using Clock = std::chrono::steady_clock;
 
+  ReconnectingSource(std::string name, Opener open, Backoff backoff, std::function<std::string()> identify);
   std::optional<ReadResult> try_open(Clock::time_point deadline);
+  // Sleeps until `until`, or less when a device arrives; true when one did.
+  bool wait_for_arrival(Clock::time_point until);
   ReadResult begin_gap_or_continue(const std::string& why, Clock::time_point now);
 
   const std::string name_;
   const Opener open_;
   const Backoff backoff_;
+  const std::function<std::string()> identify_;  // the open camera's USB identity; empty: none
+  std::string identity_;
   std::unique_ptr<FrameSource> source_;
   Clock::time_point next_attempt_{};  // the epoch: the first attempt is due at once
   Clock::duration wait_;              // before the attempt after the next failure
@@ -80,6 +106,11 @@ class ReconnectingSource final : public FrameSource {
   bool was_connected_ = false;
   std::deque<SourceGap> gaps_;
   Clock::duration closed_gaps_time_{};
+  std::mutex arrival_mutex_;
+  std::condition_variable arrival_;
+  bool arrived_ = false;  // guarded by arrival_mutex_
+  std::atomic<std::uint64_t> arrivals_{0};
+  std::unique_ptr<UsbArrivalWatch> watch_;  // last: stopped before the members it calls into go
 };
 
 }  // namespace cvo::drivers

@@ -20,6 +20,7 @@
 #include "drivers/frame_gaps.hpp"
 #include "drivers/read_result.hpp"
 #include "drivers/stream_pairing.hpp"
+#include "drivers/usb_cameras.hpp"
 #include "drivers/v4l2_formats.hpp"
 
 namespace cvo::drivers {
@@ -73,7 +74,8 @@ class V4l2Node {
     if (fd_.get() < 0) {
       const int error = errno;
       throw SourceError(path, std::string(role) + " node: " +
-                                  (error == ENOENT ? "no such device node" : "cannot open: " + errno_text(error)));
+                                  (error == ENOENT ? "no such device node" : "cannot open: " + errno_text(error)) +
+                                  "; " + usb_open_hint("v4l2:" + path));
     }
     v4l2_capability cap{};
     if (xioctl(fd_.get(), VIDIOC_QUERYCAP, &cap) != 0) fail(std::string(role) + " node: not a V4L2 device");

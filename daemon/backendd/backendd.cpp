@@ -126,7 +126,7 @@ struct Backendd::Work {
   Clock::time_point last_status = Clock::now();
 };
 
-Backendd::Backendd(config::Config config) : config_(std::move(config)) {
+Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(config_.backendd.queue_max) {
   const auto& b = config_.backendd;
   if (b.exit_on_eof && !is_log(b.lcm_url))
     throw io::InputError("backendd.exit_on_eof", "needs a file:// lcm_url (a log that ends), not '" + b.lcm_url + "'");
@@ -191,7 +191,6 @@ int Backendd::run() {
   systemd_.stopping();
   stop_ = true;
   receive.join();
-  queue_ready_.notify_all();
   work.join();
   return 0;
 }
@@ -203,7 +202,6 @@ int Backendd::run() {
 // The store's records pass the same door as received messages (replayed first, in order), so a
 // store written before the door, or a damaged one, cannot feed the mapper a repeat.
 void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
-  const std::lock_guard lock(queue_mutex_);
   for (auto& record : recovered) {
     std::string error;
     const auto key = identify(record.kind, record.payload.data(), record.payload.size(), &error, nullptr);
@@ -219,7 +217,7 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     door_.admit(*key, crc);
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key->session, key->id, Clock::now());  // a gap in the store is asked for too
-    queue_.push_back({std::move(record), std::nullopt});
+    queue_.push({std::move(record), std::nullopt});
   }
 }
 
@@ -297,9 +295,13 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       gaps_.seen(KeyframeGaps::Seen::kGraphWithoutKeyframe, key->session, key->id, Clock::now());
       return refuse(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME, "skipped " + describe(*key) + ": its keyframe never came");
     }
-    if (!wait_for_queue_space()) {
+    // Room first (a log waits for it): a record refused here is neither stored nor let in, so its
+    // re-send is new.
+    const bool room = is_log(config_.backendd.lcm_url) ? queue_.wait_for_room([&] { return stop_.load(); })
+                                                       : queue_.has_room();
+    if (!room) {
       ++queue_drops_;
-      return note_limited("queue full", describe(*key) + " refused: " + std::to_string(config_.backendd.queue_max) +
+      return note_limited("queue full", describe(*key) + " refused: " + std::to_string(queue_.capacity()) +
                                             " records wait for the back end already");
     }
     QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now()};
@@ -311,11 +313,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     door_.admit(*key, crc);
     gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key->session, key->id, Clock::now());
-    {
-      const std::lock_guard lock(queue_mutex_);
-      queue_.push_back(std::move(queued));
-    }
-    queue_ready_.notify_one();
+    queue_.push(std::move(queued));
   } catch (const std::exception& e) {  // out of memory, most likely: this message is lost, not the daemon
     note_limited("receive failure", "skipped " + channel + ": " + e.what());
   }
@@ -399,16 +397,6 @@ void Backendd::retry_store(bool final) {
     note("warning: stopping with the " + describe(health) + "; what is unsaved is lost on restart");
 }
 
-// Live input that outruns the back end is refused (counted; a gap the tracker is asked to fill),
-// so memory stays bounded; a log is read no faster than the back end works.
-bool Backendd::wait_for_queue_space() {
-  std::unique_lock lock(queue_mutex_);
-  const auto room = [&] { return queue_.size() < config_.backendd.queue_max; };
-  if (!is_log(config_.backendd.lcm_url)) return room();
-  while (!room() && !stop_) queue_space_.wait_for(lock, 100ms);
-  return room();
-}
-
 // ---------------------------------------------------------------------------------------------
 // cvo-backend
 
@@ -417,19 +405,10 @@ void Backendd::work_loop() {
   const auto status_period = std::chrono::duration<double>(config_.backendd.status_period_s);
   while (true) {
     work_heartbeat_ns_ = now_ns();
-    std::optional<QueuedRecord> queued;
-    {
-      std::unique_lock lock(queue_mutex_);
-      queue_ready_.wait_for(lock, 50ms, [&] { return !queue_.empty() || receiver_done_; });
-      if (!queue_.empty()) {
-        queued = std::move(queue_.front());
-        queue_.pop_front();
-        queue_space_.notify_one();
-      } else if (receiver_done_) {
-        break;
-      }
-    }
+    const bool receiver_done = receiver_done_;  // read first: it pushes nothing after setting it
+    const auto queued = queue_.pop(50ms);
     if (queued) process(*queued);
+    else if (receiver_done && queue_.size() == 0) break;
     if (Clock::now() - work_->last_status >= status_period)
       publish_status(work_->summary.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT
                                                    : cvo_lcm::status_t::STATE_RUNNING);
@@ -504,10 +483,7 @@ void Backendd::publish_status(std::int8_t state) {
   s.unsaved_records = static_cast<std::int64_t>(store.unsaved);
   const double elapsed = std::chrono::duration<double>(now - w.last_status).count();
   s.rate_hz = elapsed > 0 ? static_cast<double>(w.processed - w.processed_at_last_status) / elapsed : 0;
-  {
-    const std::lock_guard lock(queue_mutex_);
-    s.queue_depth = static_cast<std::int32_t>(queue_.size());
-  }
+  s.queue_depth = static_cast<std::int32_t>(queue_.size());
   s.rss_bytes = resident_bytes();
   for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = bad_messages_[k];
   s.queue_drops = queue_drops_;

@@ -19,9 +19,7 @@
 // skipped.
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -34,6 +32,7 @@
 #include "daemon/backendd/keyframe_gaps.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
+#include "daemon/backendd/work_queue.hpp"
 #include "daemon/common/systemd_notify.hpp"
 #include "libcvo/config/config.hpp"
 
@@ -73,7 +72,6 @@ class Backendd {
   void saw_pose(const void* data, std::size_t size);
   void ask_for_missing(::lcm::LCM& lcm, bool stopping);
   static GapPolicy gap_policy(const config::Config& config);
-  bool wait_for_queue_space();
   void note_store_change();
   void retry_store(bool final);
   void work_loop();
@@ -100,9 +98,7 @@ class Backendd {
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
   std::unique_ptr<Work> work_;  // the mapper and what the daemon reports of it; cvo-backend only
 
-  std::mutex queue_mutex_;
-  std::condition_variable queue_ready_, queue_space_;
-  std::deque<QueuedRecord> queue_;
+  WorkQueue<QueuedRecord> queue_;  // cvo-receive -> cvo-backend
   std::atomic<bool> stop_{false}, receiver_done_{false};
   std::atomic<bool> input_ended_{false};  // a file:// input log was read to its end
   std::atomic<std::int64_t> queue_drops_{0};

@@ -22,6 +22,7 @@
 #include "cvo_lcm/status_t.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
 #include "libcvo/lcm/decode.hpp"
+#include "tests/backendd/tracker_recording.hpp"
 #include "tests/daemon/daemon_process.hpp"
 #include "tests/daemon/lcm_log.hpp"
 #include "tests/support/run_tool.hpp"
@@ -34,10 +35,7 @@ namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using cvo::testing::DaemonProcess;
 
-struct Event {
-  std::string channel;
-  std::vector<std::uint8_t> bytes;
-};
+using Event = cvo::testing::Message;
 
 template <class T>
 Event event(const std::string& channel, const T& message) {
@@ -51,26 +49,6 @@ T decoded(const Event& e) {
   auto m = lcm::decode<T>(e.bytes.data(), static_cast<int>(e.bytes.size()), nullptr);
   EXPECT_TRUE(m) << e.channel;
   return m.value_or(T{});
-}
-
-// The tracker's keyframes and local graphs on the embedded clip, in the order it published them.
-std::vector<Event> tracker_recording(const fs::path& dir) {
-  const auto out = dir / "tracker.lcmlog";
-  DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
-                         {"--source", "tum:" + (fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").string(), "--exit-on-eof",
-                          "--deterministic", "--lcm-url", "file://" + out.string() + "?mode=w", "--set",
-                          "trackerd.paced=false", "--set", "trackerd.realtime_priority=0", "--set",
-                          "trackerd.lock_memory=false"},
-                         dir / "tracker.txt");
-  EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0) << cvo::testing::slurp(dir / "tracker.txt");
-  std::vector<Event> events;
-  ::lcm::LogFile in(out.string(), "r");
-  while (const ::lcm::LogEvent* e = in.readNextEvent()) {
-    if (e->channel != "CVO_KEYFRAME" && e->channel != "CVO_LOCAL_GRAPH") continue;
-    const auto* data = static_cast<const std::uint8_t*>(e->data);
-    events.push_back({e->channel, std::vector<std::uint8_t>(data, data + e->datalen)});
-  }
-  return events;
 }
 
 // Where the poison goes into the recording: a third of the way.
@@ -157,7 +135,7 @@ Outcome run_backendd(const fs::path& dir, const std::string& name, const fs::pat
 
 TEST(BackenddPoison, EveryRefusalIsCountedByKindAndEveryGoodMessageIsUsed) {
   const cvo::test::TempDir dir("backendd_poison");
-  const auto good = tracker_recording(dir.path());
+  const auto good = cvo::testing::tracker_recording(dir.path());
   ASSERT_GE(good.size(), 8u);
   const auto bad = poison(good);
   write_log(dir.path() / "clean.lcmlog", good, {});
