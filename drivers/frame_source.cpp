@@ -20,17 +20,6 @@ const char* to_string(ReadStatus status) {
   return "?";
 }
 
-const char* to_string(BadInput kind) {
-  switch (kind) {
-    case BadInput::kTooShort: return "too short";
-    case BadInput::kFingerprint: return "fingerprint";
-    case BadInput::kBody: return "body";
-    case BadInput::kVersion: return "version";
-    case BadInput::kContent: return "content";
-  }
-  return "?";
-}
-
 std::unique_ptr<FrameSource> open_source(std::string_view spec, const SourceOptions& options) {
   const auto colon = spec.find(':');
   const std::string_view scheme = spec.substr(0, colon);

@@ -21,6 +21,7 @@
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/io/input_error.hpp"
+#include "libcvo/lcm/bad_kind.hpp"
 
 namespace cvo::drivers {
 
@@ -32,15 +33,9 @@ enum class ReadStatus {
   kDisconnected,  // the device or stream went away; close this source and open it again
 };
 
-/// Why a message or frame was refused; values match cvo_lcm::status_t's BAD_* indices, so the
-/// daemon counts them straight into CVO_STATUS.
-enum class BadInput : std::int32_t {
-  kTooShort = 0,     // shorter than an LCM fingerprint
-  kFingerprint = 1,  // another message type or schema
-  kBody = 2,         // truncated, oversized or corrupt body
-  kVersion = 3,      // another schema version of our type
-  kContent = 4,      // decodes, but the frame is unusable (wrong sizes, undecodable image, ...)
-};
+/// Why a message or frame was refused: the shared list of refusal kinds (libcvo/lcm/bad_kind.hpp),
+/// CVO_STATUS's bad_messages indices, so the daemon counts them straight into CVO_STATUS.
+using BadInput = lcm::BadKind;
 
 struct ReadResult {
   ReadStatus status = ReadStatus::kTimeout;
@@ -85,8 +80,8 @@ class FrameSource {
 
 /// "frame", "timeout", "end of stream", "bad input", "disconnected".
 const char* to_string(ReadStatus status);
-/// "too short", "fingerprint", "body", "version", "content".
-const char* to_string(BadInput kind);
+/// Of a BadInput: "too short", "fingerprint", "body", "version", "content", "image size", ...
+using lcm::to_string;
 
 /// Opens the source a spec names (see the top of this file). Throws SourceError.
 std::unique_ptr<FrameSource> open_source(std::string_view spec, const SourceOptions& options = {});

@@ -23,11 +23,6 @@ using Clock = std::chrono::steady_clock;
 // LCM's default is 30.
 constexpr int kQueueCapacity = 64;
 
-static_assert(static_cast<int>(lcm::DecodeFailure::kTooShort) == static_cast<int>(BadInput::kTooShort) &&
-              static_cast<int>(lcm::DecodeFailure::kFingerprint) == static_cast<int>(BadInput::kFingerprint) &&
-              static_cast<int>(lcm::DecodeFailure::kBody) == static_cast<int>(BadInput::kBody) &&
-              static_cast<int>(lcm::DecodeFailure::kVersion) == static_cast<int>(BadInput::kVersion));
-
 class LcmSource final : public FrameSource {
  public:
   LcmSource(std::string url, const SourceOptions& options)
@@ -88,13 +83,14 @@ class LcmSource final : public FrameSource {
         lcm::decode<cvo_lcm::rgbd_frame_t>(buffer->data, static_cast<int>(buffer->data_size), &error, &failure);
     if (!message) {
       gaps_.unreadable();
-      result_ = ReadResult{ReadStatus::kBadInput, static_cast<BadInput>(failure), error};
+      result_ = bad_input(failure, error);
       return;
     }
     if (message->frame_index >= 0) gaps_.arrived(message->frame_index);
-    auto frame = lcm::from_message(*message, &error);
+    BadInput kind = BadInput::kContent;
+    auto frame = lcm::from_message(*message, &error, &kind);
     if (!frame) {
-      result_ = bad_input(BadInput::kContent, error);
+      result_ = bad_input(kind, error);
       return;
     }
     *target_ = std::move(*frame);

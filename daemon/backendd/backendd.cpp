@@ -118,6 +118,9 @@ struct Backendd::Work {
 
   slam::Mapper mapper;
   ::lcm::LCM lcm;  // CVO_MAP and CVO_STATUS
+  // CVO_MAP's epoch: revisions count from the start of this process, and a tracker takes a newer
+  // epoch's maps after a restart of the back end instead of refusing them as stale.
+  const std::int64_t epoch = wall_utime();
   // When each session's first keyframe arrived (nullopt: it was replayed from the store).
   std::map<slam::SessionId, std::optional<Clock::time_point>> first_arrival;
   std::vector<std::string> joins;  // every join noted, repeated in the closing note
@@ -459,7 +462,7 @@ void Backendd::apply_local_graph(const StoredRecord& record) {
 void Backendd::publish_map(const std::vector<std::int64_t>& joined) {
   Work& w = *work_;
   const slam::Map map = w.mapper.map();
-  const auto message = lcm::to_message(map, wall_utime());
+  const auto message = lcm::to_message(map, wall_utime(), w.epoch);
   w.lcm.publish("CVO_MAP", &message);
   w.summary = summarise(map);
   for (const auto session : joined) {

@@ -12,6 +12,12 @@ KeyframeHistory::KeyframeHistory(std::size_t keyframes, std::size_t keyframe_byt
   }
 }
 
+void KeyframeHistory::reserve_keyframe_bytes(std::size_t keyframe_bytes) {
+  if (keyframe_bytes <= keyframe_bytes_) return;
+  keyframe_bytes_ = keyframe_bytes;
+  for (auto& slot : slots_) slot.keyframe.reserve(keyframe_bytes);  // keeps the bytes held
+}
+
 void KeyframeHistory::made(std::int64_t session, std::int64_t id) {
   auto [it, inserted] = newest_.try_emplace(session, id);
   if (!inserted) it->second = std::max(it->second, id);

@@ -62,6 +62,9 @@ class KeyframeHistory {
   [[nodiscard]] std::int64_t resent() const { return resent_; }  // keyframes sent again
   [[nodiscard]] std::int64_t lost() const { return lost_; }      // asked for, no longer held, each once
   [[nodiscard]] std::size_t capacity() const { return slots_.size(); }
+  /// Makes every slot hold keyframes of up to `keyframe_bytes` (a camera of a larger size); what
+  /// is held and counted stays. Allocates: the publisher calls it, not the tracking thread.
+  void reserve_keyframe_bytes(std::size_t keyframe_bytes);
 
  private:
   struct Slot {

@@ -6,12 +6,20 @@
 
 namespace cvo::daemon::trackerd {
 
+namespace {
+
+void create_images(KeyframeSlot& k, int width, int height) {
+  k.frame.bgr.create(height, width, CV_8UC3);
+  k.frame.depth.create(height, width, CV_16UC1);
+}
+
+}  // namespace
+
 Outbox::Outbox(std::size_t capacity, std::size_t pool_size, int width, int height, std::size_t cloud_capacity,
                std::size_t graph_capacity)
     : events_(capacity), keyframes_(pool_size), keyframe_used_(pool_size, 0), graph_used_(pool_size, 0) {
   for (auto& k : keyframes_) {  // full-size images and clouds now, so that copies into them never allocate
-    k.frame.bgr.create(height, width, CV_8UC3);
-    k.frame.depth.create(height, width, CV_16UC1);
+    create_images(k, width, height);
     k.cloud = registration::PointCloud(cloud_capacity);
   }
   graphs_.reserve(pool_size);
@@ -58,6 +66,12 @@ void Outbox::close() {
   }
   ready_.notify_all();
   room_.notify_all();
+}
+
+void Outbox::resize_keyframe_images(int width, int height) {
+  std::unique_lock lock(mutex_);
+  room_.wait(lock, [&] { return std::find(keyframe_used_.begin(), keyframe_used_.end(), 1) == keyframe_used_.end(); });
+  for (auto& k : keyframes_) create_images(k, width, height);  // no slot in use: the publisher reads none
 }
 
 bool Outbox::pop(Event& event, std::chrono::milliseconds timeout) {

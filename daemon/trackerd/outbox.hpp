@@ -16,23 +16,15 @@
 
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/lcm/tracker_messages.hpp"
 #include "libcvo/odometry/local_graph.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 
 namespace cvo::daemon::trackerd {
 
-struct PoseEvent {
-  std::int64_t frame_index = 0;  // in its session
-  std::int64_t keyframe_id = -1;
-  double timestamp = 0;  // the frame's colour stamp
-  core::SE3 odom_pose, map_pose;
-  bool map_placed = false;  // map_pose is in the map frame (CVO_MAP placed the session)
-  core::Matrix6d covariance = core::Matrix6d::Identity();
-  odometry::TrackStatus status = odometry::TrackStatus::kOk;
-  bool is_keyframe = false;
-  double inner_product = 0, gamma_keyframe = 0;
-  int iterations = 0, points = 0;
+// A tracked frame (what CVO_POSE says, lcm::pose_message), and when it arrived for its latency.
+struct PoseEvent : lcm::TrackedPose {
   std::chrono::steady_clock::time_point received;
 };
 
@@ -72,7 +64,11 @@ class Outbox {
   [[nodiscard]] KeyframeSlot& keyframe(int slot) { return keyframes_[static_cast<std::size_t>(slot)]; }
   [[nodiscard]] LocalGraphSlot& graph(int slot) { return graphs_[static_cast<std::size_t>(slot)]; }
   bool push(const Event& event, bool wait);
-  void close();  // no more events: pop() returns false once the outbox is empty
+  void close();
+  /// Tracking thread, when the camera changed size: waits until the publisher has released every
+  /// keyframe slot, then gives each slot images of the new size (the one allocation of a camera
+  /// change, so that the copies after it again never allocate).
+  void resize_keyframe_images(int width, int height);  // no more events: pop() returns false once the outbox is empty
 
   // Publisher thread: the oldest event, waiting up to `timeout`. Release its slots when done.
   bool pop(Event& event, std::chrono::milliseconds timeout);

@@ -71,16 +71,6 @@ std::int64_t new_session_id(std::uint64_t previous = 0) {
 }
 
 
-std::int8_t to_pose_status(odometry::TrackStatus status) {
-  switch (status) {
-    case odometry::TrackStatus::kOk: return cvo_lcm::pose_t::STATUS_OK;
-    case odometry::TrackStatus::kFirstFrame: return cvo_lcm::pose_t::STATUS_FIRST_FRAME;
-    case odometry::TrackStatus::kSelectionFailed: return cvo_lcm::pose_t::STATUS_SELECTION_FAILED;
-    case odometry::TrackStatus::kRegistrationFailed: return cvo_lcm::pose_t::STATUS_REGISTRATION_FAILED;
-  }
-  return cvo_lcm::pose_t::STATUS_LOST;
-}
-
 bool is_device(const std::string& spec) { return spec.starts_with("openni2:") || spec.starts_with("v4l2:"); }
 
 // Intrinsics for the sources that carry none (v4l2): the configured camera (a bad camera file
@@ -113,29 +103,6 @@ std::optional<core::Matrix6d> keyframe_covariance(const odometry::KeyframeOdomet
   return std::nullopt;
 }
 
-cvo_lcm::pose_t pose_message(const Event& event) {
-  const PoseEvent& e = event.pose;
-  cvo_lcm::pose_t m{};
-  m.version = cvo_lcm::pose_t::SCHEMA_VERSION;
-  m.session = event.session;
-  m.utime = lcm::to_utime(e.timestamp);
-  m.frame_index = e.frame_index;
-  m.keyframe_id = e.keyframe_id;
-  m.odom_pose = lcm::to_message(e.odom_pose);
-  m.map_pose = lcm::to_message(e.map_pose);
-  m.map_placed = e.map_placed;
-  lcm::matrix6_to_message(e.covariance, m.covariance);
-  m.status = to_pose_status(e.status);
-  m.is_keyframe = e.is_keyframe;
-  m.inner_product = e.inner_product;
-  m.gamma_frame = 0;
-  m.gamma_keyframe = e.gamma_keyframe;
-  m.iterations = e.iterations;
-  m.points = e.points;
-  m.latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - e.received).count();
-  return m;
-}
-
 // Room for the largest CVO_KEYFRAME a pipeline can publish: every point, the images raw plus an
 // eighth for the encoders' own overhead (a compressed image larger than that is pathological, and
 // not kept); and for a full local graph (a node and two edges per frame).
@@ -158,6 +125,30 @@ std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& pa
   return empty + parameters.local_graph_capacity * (node + 2 * edge);
 }
 
+// Frames of the same camera: every intrinsic, the size included. A camera change needs a new
+// session (its poses are in another odometry), and a new size a new pipeline.
+bool same_camera(const core::Intrinsics& a, const core::Intrinsics& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width && a.height == b.height &&
+         a.depth_scale == b.depth_scale && a.distortion == b.distortion;
+}
+
+// Images of the intrinsics' size.
+bool images_fit(const core::RgbdFrame& frame) {
+  const auto& k = frame.intrinsics;
+  return frame.bgr.cols == k.width && frame.bgr.rows == k.height && frame.depth.cols == k.width &&
+         frame.depth.rows == k.height;
+}
+
+// A frame of valid intrinsics with images of their size: one a pipeline can be made for.
+// (validate() allocates its message only for invalid intrinsics, which sources refuse first.)
+bool usable(const core::RgbdFrame& frame) { return images_fit(frame) && frame.intrinsics.validate().empty(); }
+
+std::uint64_t packed_size(int width, int height) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(width)) << 32) | static_cast<std::uint32_t>(height);
+}
+
+std::string size_name(const core::Intrinsics& k) { return std::to_string(k.width) + "x" + std::to_string(k.height); }
+
 std::string id_list(const std::vector<std::int64_t>& ids) {
   std::string out;
   for (const auto id : ids) out += (out.empty() ? "" : ", ") + std::to_string(id);
@@ -166,23 +157,34 @@ std::string id_list(const std::vector<std::int64_t>& ids) {
 
 }  // namespace
 
-// Everything sized by the first frame. Owned by Trackerd; the tracking thread uses the tracker
-// and the keyframe output, both threads the outbox (thread-safe), the publisher the history.
-struct Trackerd::Pipeline {
-  Pipeline(int w, int h, const odometry::KeyframeOdometryParameters& parameters, std::size_t history_keyframes)
-      : width(w),
-        height(h),
-        tracker(w, h, parameters),
-        output(w, h),
-        outbox(kOutboxEvents, kPoolSlots, w, h, parameters.max_points, parameters.local_graph_capacity),
-        history(history_keyframes, max_keyframe_bytes(w, h, parameters), max_local_graph_bytes(parameters)) {}
-  int width, height;
+// What only the tracking thread uses, sized by its camera: made again when the camera changes size.
+struct Tracking {
+  Tracking(const core::Intrinsics& k, const odometry::KeyframeOdometryParameters& parameters)
+      : camera(k), tracker(k.width, k.height, parameters), output(k.width, k.height) {}
+  core::Intrinsics camera;  // of the frames it tracks
   odometry::KeyframeOdometry tracker;
   odometry::KeyframeOutput output;  // which frame each keyframe is, and its id in the session
+};
+
+// Everything sized by the camera. Owned by Trackerd; the tracking thread uses `tracking`, both
+// threads the outbox (thread-safe), the publisher the history.
+struct Trackerd::Pipeline {
+  Pipeline(const core::Intrinsics& k, const odometry::KeyframeOdometryParameters& p, std::size_t history_keyframes)
+      : parameters(p),
+        tracking(std::make_unique<Tracking>(k, p)),
+        outbox(kOutboxEvents, kPoolSlots, k.width, k.height, p.max_points, p.local_graph_capacity),
+        history(history_keyframes, max_keyframe_bytes(k.width, k.height, p), max_local_graph_bytes(p)) {}
+  const odometry::KeyframeOdometryParameters parameters;
+  std::unique_ptr<Tracking> tracking;
   Outbox outbox;
   KeyframeHistory history;  // what was published, for CVO_KEYFRAME_REQUEST
   std::int64_t session_frames = 0;  // frames tracked in the running session
   std::uint64_t connection = 0;     // the source connection they came from (RingSlot::connection)
+  std::uint64_t first_index = 0;    // acquisition's index of the session's first frame (0 after a reconnection)
+  core::Intrinsics other_camera;    // another camera's frames, in a row: other_frames of them
+  std::size_t other_frames = 0;
+  // Warm-up, again after a camera change: allocations are defects from warmup_frames frames on.
+  std::int64_t warm_frames = 0, allocations_at_warmup = 0, defects_before = 0;
 };
 
 Trackerd::Trackerd(config::Config config) : Trackerd(std::move(config), SourceFactory{}) {}
@@ -340,7 +342,6 @@ void Trackerd::track_loop() {
     if (const auto why = pin_this_thread(t.cpu); !why.empty()) note("warning: " + why);
 
   Pipeline* p = nullptr;
-  std::int64_t frames = 0, allocations_at_warmup = 0;
   while (true) {
     track_heartbeat_ns_ = now_ns();
     RingSlot* slot = ring_->begin_read(100ms);
@@ -348,18 +349,18 @@ void Trackerd::track_loop() {
       if (ring_->drained()) break;
       continue;
     }
-    const core::RgbdFrame& frame = slot->frame;
-    if (p == nullptr) p = start_pipeline(frame);
-    if (p == nullptr || frame.bgr.cols != p->width || frame.bgr.rows != p->height || frame.depth.cols != p->width ||
-        frame.depth.rows != p->height) {  // the first frame fixed the size; a change is a new camera
+    if (p == nullptr) p = start_pipeline(slot->frame);
+    if (p != nullptr && slot->connection != p->connection) {
+      if (p->session_frames > 0) start_new_session(*p);
+      p->connection = slot->connection;
+      p->first_index = 0;  // acquisition counts from 0 again
+    }
+    if (p == nullptr || !accept_camera(*p, slot->frame)) {  // counted, without a note: no allocation here
       ++counters_.bad_messages[cvo_lcm::status_t::BAD_CONTENT];
       ring_->end_read();
       continue;
     }
-    if (slot->connection != p->connection) {
-      if (p->session_frames > 0) start_new_session(*p);
-      p->connection = slot->connection;
-    }
+    slot->frame.index -= p->first_index;  // frame indices count from 0 in a session
 
     Event event;
     track_frame(*p, *slot, event);
@@ -367,9 +368,9 @@ void Trackerd::track_loop() {
     p->outbox.push(event, t.deterministic);  // when full, dropped: counted, with what it carried
     ++p->session_frames;
     ++counters_.frames_tracked;
-    if (++frames == static_cast<std::int64_t>(t.warmup_frames)) allocations_at_warmup = thread_allocations();
-    if (frames > static_cast<std::int64_t>(t.warmup_frames))
-      counters_.allocations_after_warmup = thread_allocations() - allocations_at_warmup;
+    if (++p->warm_frames == static_cast<std::int64_t>(t.warmup_frames)) p->allocations_at_warmup = thread_allocations();
+    if (p->warm_frames > static_cast<std::int64_t>(t.warmup_frames))
+      counters_.allocations_after_warmup = p->defects_before + thread_allocations() - p->allocations_at_warmup;
   }
   if (p != nullptr) {
     publish_open_graph(*p);  // the end of the session: the back end gets every tracked frame
@@ -378,22 +379,72 @@ void Trackerd::track_loop() {
   tracker_done_ = true;
 }
 
-// The pipeline for frames of this one's size, or nullptr (counted) when its intrinsics are unusable.
+// The pipeline for frames of this one's camera, or nullptr (counted) when it cannot be tracked.
 Trackerd::Pipeline* Trackerd::start_pipeline(const core::RgbdFrame& first) {
-  const auto& k = first.intrinsics;
-  if (!k.validate().empty() || first.bgr.cols != k.width || first.bgr.rows != k.height) return nullptr;
-  pipeline_ = std::make_unique<Pipeline>(k.width, k.height, odometry::keyframe_odometry_parameters(config_),
+  if (!usable(first)) return nullptr;
+  pipeline_ = std::make_unique<Pipeline>(first.intrinsics, odometry::keyframe_odometry_parameters(config_),
                                          config_.trackerd.keyframe_history);
+  camera_size_ = packed_size(first.intrinsics.width, first.intrinsics.height);
   pipeline_ready_ = true;
   return pipeline_.get();
+}
+
+// Whether `frame` may be tracked: it comes from the pipeline's camera, or from another camera whose
+// frames have now come trackerd.camera_change_frames times in a row, and the tracker re-initialises
+// for it. A lone frame of another camera is refused and does not disturb tracking.
+bool Trackerd::accept_camera(Pipeline& p, const core::RgbdFrame& frame) {
+  if (same_camera(frame.intrinsics, p.tracking->camera)) {  // validated when the pipeline was made
+    if (!images_fit(frame)) return false;
+    p.other_frames = 0;
+    return true;
+  }
+  if (!usable(frame)) return false;
+  if (p.other_frames == 0 || !same_camera(frame.intrinsics, p.other_camera)) {
+    p.other_camera = frame.intrinsics;
+    p.other_frames = 0;
+  }
+  if (++p.other_frames < config_.trackerd.camera_change_frames) return false;
+  change_camera(p, frame);
+  return true;
+}
+
+// Another camera (a new size or new intrinsics) for good: its frames start a new session from
+// `first`; a new size needs a tracker and keyframe slots of that size. That allocation is the
+// camera change's, reported once here, and warm-up starts again before allocations count as defects.
+void Trackerd::change_camera(Pipeline& p, const core::RgbdFrame& first) {
+  const core::Intrinsics& k = first.intrinsics;
+  const std::int64_t allocations_before = thread_allocations();
+  const std::string from = size_name(p.tracking->camera);
+  if (p.session_frames > 0) start_new_session(p);  // the old session's open local graph goes out first
+  const bool resized = k.width != p.tracking->camera.width || k.height != p.tracking->camera.height;
+  if (resized) {
+    p.tracking.reset();  // before the new one: never both in memory
+    p.tracking = std::make_unique<Tracking>(k, p.parameters);
+    p.outbox.resize_keyframe_images(k.width, k.height);
+    camera_size_ = packed_size(k.width, k.height);
+  } else {
+    p.tracking->camera = k;
+  }
+  p.first_index = first.index;
+  p.other_frames = 0;
+  p.defects_before = counters_.allocations_after_warmup;
+  p.warm_frames = 0;
+  note("camera changed (" + from + " to " + size_name(k) + ", fx " + std::to_string(k.fx) + ") for " +
+       std::to_string(config_.trackerd.camera_change_frames) + " frames in a row: tracking again in session " +
+       slam::session_name(session_.load()) +
+       (resized ? "; the pipeline for the new size took " + std::to_string(thread_allocations() - allocations_before) +
+                      " allocations (not counted as realtime defects: warm-up again)"
+                : ""));
 }
 
 // One frame through KF-CVO into an event: its pose (map pose when CVO_MAP places the session), the
 // local graph it closed and the keyframe it made, copied into preallocated outbox slots.
 void Trackerd::track_frame(Pipeline& p, const RingSlot& slot, Event& event) {
   const core::RgbdFrame& frame = slot.frame;
-  const odometry::TrackResult result = p.tracker.track(frame);
-  const odometry::KeyframeStep step = p.output.after_track(p.tracker, result, frame);
+  odometry::KeyframeOdometry& tracker = p.tracking->tracker;
+  odometry::KeyframeOutput& output = p.tracking->output;
+  const odometry::TrackResult result = tracker.track(frame);
+  const odometry::KeyframeStep step = output.after_track(tracker, result, frame);
   const bool wait = config_.trackerd.deterministic;  // never lose a graph or keyframe in a replay
   event.session = session_.load(std::memory_order_relaxed);
 
@@ -407,12 +458,12 @@ void Trackerd::track_frame(Pipeline& p, const RingSlot& slot, Event& event) {
   e.map_pose = placement.T_map_odom * result.pose;
   e.map_placed = placement.placed;
   e.inner_product = result.inner_product;
-  e.gamma_keyframe = p.tracker.gamma();
+  e.gamma_keyframe = tracker.gamma();
   e.iterations = result.iterations;
   e.points = static_cast<int>(result.points);
-  e.keyframe_id = p.output.keyframe_id();
+  e.keyframe_id = output.keyframe_id();
   e.is_keyframe = result.keyframe;
-  if (const auto covariance = keyframe_covariance(p.tracker, frame.index)) e.covariance = *covariance;
+  if (const auto covariance = keyframe_covariance(tracker, frame.index)) e.covariance = *covariance;
   if (!result.tracked()) ++counters_.failed_frames;
 
   // A graph or keyframe that finds no slot (the publisher is behind) is counted lost by the outbox.
@@ -433,23 +484,23 @@ void Trackerd::track_frame(Pipeline& p, const RingSlot& slot, Event& event) {
     k.frame.intrinsics = source.intrinsics;
     source.bgr.copyTo(k.frame.bgr);  // same-sized images: no allocation
     source.depth.copyTo(k.frame.depth);
-    k.cloud = p.tracker.keyframe_cloud();  // same capacity: copies points, no allocation
+    k.cloud = tracker.keyframe_cloud();  // same capacity: copies points, no allocation
   }
-  p.output.keep(frame);
+  output.keep(frame);
 }
 
 // The open local graph of the running session (its current keyframe and the frames tracked
 // against it), as the tracker stops or the session ends. Waiting for room is harmless here: the
 // source has ended or was away.
 void Trackerd::publish_open_graph(Pipeline& p) {
-  const auto& open = p.tracker.current_local_graph();
-  if (open.empty() || p.output.keyframe_id() < 0) return;
+  const auto& open = p.tracking->tracker.current_local_graph();
+  if (open.empty() || p.tracking->output.keyframe_id() < 0) return;
   Event event;
   event.session = session_.load(std::memory_order_relaxed);
   event.has_pose = false;
   event.graph_slot = p.outbox.acquire_graph_slot(true);
   auto& g = p.outbox.graph(event.graph_slot);
-  g.keyframe_id = p.output.keyframe_id();
+  g.keyframe_id = p.tracking->output.keyframe_id();
   g.graph = open;  // within capacity: no allocation
   p.outbox.push(event, true);
 }
@@ -459,8 +510,8 @@ void Trackerd::publish_open_graph(Pipeline& p) {
 // out: this thread does not allocate).
 void Trackerd::start_new_session(Pipeline& p) {
   publish_open_graph(p);
-  p.tracker.reset();
-  p.output.reset();
+  p.tracking->tracker.reset();
+  p.tracking->output.reset();
   p.session_frames = 0;
   session_ = new_session_id(static_cast<std::uint64_t>(session_.load()));
 }
@@ -538,6 +589,9 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
   if (event.session != out.session) {  // noted here: the tracking thread does not allocate
     out.session = event.session;
     note("camera re-initialised: new session " + slam::session_name(event.session));
+    const std::uint64_t size = camera_size_.load();  // a camera change may have made keyframes larger
+    p.history.reserve_keyframe_bytes(max_keyframe_bytes(static_cast<int>(size >> 32),
+                                                        static_cast<int>(size & 0xffffffffU), p.parameters));
   }
   if (event.has_pose && event.pose.keyframe_id >= 0) p.history.made(event.session, event.pose.keyframe_id);
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
@@ -550,7 +604,8 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
   else if (event.has_pose && event.pose.is_keyframe)  // no outbox slot: counted by the outbox
     p.history.never_sent(event.session, event.pose.keyframe_id);
   if (event.has_pose) {
-    const cvo_lcm::pose_t m = pose_message(event);
+    const double latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - event.pose.received).count();
+    const cvo_lcm::pose_t m = lcm::pose_message(event.session, event.pose, latency_ms);
     out.lcm.publish("CVO_POSE", &m);
     out.latency.add(m.latency_ms);
     if (m.latency_ms > config_.trackerd.deadline_ms) ++out.deadline_misses;
@@ -617,8 +672,8 @@ void Trackerd::answer_request(Publisher& out, const void* data, int size) {
 void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
   const auto now = Clock::now();
   const double elapsed = std::chrono::duration<double>(now - out.last_status).count();
-  cvo_lcm::status_t s{};
-  s.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  lcm::ProcessStatus s;
+  s.process = kProcess;
   s.session = out.session;
   s.utime = wall_utime();
   s.pid = static_cast<std::int32_t>(getpid());
@@ -633,7 +688,7 @@ void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
   s.allocations_after_warmup = counters_.allocations_after_warmup;
   s.queue_depth = static_cast<std::int32_t>(ring_->waiting());
   s.rss_bytes = resident_bytes();
-  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = counters_.bad_messages[k];
+  for (std::size_t k = 0; k < s.bad_messages.size(); ++k) s.bad_messages[k] = counters_.bad_messages[k];
   const std::int64_t outbox_lost = pipeline_ready_ ? pipeline_->outbox.lost() : 0;
   if (outbox_lost > out.outbox_lost_noted) {  // noted here: the tracking thread does not allocate
     note(std::to_string(outbox_lost) + " keyframes or local graphs lost before publication (the publisher fell behind)");
@@ -641,18 +696,16 @@ void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
   }
   s.keyframes_requested = pipeline_ready_ ? pipeline_->history.resent() : 0;
   s.keyframes_lost = outbox_lost + out.unsent + (pipeline_ready_ ? pipeline_->history.lost() : 0);
-  s.process = kProcess;
   {
     const std::lock_guard lock(detail_mutex_);
     s.detail = detail_;
   }
-  const bool idle = now - out.last_frame > 1s;
-  if (state_override >= 0) s.state = state_override;
-  else if (out.published == 0) s.state = counters_.source_connected ? cvo_lcm::status_t::STATE_STARTING : cvo_lcm::status_t::STATE_WAITING_FOR_INPUT;
-  else if (!counters_.source_connected || idle) s.state = cvo_lcm::status_t::STATE_WAITING_FOR_INPUT;
-  else if (counters_.failed_frames > out.failed_at_last_status) s.state = cvo_lcm::status_t::STATE_DEGRADED;
-  else s.state = cvo_lcm::status_t::STATE_RUNNING;
-  out.lcm.publish("CVO_STATUS", &s);
+  s.state = state_override >= 0 ? state_override
+                                : lcm::tracker_state({out.published, counters_.source_connected.load(),
+                                                      now - out.last_frame > 1s,
+                                                      counters_.failed_frames > out.failed_at_last_status});
+  const cvo_lcm::status_t message = lcm::status_message(s);
+  out.lcm.publish("CVO_STATUS", &message);
   systemd_.status(std::to_string(out.published) + " frames, " + std::to_string(static_cast<int>(std::lround(s.rate_hz))) +
                   " Hz, latency p99 " + std::to_string(static_cast<int>(std::lround(s.latency_p99_ms))) + " ms, " +
                   std::to_string(s.dropped_frames) + " dropped");
@@ -661,26 +714,20 @@ void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
   out.last_status = now;
 }
 
-// CVO_MAP: only the running session's entry counts. Placed: its correction moves the map poses;
-// unplaced or absent: map pose = odometry pose. Anything undecodable is a counted refusal.
+// CVO_MAP: what lcm::decide_map_correction trusts moves the running session's map poses (placed:
+// its correction; not placed: map pose = odometry pose); anything else is counted by kind.
 void Trackerd::apply_map(const void* data, int size) {
-  std::string error;
-  auto failure = lcm::DecodeFailure::kBody;
-  const auto message = lcm::decode<cvo_lcm::map_t>(data, size, &error, &failure);
-  const auto map = message ? lcm::from_message(*message, &error) : std::nullopt;
-  if (!map) {
-    count_bad(message ? cvo_lcm::status_t::BAD_CONTENT : static_cast<int>(failure), "skipped CVO_MAP", error);
-    return;
-  }
   const std::int64_t session = session_.load();
-  const auto entry = std::find_if(map->sessions.begin(), map->sessions.end(),
-                                  [&](const slam::MapSession& s) { return s.session == session; });
-  MapPlacement placement;
-  if (entry != map->sessions.end() && entry->placed) placement = {entry->correction, true};
-  if (placement.placed != correction_.get(session).placed)
-    note("session " + slam::session_name(session) + (placement.placed ? " placed in the map" : " no longer placed in the map") +
-         " (map revision " + std::to_string(map->revision) + ")");
-  correction_.set(session, placement);
+  const auto& t = config_.trackerd;
+  const lcm::CorrectionDecision d =
+      lcm::decide_map_correction(data, size, session, applied_, {t.max_map_jump_m, t.max_map_jump_deg});
+  if (!d.apply) return count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
+  const bool was_placed = applied_.session == session && applied_.placed;
+  if (d.correction.placed != was_placed)
+    note("session " + slam::session_name(session) + (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
+         " (map revision " + std::to_string(d.correction.revision) + ")");
+  applied_ = d.correction;
+  correction_.set(session, {d.correction.T_map_odom, d.correction.placed});
 }
 
 }  // namespace cvo::daemon::trackerd

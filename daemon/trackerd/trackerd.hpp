@@ -18,7 +18,14 @@
 // disconnection (a camera unplugged, re-initialised) is a new session: its odometry starts again at
 // the first frame, so the old session's open local graph goes out first and the tracker, its
 // keyframe numbering and the frame indices are reset (RingSlot::connection tells the tracker).
-// CVO_MAP corrects the map pose only when it places the running session.
+// CVO_MAP corrects the map pose only when it places the running session, is newer than the map
+// applied last and moves the map frame plausibly (lcm::decide_map_correction); each refusal is
+// counted by kind.
+//
+// Camera changes: frames of another camera (size or intrinsics) are refused as bad content until
+// trackerd.camera_change_frames of them came in a row; then that camera is the tracker's, in a new
+// session, with a tracker and keyframe slots of its size (the allocations this takes are noted, and
+// warm-up starts again before allocations count in allocations_after_warmup).
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -34,6 +41,7 @@
 #include "daemon/trackerd/map_correction.hpp"
 #include "daemon/trackerd/outbox.hpp"
 #include "drivers/frame_source.hpp"
+#include "libcvo/lcm/map_decision.hpp"
 #include "libcvo/config/config.hpp"
 
 namespace cvo::daemon::trackerd {
@@ -74,6 +82,8 @@ class Trackerd {
   void acquire_loop();
   void track_loop();
   Pipeline* start_pipeline(const core::RgbdFrame& first);
+  bool accept_camera(Pipeline& p, const core::RgbdFrame& frame);
+  void change_camera(Pipeline& p, const core::RgbdFrame& first);
   void track_frame(Pipeline& p, const RingSlot& slot, Event& event);
   void publish_open_graph(Pipeline& p);
   void start_new_session(Pipeline& p);
@@ -93,6 +103,7 @@ class Trackerd {
   Counters counters_;
   std::unique_ptr<FrameRing> ring_;
   MapCorrection correction_;
+  lcm::AppliedCorrection applied_;  // the last CVO_MAP correction applied (publisher thread only)
   // The running session: written by the tracking thread (a new one when the camera comes back),
   // read by the publisher for CVO_MAP.
   std::atomic<std::int64_t> session_;
@@ -103,10 +114,14 @@ class Trackerd {
   std::atomic<bool> fatal_{false};         // the source could not be opened (exit-on-eof mode)
   std::atomic<std::int64_t> track_heartbeat_ns_{0}, publish_heartbeat_ns_{0};
 
-  // Created by the tracking thread on the first frame (its size fixes every buffer); the
-  // publisher uses it once pipeline_ready_ is set (release/acquire of the atomic).
+  // Created by the tracking thread on the first usable frame (its size sizes every buffer; a camera
+  // change resizes the tracking thread's own part and the keyframe slots); the publisher uses it
+  // once pipeline_ready_ is set (release/acquire of the atomic).
   std::unique_ptr<Pipeline> pipeline_;
   std::atomic<bool> pipeline_ready_{false};
+  // The size of the camera tracked (width << 32 | height): the publisher sizes its keyframe
+  // history for it when a session starts.
+  std::atomic<std::uint64_t> camera_size_{0};
 
   std::mutex detail_mutex_;
   std::string detail_;

@@ -144,6 +144,14 @@ const std::vector<Field>& table() {
       row("trackerd.keyframe_history", &Config::trackerd, &TrackerdParameters::keyframe_history, kNonNegative,
           "last keyframes and their local graphs kept to send again when the back end asks (CVO_KEYFRAME_REQUEST); "
           "each preallocated, about 2.2 MB at 640x480; 0: none"),
+      row("trackerd.camera_change_frames", &Config::trackerd, &TrackerdParameters::camera_change_frames, kAtLeastOne,
+          "frames of another camera (size or intrinsics) in a row that make the tracker re-initialise for it in a "
+          "new session; fewer are refused"),
+      row("trackerd.max_map_jump_m", &Config::trackerd, &TrackerdParameters::max_map_jump_m, kPositive,
+          "a CVO_MAP correction that moves the map frame further than this (m) from the last one applied is refused"),
+      row("trackerd.max_map_jump_deg", &Config::trackerd, &TrackerdParameters::max_map_jump_deg, kHalfTurnDeg,
+          "a CVO_MAP correction that turns the map frame further than this (degrees) from the last one applied is "
+          "refused"),
       row("backendd.lcm_url", &Config::backendd, &BackenddParameters::lcm_url, kAny,
           "LCM provider keyframes and local graphs come from, and CVO_MAP goes to"),
       row("backendd.store", &Config::backendd, &BackenddParameters::store, kAny,

@@ -38,6 +38,13 @@ struct TrackerdParameters {
   // Keyframes (with their local graphs) kept, as sent, to answer CVO_KEYFRAME_REQUEST; each slot is
   // preallocated for the largest message (about 2.2 MB at 640x480).
   std::size_t keyframe_history = 32;
+  // Frames of another camera (size or intrinsics) in a row that make the tracker re-initialise for
+  // it in a new session; fewer are refused as bad content (a lone odd frame does not reset tracking).
+  std::size_t camera_change_frames = 5;
+  // A CVO_MAP whose correction of the running session moves the map frame further than this from
+  // the correction applied last is refused as implausible (a loop closure corrects drift).
+  double max_map_jump_m = 1.0;
+  double max_map_jump_deg = 30.0;
 };
 
 /// cvo-backendd's own settings (daemon/backendd).

@@ -15,25 +15,16 @@
 #include <string>
 #include <vector>
 
+#include "libcvo/lcm/bad_kind.hpp"
 #include "libcvo/lcm/wire_layout.hpp"
 
 namespace cvo::lcm {
 
-/// Which check refused a buffer. The values match cvo_lcm::status_t's BAD_* indices.
-enum class DecodeFailure : std::int32_t {
-  kTooShort = 0,     // shorter than the 8-byte fingerprint
-  kFingerprint = 1,  // another message type, or another schema of this one
-  kBody = 2,         // counts that do not fit, a truncated or corrupt body, trailing bytes
-  kVersion = 3,      // our type, another `version`
-};
-
-/// Why a message that decoded cannot be used (the from_message conversions). The values match
-/// cvo_lcm::status_t's BAD_* indices too.
-enum class ContentFailure : std::int32_t {
-  kContent = 4,      // malformed: sizes that do not match, images that do not decode, ...
-  kNotFinite = 7,    // a NaN or infinite pose, point or number
-  kInformation = 8,  // an information matrix that is not symmetric positive definite
-};
+/// Which check refused a buffer (kTooShort, kFingerprint, kBody or kVersion), and why a message
+/// that decoded cannot be used (the from_message conversions: kContent, kNotFinite, ...): both are
+/// the one list of refusal kinds, BadKind, whose values are CVO_STATUS's bad_messages indices.
+using DecodeFailure = BadKind;
+using ContentFailure = BadKind;
 
 namespace detail {
 std::string hex64(std::uint64_t v);

@@ -85,8 +85,12 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   frame.depth = m.depth;
   frame.colour_size = m.colour_size;
   frame.depth_size = m.depth_size;
-  auto images = from_message(frame, &why);
-  if (!images) return fail(error, why);
+  ContentFailure image_failure = ContentFailure::kContent;
+  auto images = from_message(frame, &why, &image_failure);
+  if (!images) {
+    kind(image_failure);  // an image that is not its declared format, or a bomb, by its own kind
+    return fail(error, why);
+  }
 
   // A decoded message has these sizes (decode.hpp checks the counts); one built in memory may not.
   const auto n = static_cast<std::size_t>(std::max(m.num_points, 0));

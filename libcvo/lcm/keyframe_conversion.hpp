@@ -28,7 +28,8 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
                                               std::string* error);
 
 /// Fails on another schema version, a bad pose, non-finite points, or images that do not decode;
-/// *failure (when given) says which kind (not finite: a NaN or infinite pose or point).
+/// *failure (when given) says which kind (not finite: a NaN or infinite pose or point; image format
+/// or image size: an image refused before decoding, as rgbd_conversion's from_message does).
 std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& message, std::string* error,
                                      ContentFailure* failure = nullptr);
 

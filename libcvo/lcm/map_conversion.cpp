@@ -12,10 +12,11 @@ std::nullopt_t fail(std::string* error, const std::string& what) {
 }
 }  // namespace
 
-cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime) {
+cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t epoch) {
   cvo_lcm::map_t m{};
   m.version = cvo_lcm::map_t::SCHEMA_VERSION;
   m.utime = utime;
+  m.epoch = epoch;
   m.revision = static_cast<std::int64_t>(map.revision);
   for (const auto& s : map.sessions)
     m.sessions.push_back({s.session, s.placed, s.piece, static_cast<std::int32_t>(s.keyframes), s.joined_at_keyframe,

@@ -10,7 +10,8 @@
 
 namespace cvo::lcm {
 
-cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime);
+/// `epoch`: when the publishing back end started (map_t.epoch).
+cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t epoch = 0);
 
 /// Fails on another schema version or a pose that is not a rigid transform. Loops come back with
 /// their keyframe ids in LoopClosure::from/to (node ids are the mapper's own, not on the wire).

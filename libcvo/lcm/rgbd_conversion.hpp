@@ -5,11 +5,13 @@
 //
 // Both directions validate and return nullopt with a message instead of throwing: a message is
 // untrusted input, and a frame from a driver may be malformed.
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
 
 #include "cvo_lcm/rgbd_frame_t.hpp"
+#include "libcvo/lcm/bad_kind.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 
 namespace cvo::lcm {
@@ -44,6 +46,27 @@ std::optional<cvo_lcm::rgbd_frame_t> to_message(const core::RgbdFrame& frame, co
 
 /// Fails on another schema version, a negative frame index, invalid intrinsics, an unknown
 /// encoding, raw data of the wrong size, or an image that does not decode to the right type and size.
-std::optional<core::RgbdFrame> from_message(const cvo_lcm::rgbd_frame_t& message, std::string* error);
+/// JPEG and PNG images are checked before any decoder runs (check_image_header): an image that is
+/// not its declared format is refused as kImageFormat, one whose header gives another size, depth
+/// or channel count than the message, or more bytes than such an image can take, as kImageSize;
+/// then only the declared format's decoder runs. *kind (when given) says which refusal; kContent
+/// for the others.
+std::optional<core::RgbdFrame> from_message(const cvo_lcm::rgbd_frame_t& message, std::string* error,
+                                            BadKind* kind = nullptr);
+
+/// What an image of a CVO_RGBD or CVO_KEYFRAME message must be: its format, and what its header
+/// must say (the message's width and height; 8-bit colour or 16-bit single-channel depth).
+enum class ImageFormat { kJpeg, kPng };
+struct ExpectedImage {
+  ImageFormat format = ImageFormat::kPng;
+  int width = 0, height = 0;
+  bool depth16 = false;  // a 16-bit single-channel PNG (depth); otherwise 8-bit colour
+};
+
+/// Reads only the magic bytes and the header (PNG IHDR; JPEG markers up to the first SOFn, a
+/// bounded scan): "" when `bytes` may go to the declared decoder, otherwise why not, with *kind set
+/// to kImageFormat or kImageSize. Allocates nothing on success.
+std::string check_image_header(const std::uint8_t* bytes, std::size_t size, const ExpectedImage& expected,
+                               BadKind* kind);
 
 }  // namespace cvo::lcm

@@ -21,14 +21,14 @@ constexpr std::array kKeyframeCounts{CountField{"num_points", 182, 8 * 4}, Count
 // local_graph_t: version, session, keyframe_id, utime (28), then the counts.
 constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 28, kGraphNode},
                                        CountField{"num_edges", 32, kGraphEdge}};
-// map_t: version, utime, revision (20), then the counts of map_session_t (session, placed, piece,
+// map_t: version, utime, revision, epoch (28), then the counts of map_session_t (session, placed, piece,
 // keyframes, joined_at_keyframe, correction), map_keyframe_t (session, id, utime, pose) and
 // map_loop_t (two sessions, an edge).
 constexpr int kMapSession = 8 + 1 + 8 + 4 + 8 + kPose3d;
 constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
 constexpr int kMapLoop = 8 + 8 + kGraphEdge;
-constexpr std::array kMapCounts{CountField{"num_sessions", 20, kMapSession}, CountField{"num_keyframes", 24, kMapKeyframe},
-                                CountField{"num_loops", 28, kMapLoop}};
+constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession}, CountField{"num_keyframes", 32, kMapKeyframe},
+                                CountField{"num_loops", 36, kMapLoop}};
 // keyframe_request_t: version, utime, session (20), then the count of int64 ids.
 constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}};
 
@@ -43,11 +43,11 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "rgbd_frame_t") return {126, kRgbdCounts};
   if (type_name == "keyframe_t") return {194, kKeyframeCounts};
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
-  if (type_name == "map_t") return {32, kMapCounts};
+  if (type_name == "map_t") return {40, kMapCounts};
   if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
-  // (93), rss_bytes (101), bad_messages[9] (173), 5 int64 (213), then the strings process and detail.
-  if (type_name == "status_t") return {213, {}, 213, 2};
+  // (93), rss_bytes (101), bad_messages[14] (213), 5 int64 (253), then the strings process and detail.
+  if (type_name == "status_t") return {253, {}, 253, 2};
   return {};
 }
 

@@ -73,7 +73,7 @@ TEST(MessageDoor, ContentIsCheckedAsTheBackEndWillUseIt) {
   const auto keyframe = encoded(cvo::test::sample_keyframe());  // its "JPEG" is a few bytes of header
   EXPECT_FALSE(usable(RecordKind::kKeyframe, keyframe.data(), keyframe.size(), &error, &bad));
   EXPECT_FALSE(error.empty());
-  EXPECT_EQ(bad, +cvo_lcm::status_t::BAD_CONTENT);
+  EXPECT_EQ(bad, +cvo_lcm::status_t::BAD_IMAGE_FORMAT) << "no frame header: refused before a decoder runs";
   auto indefinite = cvo::test::sample_local_graph();
   indefinite.edges[1].information[7] = -3.0;  // a negative variance
   const auto bytes = encoded(indefinite);

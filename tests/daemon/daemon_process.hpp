@@ -4,6 +4,7 @@
 // these controls, which popen() does not give.
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -54,7 +55,7 @@ class DaemonProcess {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (true) {
       int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+      if (wait4(pid_, &status, WNOHANG, &usage_) == pid_) {
         exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
         return exit_code_;
       }
@@ -63,10 +64,13 @@ class DaemonProcess {
     }
   }
   bool running() { return !wait_for(std::chrono::milliseconds(0)).has_value(); }
+  /// Once it has exited (wait_for): its peak resident set (the kernel's maxrss of this child), in bytes.
+  [[nodiscard]] long peak_rss_bytes() const { return usage_.ru_maxrss * 1024L; }
 
  private:
   pid_t pid_ = -1;
   std::optional<int> exit_code_;
+  rusage usage_{};
 };
 
 }  // namespace cvo::testing

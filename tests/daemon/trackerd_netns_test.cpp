@@ -1,7 +1,9 @@
 // cvo-trackerd over real LCM UDP multicast, the way it runs on a robot: a clip converted with
 // tum2lcm is played by lcm-logplayer into a running daemon, whose output lcm-logger records; the
 // recording is decoded and evaluated against ground truth. CVO_MAPs sent mid-replay must correct
-// the map poses that follow only when they place the tracker's own session. The open local graph
+// the map poses that follow only when they place the tracker's own session, are newer than the
+// map applied last and move it plausibly (stale, foreign and implausible maps are counted and
+// change nothing). The open local graph
 // goes out at SIGTERM. Two replays in deterministic mode give identical poses, in two sessions.
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): a private network
@@ -93,11 +95,11 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
   return r;
 }
 
-// A map of the back end that holds `sessions`, one keyframe each.
-std::vector<std::uint8_t> map_message(const std::vector<slam::MapSession>& sessions,
+// A map of the back end, of `revision`, that holds `sessions`, one keyframe each.
+std::vector<std::uint8_t> map_message(std::uint64_t revision, const std::vector<slam::MapSession>& sessions,
                                       std::int32_t version = cvo_lcm::map_t::SCHEMA_VERSION) {
   slam::Map map;
-  map.revision = 1;
+  map.revision = revision;
   map.sessions = sessions;
   for (const auto& s : sessions) map.keyframes.push_back({s.session, 0, 1305031102.175304, s.correction});
   auto message = lcm::to_message(map, 1);
@@ -129,13 +131,17 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
 
   // The back end places the tracker's session 1 m along x in the map, after a map that places
   // only another session (at 5 m along y): only the tracker's own entry may move its map poses.
+  // Then an older map (replayed) and a newer one that would move the map frame 9 m: both refused,
+  // counted, and the correction stays.
   const auto placed = core::SE3::from_translation({1, 0, 0});
   const auto elsewhere = core::SE3::from_translation({0, 5, 0});
   const auto first = replay(dir.path(), recording, "first", [&](std::int64_t session) {
     const std::int64_t other = session ^ 0x5a5a;
     return std::vector<std::vector<std::uint8_t>>{
-        map_message({{other, true, other, 1, 0, elsewhere}}),
-        map_message({{other, true, other, 1, 0, elsewhere}, {session, true, other, 1, 0, placed}})};
+        map_message(2, {{other, true, other, 1, 0, elsewhere}}),
+        map_message(3, {{other, true, other, 1, 0, elsewhere}, {session, true, other, 1, 0, placed}}),
+        map_message(2, {{session, true, other, 1, 0, elsewhere}}),
+        map_message(4, {{session, true, other, 1, 0, core::SE3::from_translation({10, 0, 0})}})};
   });
   EXPECT_EQ(first.trackerd_exit, 0) << cvo::testing::slurp(dir.path() / "first.trackerd.txt");
   EXPECT_LT(first.shutdown_ms, 1000);
@@ -146,6 +152,9 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   const auto& status = first.published.statuses.back();
   EXPECT_EQ(status.dropped_frames, 0);
   EXPECT_EQ(status.allocations_after_warmup, 0);
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_FOREIGN], 1);
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_STALE], 1);
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_IMPLAUSIBLE], 1);
   std::printf("UDP replay: end-to-end latency (receipt to publication) median %.2f ms, p99 %.2f ms; shutdown %.0f ms\n",
               status.latency_median_ms, status.latency_p99_ms, first.shutdown_ms);
 
@@ -174,8 +183,8 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   // A second start is another session. Its maps name it unplaced (with a correction that must not
   // be applied), and one says it is schema version 1: refused and counted, never applied.
   const auto second = replay(dir.path(), recording, "second", [&](std::int64_t session) {
-    return std::vector<std::vector<std::uint8_t>>{map_message({{session, true, session, 1, 0, placed}}, 1),
-                                                   map_message({{session, false, session, 1, -1, elsewhere}})};
+    return std::vector<std::vector<std::uint8_t>>{map_message(1, {{session, true, session, 1, 0, placed}}, 1),
+                                                   map_message(1, {{session, false, session, 1, -1, elsewhere}})};
   });
   EXPECT_EQ(second.trackerd_exit, 0);
   expect_one_complete_session(second);

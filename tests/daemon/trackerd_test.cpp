@@ -25,6 +25,7 @@
 #include "libcvo/lcm/rgbd_conversion.hpp"
 #include "tests/daemon/daemon_process.hpp"
 #include "tests/daemon/lcm_log.hpp"
+#include "tests/lcm/image_bombs.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -161,7 +162,7 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   const auto text = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(out), dir.path());
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_NE(text.out.find("session: " + hex(session)), std::string::npos) << text.out;
-  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0 0 0 0\n"), std::string::npos) << "all nine kinds\n" << text.out;
+  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n"), std::string::npos) << "all fourteen kinds\n" << text.out;
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(dir.path() / "missing.lcm") + " --out x", dir.path()).exit_code, 1);
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "frobnicate", dir.path()).exit_code, 2);
 }
@@ -399,6 +400,155 @@ TEST(Trackerd, UnusableSourceOrSettingsFailWithAMessage) {
 
 // cvo-log map: a recording with two CVO_MAPs (and a broken one after them) as the back end sends
 // them; the last readable one is written, its placed sessions' keyframes merged in time order.
+// CVO_RGBD messages as a recording, 33 ms apart.
+void write_rgbd_log(const fs::path& path, const std::vector<std::vector<std::uint8_t>>& messages) {
+  ::lcm::LogFile log(path.string(), "w");
+  ASSERT_TRUE(log.good());
+  std::int64_t t = 0;
+  for (const auto& bytes : messages) {
+    ::lcm::LogEvent e{};
+    e.timestamp = t += 33000;
+    e.channel = "CVO_RGBD";
+    e.datalen = static_cast<int32_t>(bytes.size());
+    e.data = const_cast<std::uint8_t*>(bytes.data());
+    ASSERT_EQ(log.writeEvent(&e), 0);
+  }
+}
+
+struct Replayed {
+  cvo::testing::PublishedLog log;
+  long peak_rss_bytes = 0;
+  std::string err;
+};
+
+// cvo-trackerd over a recording, deterministic, to its end.
+Replayed replay_recording(const fs::path& dir, const fs::path& recording, const std::string& name,
+                          const std::vector<std::string>& extra = {}) {
+  const auto out = dir / (name + ".out.lcmlog");
+  const auto err = dir / (name + ".stderr.txt");
+  DaemonProcess d(kTrackerd,
+                  with(with(base_args(out), {"--source", "lcm:file://" + recording.string() + "?speed=0", "--exit-on-eof",
+                                             "--deterministic"}),
+                       extra),
+                  err);
+  Replayed r;
+  const auto code = d.wait_for(120s);
+  r.err = cvo::testing::slurp(err);
+  EXPECT_TRUE(code) << "still running";
+  EXPECT_EQ(code.value_or(-2), 0) << r.err;
+  r.peak_rss_bytes = d.peak_rss_bytes();
+  r.log = cvo::testing::read_published(out);
+  return r;
+}
+
+// Decompression bombs (PNG and JPEG headers claiming 16384x16384, 805 MB of colour: a trusting
+// decoder allocates and fills it, about 1.3 GB and seconds of CPU each) and files of another format
+// than declared (a PNG labelled JPEG, Radiance HDR labelled PNG or JPEG) between the 50 frames of
+// the clip: each refused by its kind before any decoder runs, every frame tracked, and the
+// tracker's peak memory that of the same run without them.
+TEST(Trackerd, ImageBombsAreRefusedByKindWithoutCostingMemory) {
+  cvo::test::TempDir dir;
+  auto sequence = io::TumSequence::open(kClip);
+  const lcm::RgbdEncoding png{lcm::ColourEncoding::kPng, lcm::DepthEncoding::kPng};
+  const lcm::RgbdEncoding jpeg{lcm::ColourEncoding::kJpeg, lcm::DepthEncoding::kPng};
+  std::vector<std::vector<std::uint8_t>> clean, bombed;
+  const auto colour_of = [](cvo_lcm::rgbd_frame_t m, std::vector<std::uint8_t> colour) {
+    m.colour = std::move(colour);
+    m.colour_size = static_cast<std::int32_t>(m.colour.size());
+    return lcm::encode(m);
+  };
+  for (std::size_t i = 0; i < 50; ++i) {
+    const auto frame = sequence.read(i);
+    const auto as_png = *lcm::to_message(frame, png, nullptr);
+    clean.push_back(lcm::encode(as_png));
+    bombed.push_back(clean.back());
+    const auto as_jpeg = *lcm::to_message(frame, jpeg, nullptr);
+    switch (i) {
+      case 4: bombed.push_back(colour_of(as_png, test::png_bomb(16384, 16384, false))); break;
+      case 9: bombed.push_back(colour_of(as_jpeg, test::jpeg_bomb(16384, 16384))); break;
+      case 14: {
+        auto m = as_png;
+        m.depth = test::png_bomb(16384, 16384, true);
+        m.depth_size = static_cast<std::int32_t>(m.depth.size());
+        bombed.push_back(lcm::encode(m));
+        break;
+      }
+      case 19: bombed.push_back(colour_of(as_jpeg, as_png.colour)); break;  // a PNG labelled JPEG
+      case 24: bombed.push_back(colour_of(as_png, test::hdr_file(640, 480))); break;
+      case 29: bombed.push_back(colour_of(as_jpeg, test::hdr_file(640, 480))); break;
+      case 34: bombed.push_back(colour_of(as_jpeg, test::jpeg_bomb(16384, 16384))); break;  // again: still nothing
+      default: break;
+    }
+  }
+  write_rgbd_log(dir.path() / "clean.lcmlog", clean);
+  write_rgbd_log(dir.path() / "bombed.lcmlog", bombed);
+
+  const auto without = replay_recording(dir.path(), dir.path() / "clean.lcmlog", "clean");
+  const auto with_bombs = replay_recording(dir.path(), dir.path() / "bombed.lcmlog", "bombed");
+  EXPECT_EQ(without.log.poses.size(), 50u);
+  EXPECT_EQ(with_bombs.log.poses.size(), 50u) << "every frame of the clip tracked, no bomb as a frame";
+  ASSERT_FALSE(with_bombs.log.statuses.empty());
+  const auto& s = with_bombs.log.statuses.back();
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_IMAGE_SIZE], 4) << "PNG, JPEG (twice) and depth PNG bombs";
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_IMAGE_FORMAT], 3) << "PNG labelled JPEG, HDR labelled PNG and JPEG";
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_CONTENT], 0);
+  EXPECT_EQ(s.allocations_after_warmup, 0);
+  EXPECT_NE(with_bombs.err.find("PNG header says 16384x16384"), std::string::npos) << with_bombs.err;
+  std::printf("cvo-trackerd peak RSS: %.1f MB without bombs, %.1f MB with 7 bombs\n", without.peak_rss_bytes / 1e6,
+              with_bombs.peak_rss_bytes / 1e6);
+  EXPECT_GT(without.peak_rss_bytes, 0);
+  EXPECT_LT(with_bombs.peak_rss_bytes, without.peak_rss_bytes + 50'000'000L);
+}
+
+// A frame of another camera size first (8x6), then the clip: the clip's camera is the tracker's
+// after trackerd.camera_change_frames frames in a row, in a new session counted from frame 0 with
+// a re-warmed tracking thread; a lone 8x6 frame in the middle of the clip is refused and changes
+// nothing.
+TEST(Trackerd, ACameraOfAnotherSizeIsTrackedAfterAFewFrames) {
+  cvo::test::TempDir dir;
+  auto sequence = io::TumSequence::open(kClip);
+  const lcm::RgbdEncoding png{lcm::ColourEncoding::kPng, lcm::DepthEncoding::kPng};
+  auto tiny = sequence.read(0);
+  tiny.bgr = tiny.bgr(cv::Rect(0, 0, 8, 6)).clone();
+  tiny.depth = tiny.depth(cv::Rect(0, 0, 8, 6)).clone();
+  tiny.intrinsics.width = 8;
+  tiny.intrinsics.height = 6;
+  tiny.intrinsics.cx = 4;
+  tiny.intrinsics.cy = 3;
+  std::vector<std::vector<std::uint8_t>> messages = {lcm::encode(*lcm::to_message(tiny, png, nullptr))};
+  for (std::size_t i = 0; i < 50; ++i) {
+    messages.push_back(lcm::encode(*lcm::to_message(sequence.read(i), png, nullptr)));
+    if (i == 30) messages.push_back(messages.front());  // a lone odd frame
+  }
+  write_rgbd_log(dir.path() / "change.lcmlog", messages);
+  const auto r = replay_recording(dir.path(), dir.path() / "change.lcmlog", "change");
+
+  constexpr int kChangeFrames = 5;  // trackerd.camera_change_frames' default
+  ASSERT_FALSE(r.log.poses.empty());
+  const std::int64_t session = r.log.poses.back().session;
+  std::vector<cvo_lcm::pose_t> clip;
+  for (const auto& p : r.log.poses)
+    if (p.session == session) clip.push_back(p);
+  EXPECT_EQ(clip.size(), 50u - (kChangeFrames - 1)) << "the clip from its 5th frame on";
+  EXPECT_EQ(r.log.poses.size() - clip.size(), 1u) << "the 8x6 frame, in a session of its own";
+  EXPECT_NE(r.log.poses.front().session, session);
+  ASSERT_FALSE(clip.empty());
+  EXPECT_EQ(clip.front().frame_index, 0) << "frame indices count from 0 in the new session";
+  EXPECT_EQ(clip.back().frame_index, static_cast<std::int64_t>(clip.size()));  // the lone frame took an index
+  const auto tracked = std::count_if(clip.begin(), clip.end(), [](const auto& p) { return p.status == cvo_lcm::pose_t::STATUS_OK; });
+  EXPECT_EQ(static_cast<std::size_t>(tracked), clip.size() - 1) << "all but the first registered";
+  ASSERT_FALSE(r.log.statuses.empty());
+  const auto& s = r.log.statuses.back();
+  EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_CONTENT], (kChangeFrames - 1) + 1)
+      << "4 clip frames before the change, and the lone 8x6 frame";
+  EXPECT_EQ(s.allocations_after_warmup, 0) << "the new pipeline's allocations are the camera change's, then warm-up again";
+  const auto note = r.err.find("camera changed (8x6 to 640x480");
+  ASSERT_NE(note, std::string::npos) << r.err;
+  std::printf("%s\n", r.err.substr(note, r.err.find('\n', note) - note).c_str());
+  EXPECT_FALSE(r.log.keyframes.empty());
+  EXPECT_EQ(r.log.keyframes.back().width, 640);
+}
+
 TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
   cvo::test::TempDir dir;
   constexpr std::int64_t kFirst = 0x1111, kJoined = -0x2222, kAlone = 0x3333;  // any 64 bits

@@ -92,6 +92,8 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
   auto short_raw = message_of(first);  // consistent counts, but 3 bytes short of 8x6 BGR
   short_raw.colour.resize(short_raw.colour.size() - 3);
   short_raw.colour_size = static_cast<std::int32_t>(short_raw.colour.size());
+  auto mislabelled = message_of(first);  // raw pixels said to be a PNG: no decoder may see them
+  mislabelled.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_PNG;
   cvo_lcm::pose_t pose{};
   pose.version = cvo_lcm::pose_t::SCHEMA_VERSION;
 
@@ -102,6 +104,7 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
                   {"CVO_RGBD", oversized},
                   {"CVO_RGBD", lcm::encode(other_version)},
                   {"CVO_RGBD", lcm::encode(short_raw)},
+                  {"CVO_RGBD", lcm::encode(mislabelled)},
                   {"CVO_POSE", lcm::encode(pose)},  // another channel: not ours, skipped
                   {"CVO_RGBD", lcm::encode(message_of(last))}});
 
@@ -118,7 +121,8 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
                                                               {BadInput::kBody, "truncated"},
                                                               {BadInput::kBody, "trailing bytes"},
                                                               {BadInput::kVersion, "schema version 3"},
-                                                              {BadInput::kContent, "raw colour needs"}};
+                                                              {BadInput::kContent, "raw colour needs"},
+                                                              {BadInput::kImageFormat, "not a PNG"}};
   for (const auto& [kind, words] : refused) {
     r = source->read(frame, milliseconds(2000));
     EXPECT_EQ(r.status, ReadStatus::kBadInput) << words;

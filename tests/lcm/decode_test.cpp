@@ -91,8 +91,8 @@ TEST(Decode, HugeOrNegativeCountsAreRefusedBeforeAllocating) {
 
 TEST(Decode, CorruptStringLengthIsRefused) {
   auto bytes = encode(test::sample_status());
-  // The first string length follows the fixed fields: 8 + 4+8+8+4+1+3*8+5*8+4+8+9*8+5*8 = 221.
-  const std::size_t process_length = 221;
+  // The first string length follows the fixed fields: 8 + 4+8+8+4+1+3*8+5*8+4+8+14*8+5*8 = 261.
+  const std::size_t process_length = 261;
   ASSERT_EQ(bytes[process_length + 3], std::string("cvo-trackerd").size() + 1);
   std::string error;
   for (std::uint32_t bad : {0u, 0xffffffffu, 0x80000000u, 1000000u}) {

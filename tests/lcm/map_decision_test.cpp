@@ -1,0 +1,117 @@
+// What a tracker makes of a received CVO_MAP (lcm::decide_map_correction), without LCM: only a
+// newer map with a finite, plausible entry for its own session moves its map poses; a stale, a
+// foreign, an implausible or a non-finite one is refused by its own kind and changes nothing.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "libcvo/lcm/decode.hpp"
+#include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/map_decision.hpp"
+#include "libcvo/lcm/pose_conversion.hpp"
+
+namespace cvo::lcm {
+namespace {
+
+constexpr std::int64_t kSession = 0x1234'5678'9abc'def0;
+constexpr std::int64_t kOther = 77;
+const CorrectionLimits kLimits{1.0, 30.0};
+
+// The bytes of a map of `revision` (of a back end started at `epoch`) placing each of `sessions`
+// with its correction.
+std::vector<std::uint8_t> map_bytes(std::int64_t revision, const std::vector<slam::MapSession>& sessions,
+                                    std::int64_t epoch = 0) {
+  slam::Map map;
+  map.revision = static_cast<std::uint64_t>(revision);
+  map.sessions = sessions;
+  for (const auto& s : sessions) map.keyframes.push_back({s.session, 0, 1.5, s.correction});
+  return encode(to_message(map, 1, epoch));
+}
+
+slam::MapSession placed(std::int64_t session, const core::SE3& correction) {
+  return {session, true, kOther, 1, 0, correction};
+}
+
+CorrectionDecision decide(const std::vector<std::uint8_t>& bytes, const AppliedCorrection& last) {
+  return decide_map_correction(bytes.data(), static_cast<int>(bytes.size()), kSession, last, kLimits);
+}
+
+const core::SE3 kOneMetre = core::SE3::from_translation({1, 0, 0});
+
+TEST(MapDecision, ANewerMapPlacingTheSessionIsApplied) {
+  const auto d = decide(map_bytes(3, {placed(kOther, {}), placed(kSession, kOneMetre)}), AppliedCorrection{});
+  ASSERT_TRUE(d.apply) << d.why;
+  EXPECT_EQ(d.correction.revision, 3);
+  EXPECT_EQ(d.correction.session, kSession);
+  EXPECT_TRUE(d.correction.placed);
+  EXPECT_LT((d.correction.T_map_odom.translation() - kOneMetre.translation()).norm(), 1e-12);
+
+  // Any first placement is taken, however far (the map frame is another session's); and a later
+  // entry that is not placed returns the session to its odometry frame.
+  const auto far = decide(map_bytes(4, {placed(kSession, core::SE3::from_translation({40, 0, 0}))}), AppliedCorrection{});
+  EXPECT_TRUE(far.apply) << far.why;
+  const auto unplaced = decide(map_bytes(5, {{kSession, false, kSession, 1, -1, kOneMetre}}), d.correction);
+  ASSERT_TRUE(unplaced.apply) << unplaced.why;
+  EXPECT_FALSE(unplaced.correction.placed);
+  EXPECT_EQ(unplaced.correction.T_map_odom.translation().norm(), 0) << "identity when not placed";
+}
+
+TEST(MapDecision, StaleForeignImplausibleAndNonFiniteMapsAreRefusedByKind) {
+  const AppliedCorrection last{0, 7, kSession, true, kOneMetre};
+  const auto refused = [&](const std::vector<std::uint8_t>& bytes, BadKind kind, const char* says) {
+    const auto d = decide(bytes, last);
+    EXPECT_FALSE(d.apply);
+    EXPECT_EQ(d.refusal, kind) << d.why;
+    EXPECT_NE(d.why.find(says), std::string::npos) << d.why;
+  };
+  const auto nearby = core::SE3::from_translation({1.2, 0, 0});
+  refused(map_bytes(6, {placed(kSession, nearby)}), BadKind::kStale, "revision 6 of epoch 0, not newer than the applied revision 7");
+  refused(map_bytes(7, {placed(kSession, nearby)}), BadKind::kStale, "revision 7 of epoch 0, not newer");  // a replay
+  refused(map_bytes(8, {placed(kOther, nearby)}), BadKind::kForeign, "no entry for this session");
+  refused(map_bytes(8, {placed(kSession, core::SE3::from_translation({3, 0, 0}))}), BadKind::kImplausible,
+          "jumps 2.00 m and 0.00 deg");
+  refused(map_bytes(8, {placed(kSession, kOneMetre * core::SE3::from_rotation_vector({0, 0, 0.7}))}),
+          BadKind::kImplausible, "and 40.11 deg");
+  auto nan = to_message(slam::Map{8, {placed(kSession, nearby)}, {}, {}}, 1);
+  nan.sessions[0].correction.position[1] = std::numeric_limits<double>::quiet_NaN();
+  refused(encode(nan), BadKind::kNotFinite, "not finite");
+  auto bad_version = to_message(slam::Map{8, {placed(kSession, nearby)}, {}, {}}, 1);
+  bad_version.version = 1;
+  refused(encode(bad_version), BadKind::kVersion, "schema version 1");
+  const std::vector<std::uint8_t> short_bytes = {1, 2, 3};
+  refused(short_bytes, BadKind::kTooShort, "shorter than");
+
+  // Within the bound it is applied; the bound is the caller's.
+  EXPECT_TRUE(decide(map_bytes(8, {placed(kSession, nearby)}), last).apply);
+  const auto far = map_bytes(8, {placed(kSession, core::SE3::from_translation({3, 0, 0}))});
+  EXPECT_TRUE(decide_map_correction(far.data(), static_cast<int>(far.size()), kSession, last, {5.0, 30.0}).apply);
+}
+
+// A back end that restarts numbers its revisions afresh in a newer epoch: its first map is taken
+// (the tracker must not wait for the revision to pass the old one), and a map of the old epoch,
+// replayed, is stale.
+TEST(MapDecision, ARestartedBackEndsMapsAreNewerThanItsPredecessors) {
+  const AppliedCorrection last{1000, 250, kSession, true, kOneMetre};
+  const auto restarted = decide(map_bytes(1, {placed(kSession, kOneMetre)}, 2000), last);
+  ASSERT_TRUE(restarted.apply) << restarted.why;
+  EXPECT_EQ(restarted.correction.epoch, 2000);
+  EXPECT_EQ(restarted.correction.revision, 1);
+  const auto replayed = decide(map_bytes(900, {placed(kSession, kOneMetre)}, 500), last);
+  EXPECT_FALSE(replayed.apply);
+  EXPECT_EQ(replayed.refusal, BadKind::kStale);
+}
+
+TEST(MapDecision, TheJumpBoundHoldsOnlyWithinTheSessionItPlaced) {
+  // The last correction was for a session the tracker has left (a camera change): the new
+  // session's first placement is not a jump from it.
+  const AppliedCorrection other_session{0, 7, kOther, true, kOneMetre};
+  const auto d = decide(map_bytes(8, {placed(kSession, core::SE3::from_translation({9, 0, 0}))}), other_session);
+  EXPECT_TRUE(d.apply) << d.why;
+  // Nor is a placement after the session was unplaced.
+  const AppliedCorrection unplaced{0, 7, kSession, false, {}};
+  EXPECT_TRUE(decide(map_bytes(8, {placed(kSession, core::SE3::from_translation({9, 0, 0}))}), unplaced).apply);
+}
+
+}  // namespace
+}  // namespace cvo::lcm
