@@ -1,5 +1,6 @@
 #include "libcvo/lcm/wire_layout.hpp"
 
+#include <algorithm>
 #include <array>
 
 namespace cvo::lcm {
@@ -58,6 +59,11 @@ std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int
     const std::int32_t length = read_be32(body + at);  // includes the terminating NUL
     if (length < 1 || length > size - at - 4)
       return "corrupt string length " + std::to_string(length) + " at body offset " + std::to_string(at);
+    // Exactly one NUL, the last byte: lcm-gen's decoder keeps inner NULs that its encoder (strlen)
+    // drops, so such a string would not survive a round trip (found by fuzz/status).
+    const std::uint8_t* text = body + at + 4;
+    if (text[length - 1] != 0 || std::find(text, text + length - 1, std::uint8_t{0}) != text + length - 1)
+      return "string at body offset " + std::to_string(at) + " is not one NUL-terminated text";
     at += 4 + length;
   }
   if (layout.counts.empty()) return {};

@@ -27,7 +27,7 @@ struct WireLayout {
   std::span<const CountField> counts;  // empty: the type has no variable-length arrays
   // Strings, consecutive, from this body offset to the end (-1: none). lcm-gen's decoder reads a
   // zero or negative string length as a huge size (undefined behaviour for INT32_MIN), so each
-  // length is checked to be in 1..remaining bytes first.
+  // length is checked to be in 1..remaining bytes first, and the text to end at its only NUL.
   int strings_at = -1;
   int num_strings = 0;
 };

@@ -101,6 +101,18 @@ TEST(Decode, CorruptStringLengthIsRefused) {
   }
 }
 
+// A NUL inside a string: lcm-gen's decoder would keep it, its encoder (strlen) drop the rest, so
+// the message would not survive a round trip (found by fuzzing, fuzz/regressions/status).
+TEST(Decode, AStringWithAnInnerNulIsRefused) {
+  auto bytes = encode(test::sample_status());
+  const std::size_t process_text = 261 + 4;  // "cvo-trackerd" after its length (see above)
+  ASSERT_EQ(bytes[process_text], 'c');
+  bytes[process_text + 3] = 0;  // "cvo\0trackerd"
+  std::string error;
+  EXPECT_FALSE(decode<cvo_lcm::status_t>(bytes.data(), static_cast<int>(bytes.size()), &error));
+  EXPECT_NE(error.find("not one NUL-terminated text"), std::string::npos) << error;
+}
+
 // Each refusal says which check failed, so receivers count them by kind (CVO_STATUS bad_messages).
 TEST(Decode, FailureKindNamesTheCheck) {
   const auto good = encode(test::sample_rgbd());

@@ -1,0 +1,111 @@
+// Writes the binary seed corpora (LCM messages and keyframe stores) into OUT/<harness>/, from the
+// tests' sample messages and a small real frame, so that each seed reaches past the fingerprint and
+// the counts into the conversions (real PNG and JPEG images included). The text corpora are written
+// by hand. Usage: fuzz-seeds OUT (fuzz/corpus).
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "daemon/backendd/keyframe_store.hpp"
+#include "libcvo/lcm/decode.hpp"
+#include "libcvo/lcm/keyframe_conversion.hpp"
+#include "libcvo/lcm/rgbd_conversion.hpp"
+#include "tests/lcm/sample_messages.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+void write(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
+  fs::create_directories(file.parent_path());
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!out.flush()) throw std::runtime_error("cannot write " + file.string());
+}
+
+// 8x6 with a gradient, so that PNG and JPEG are real images of a few hundred bytes.
+cvo::core::RgbdFrame small_frame() {
+  cvo::core::RgbdFrame frame;
+  frame.index = 3;
+  frame.timestamp = 1305031229.5;
+  frame.depth_timestamp = 1305031229.51;
+  frame.intrinsics.fx = frame.intrinsics.fy = 10;
+  frame.intrinsics.cx = 4;
+  frame.intrinsics.cy = 3;
+  frame.intrinsics.width = 8;
+  frame.intrinsics.height = 6;
+  frame.bgr.create(6, 8, CV_8UC3);
+  frame.depth.create(6, 8, CV_16UC1);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 8; ++x) {
+      frame.bgr.at<cv::Vec3b>(y, x) = cv::Vec3b(static_cast<uchar>(30 * x), static_cast<uchar>(40 * y), 128);
+      frame.depth.at<std::uint16_t>(y, x) = static_cast<std::uint16_t>(5000 + 100 * x + 10 * y);
+    }
+  return frame;
+}
+
+template <class T>
+T checked(std::optional<T> value, const std::string& error) {
+  if (!value) throw std::runtime_error(error);
+  return *value;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: fuzz-seeds OUT\n");
+    return 2;
+  }
+  const fs::path out = argv[1];
+  using cvo::lcm::encode;
+  using Colour = cvo::lcm::ColourEncoding;
+  using Depth = cvo::lcm::DepthEncoding;
+  std::string error;
+
+  const auto frame = small_frame();
+  write(out / "rgbd/raw", encode(cvo::test::sample_rgbd()));
+  const std::pair<const char*, cvo::lcm::RgbdEncoding> encodings[] = {
+      {"png", {Colour::kPng, Depth::kPng}}, {"jpeg", {Colour::kJpeg, Depth::kPng}}, {"raw-8x6", {Colour::kRawBgr8, Depth::kRawU16Le}}};
+  for (const auto& [name, encoding] : encodings)
+    write(out / "rgbd" / name, encode(checked(cvo::lcm::to_message(frame, encoding, &error), error)));
+
+  cvo::lcm::Keyframe keyframe;
+  keyframe.session = 0x5e5510'0000'0001;
+  keyframe.id = 2;
+  keyframe.frame = frame;
+  for (int p = 0; p < 3; ++p) keyframe.cloud.push_back({0.1f * p, -0.1f * p, 1.0f + p}, cvo::registration::Feature{});
+  const auto keyframe_message = checked(cvo::lcm::to_message(keyframe, {Colour::kJpeg, Depth::kPng}, &error), error);
+  write(out / "keyframe/jpeg-png", encode(keyframe_message));
+  write(out / "keyframe/sample", encode(cvo::test::sample_keyframe()));  // images that do not decode
+
+  const auto graph = encode(cvo::test::sample_local_graph());
+  write(out / "local_graph/sample", graph);
+  write(out / "map/sample", encode(cvo::test::sample_map()));
+  write(out / "status/sample", encode(cvo::test::sample_status()));
+
+  // A keyframe store as cvo-backendd leaves it, then the same cut short in its last record (what a
+  // crash during a write leaves).
+  const fs::path store_file = out / "keyframe_store/two-records";
+  fs::create_directories(store_file.parent_path());
+  fs::remove(store_file);
+  {
+    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
+    std::string warning;
+    cvo::daemon::backendd::KeyframeStore store(store_file, recovered, warning);
+    store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
+    store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph);
+  }
+  const auto store_size = fs::file_size(store_file);
+  fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
+  fs::resize_file(out / "keyframe_store/torn", store_size - 17);
+  std::printf("fuzz-seeds: wrote %s\n", out.c_str());
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "fuzz-seeds: %s\n", e.what());
+  return 1;
+}

@@ -1,0 +1,30 @@
+#pragma once
+// The LCM message harnesses: the bytes go through lcm::decode<T> exactly as a daemon receives them,
+// then through the type's conversion. Refusals are nullopt by contract (decode.hpp), so the only
+// checks here are the ones decoding promises beyond "no crash".
+#include <climits>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "fuzz/harness.hpp"
+#include "libcvo/lcm/decode.hpp"
+
+namespace cvo::fuzz {
+
+template <class T, class Convert>
+void fuzz_message(const std::uint8_t* data, std::size_t size, Convert&& convert) {
+  if (size > static_cast<std::size_t>(INT_MAX)) return;  // LCM sizes are int; the transport never delivers more
+  std::string error;
+  const auto message = lcm::decode<T>(data, static_cast<int>(size), &error);
+  if (!message) return;
+  // What decode accepts, encode must turn into bytes that decode accepts again: otherwise a
+  // back end storing a message (keyframe store) could not read it back.
+  const auto again = lcm::encode(*message);
+  if (!lcm::decode<T>(again.data(), static_cast<int>(again.size()), &error)) {
+    fail(std::string("re-encoded ") + T::getTypeName() + " does not decode: " + error);
+  }
+  convert(*message);
+}
+
+}  // namespace cvo::fuzz
