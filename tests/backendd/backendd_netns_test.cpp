@@ -101,7 +101,7 @@ class BackenddNetns : public ::testing::Test {
     ASSERT_TRUE(code) << "cvo-backendd did not stop on SIGTERM\n" << cvo::testing::slurp(stderr_file);
     EXPECT_EQ(*code, 0) << cvo::testing::slurp(stderr_file);
     const int pid = backendd.pid();
-    const auto stopping = [&](const Captured& c) { return c.status_from(pid, cvo_lcm::status_t::STATE_STOPPING); };
+    const auto stopping = [&](const Captured& c) { return c.status_from(pid, +cvo_lcm::status_t::STATE_STOPPING); };
     EXPECT_TRUE(capture.wait_until(stopping, 30s))
         << "no final CVO_STATUS";
   }

@@ -139,7 +139,7 @@ class BackenddSessions : public ::testing::Test {
     const auto code = cvo::testing::stop(*backendd, 600s);  // drains its queue, then the global optimisation
     EXPECT_EQ(code.value_or(-9), 0) << cvo::testing::slurp(logs.back());
     EXPECT_TRUE(capture.wait_until(
-        [&](const Captured& c) { return c.status_from(pid, cvo_lcm::status_t::STATE_STOPPING); }, 30s));
+        [&](const Captured& c) { return c.status_from(pid, +cvo_lcm::status_t::STATE_STOPPING); }, 30s));
     for (const auto& log : logs) run.backend_log += cvo::testing::slurp(log);
     run.captured = capture.snapshot();
     capture_owner.reset();

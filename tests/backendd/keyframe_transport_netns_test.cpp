@@ -192,7 +192,7 @@ TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeLeavesTheMapWhole) {
   const auto backend_code = cvo::testing::stop(*backendd, 120s);
   EXPECT_EQ(backend_code.value_or(-9), 0) << logs();
   ASSERT_TRUE(capture.wait_until(
-      [&](const Captured& c) { return c.status_from(backend_pid, cvo_lcm::status_t::STATE_STOPPING); }, 30s));
+      [&](const Captured& c) { return c.status_from(backend_pid, +cvo_lcm::status_t::STATE_STOPPING); }, 30s));
 
   // The final map (published before the final CVO_STATUS) holds every keyframe the tracker made.
   const Captured captured = capture.snapshot();
