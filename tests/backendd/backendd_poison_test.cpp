@@ -93,14 +93,7 @@ std::vector<std::pair<Event, int>> poison(const std::vector<Event>& good) {
 void write_log(const fs::path& file, const std::vector<Event>& good, const std::vector<std::pair<Event, int>>& bad) {
   ::lcm::LogFile log(file.string(), "w");
   std::int64_t t = 0;
-  const auto write = [&](const Event& e) {
-    ::lcm::LogEvent le{};
-    le.timestamp = t += 1000;
-    le.channel = e.channel;
-    le.datalen = static_cast<std::int32_t>(e.bytes.size());
-    le.data = const_cast<std::uint8_t*>(e.bytes.data());
-    log.writeEvent(&le);
-  };
+  const auto write = [&](const Event& e) { cvo::testing::write_event(log, e.channel, e.bytes, t += 1000); };
   const std::size_t at = poison_at(good);
   for (std::size_t i = 0; i < good.size(); ++i) {
     if (i == at)

@@ -1,6 +1,7 @@
 #pragma once
 // What a daemon published, read back from an LCM log (the file:// provider's output or
 // lcm-logger's): every message of the cvo-slam channels, decoded with the checking decoder.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -34,6 +35,18 @@ void add_decoded(const ::lcm::LogEvent& e, std::vector<T>& out, int& undecodable
     ++undecodable;
     ADD_FAILURE() << e.channel << ": " << error;
   }
+}
+
+/// Appends one event to an LCM log as lcm-logger would (at `utime`); LogFile::writeEvent's result
+/// (0: written).
+inline int write_event(::lcm::LogFile& log, const std::string& channel, const std::vector<std::uint8_t>& bytes,
+                       std::int64_t utime) {
+  ::lcm::LogEvent e{};
+  e.timestamp = utime;
+  e.channel = channel;
+  e.datalen = static_cast<std::int32_t>(bytes.size());
+  e.data = const_cast<std::uint8_t*>(bytes.data());
+  return log.writeEvent(&e);
 }
 
 inline PublishedLog read_published(const std::filesystem::path& file) {

@@ -211,12 +211,7 @@ TEST(Trackerd, BadMessagesAreCountedAndSkipped) {
     ASSERT_TRUE(log.good());
     std::int64_t t = 0;
     const auto write = [&](const std::vector<std::uint8_t>& bytes) {
-      ::lcm::LogEvent e{};
-      e.timestamp = t += 33000;
-      e.channel = "CVO_RGBD";
-      e.datalen = static_cast<int32_t>(bytes.size());
-      e.data = const_cast<std::uint8_t*>(bytes.data());
-      ASSERT_EQ(log.writeEvent(&e), 0);
+      ASSERT_EQ(cvo::testing::write_event(log, "CVO_RGBD", bytes, t += 33000), 0);
     };
     const lcm::RgbdEncoding png{lcm::ColourEncoding::kPng, lcm::DepthEncoding::kPng};
     for (int i = 0; i < 12; ++i) {
@@ -405,14 +400,7 @@ void write_rgbd_log(const fs::path& path, const std::vector<std::vector<std::uin
   ::lcm::LogFile log(path.string(), "w");
   ASSERT_TRUE(log.good());
   std::int64_t t = 0;
-  for (const auto& bytes : messages) {
-    ::lcm::LogEvent e{};
-    e.timestamp = t += 33000;
-    e.channel = "CVO_RGBD";
-    e.datalen = static_cast<int32_t>(bytes.size());
-    e.data = const_cast<std::uint8_t*>(bytes.data());
-    ASSERT_EQ(log.writeEvent(&e), 0);
-  }
+  for (const auto& bytes : messages) ASSERT_EQ(cvo::testing::write_event(log, "CVO_RGBD", bytes, t += 33000), 0);
 }
 
 struct Replayed {
@@ -570,12 +558,7 @@ TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
     ASSERT_TRUE(log.good());
     std::int64_t t = 0;
     const auto write = [&](const std::vector<std::uint8_t>& bytes) {
-      ::lcm::LogEvent e{};
-      e.timestamp = t += 1000;
-      e.channel = "CVO_MAP";
-      e.datalen = static_cast<int32_t>(bytes.size());
-      e.data = const_cast<std::uint8_t*>(bytes.data());
-      ASSERT_EQ(log.writeEvent(&e), 0);
+      ASSERT_EQ(cvo::testing::write_event(log, "CVO_MAP", bytes, t += 1000), 0);
     };
     write(lcm::encode(lcm::to_message(early, 1)));
     write(lcm::encode(lcm::to_message(last, 2)));
@@ -613,12 +596,7 @@ TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
   const auto unplaced_path = dir.path() / "unplaced.lcmlog";
   {
     ::lcm::LogFile log(unplaced_path.string(), "w");
-    const auto bytes = lcm::encode(lcm::to_message(unplaced, 1));
-    ::lcm::LogEvent e{};
-    e.channel = "CVO_MAP";
-    e.datalen = static_cast<int32_t>(bytes.size());
-    e.data = const_cast<std::uint8_t*>(bytes.data());
-    ASSERT_EQ(log.writeEvent(&e), 0);
+    ASSERT_EQ(cvo::testing::write_event(log, "CVO_MAP", lcm::encode(lcm::to_message(unplaced, 1)), 0), 0);
   }
   const auto nothing = map_of(unplaced_path, "x.txt");
   EXPECT_EQ(nothing.exit_code, 1);
