@@ -20,6 +20,7 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
+#include "libcvo/core/units.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -37,14 +38,6 @@ constexpr const char* kProcess = "cvo-backendd";
 // At a stop, messages already in the socket are taken in; a tracker that is still sending must
 // not keep the drain going for ever.
 constexpr int kMaxDrainMessages = 10000;
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
-std::int64_t wall_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string fixed(double value, int digits) {
   char text[64];
@@ -120,7 +113,7 @@ struct Backendd::Work {
   ::lcm::LCM lcm;  // CVO_MAP and CVO_STATUS
   // CVO_MAP's epoch: revisions count from the start of this process, and a tracker takes a newer
   // epoch's maps after a restart of the back end instead of refusing them as stale.
-  const std::int64_t epoch = wall_utime();
+  const std::int64_t epoch = core::wall_utime();
   // When each session's first keyframe arrived (nullopt: it was replayed from the store).
   std::map<slam::SessionId, std::optional<Clock::time_point>> first_arrival;
   std::vector<std::string> joins;  // every join noted, repeated in the closing note
@@ -185,7 +178,7 @@ int Backendd::run() {
     if (const auto period = systemd_.watchdog_period(); period && Clock::now() - last_watchdog >= *period) {
       // The worker may be inside a long optimisation: allow it the watchdog's full interval.
       const auto fresh = [&](const std::atomic<std::int64_t>& heartbeat) {
-        return now_ns() - heartbeat.load() < std::chrono::nanoseconds(30s).count();
+        return core::steady_now_ns() - heartbeat.load() < std::chrono::nanoseconds(30s).count();
       };
       if (fresh(receive_heartbeat_ns_) && fresh(work_heartbeat_ns_)) systemd_.watchdog();
       last_watchdog = Clock::now();
@@ -245,7 +238,7 @@ void Backendd::receive_loop() {
   lcm.subscribe("CVO_POSE", &PoseHandler::handle, &poses);
   const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
-    receive_heartbeat_ns_ = now_ns();
+    receive_heartbeat_ns_ = core::steady_now_ns();
     retry_store(false);
     ask_for_missing(lcm, false);
     if (input_ended_) {  // a log that ended: nothing more will come; wait for the stop
@@ -351,7 +344,7 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
   for (const auto& request : round.requests) {
     cvo_lcm::keyframe_request_t m{};
     m.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
-    m.utime = wall_utime();
+    m.utime = core::wall_utime();
     m.session = request.session;
     m.ids = request.ids;
     m.num_ids = static_cast<std::int32_t>(m.ids.size());
@@ -407,7 +400,7 @@ void Backendd::work_loop() {
   name_this_thread("cvo-backend");
   const auto status_period = std::chrono::duration<double>(config_.backendd.status_period_s);
   while (true) {
-    work_heartbeat_ns_ = now_ns();
+    work_heartbeat_ns_ = core::steady_now_ns();
     const bool receiver_done = receiver_done_;  // read first: it pushes nothing after setting it
     const auto queued = queue_.pop(50ms);
     if (queued) process(*queued);
@@ -462,7 +455,7 @@ void Backendd::apply_local_graph(const StoredRecord& record) {
 void Backendd::publish_map(const std::vector<std::int64_t>& joined) {
   Work& w = *work_;
   const slam::Map map = w.mapper.map();
-  const auto message = lcm::to_message(map, wall_utime(), w.epoch);
+  const auto message = lcm::to_message(map, core::wall_utime(), w.epoch);
   w.lcm.publish("CVO_MAP", &message);
   w.summary = summarise(map);
   for (const auto session : joined) {
@@ -478,7 +471,7 @@ void Backendd::publish_status(std::int8_t state) {
   cvo_lcm::status_t s{};
   s.version = cvo_lcm::status_t::SCHEMA_VERSION;
   s.session = 0;  // the back end is no tracker session
-  s.utime = wall_utime();
+  s.utime = core::wall_utime();
   s.pid = static_cast<std::int32_t>(getpid());
   // A store that does not keep every record is the daemon's degraded state (the stop says itself).
   const auto store = store_->health();

@@ -10,69 +10,50 @@
 #include <iostream>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "daemon/backendd/backendd.hpp"
 #include "daemon/common/signals.hpp"
 #include "libcvo/config/config.hpp"
-#include "tools/common/cli.hpp"
+#include "program/cli.hpp"
 
 namespace {
 
 using namespace cvo;
 
-constexpr std::string_view kUsage =
-    R"(usage: cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]... [--print-config]
-                    [--publish-url URL] [--exit-on-eof]
-
-Receives CVO_KEYFRAME and CVO_LOCAL_GRAPH from cvo-trackerd sessions, stores them durably (a
+constexpr const char* kDescription =
+    R"(Receives CVO_KEYFRAME and CVO_LOCAL_GRAPH from cvo-trackerd sessions, stores them durably (a
 restart resumes every session received; a keyframe repeated with other content is refused),
 detects and verifies loop closures across every session (ORB bag of words, RANSAC + SVD, CVO
 refinement, the alpha test), joins a new session to the map at its first verified loop, optimises
 the keyframe pose graph with a Cauchy kernel on loops, and publishes the multi-session map on
 CVO_MAP after each change, with a CVO_STATUS heartbeat. On SIGTERM/SIGINT it runs a final global
 optimisation, publishes the final map and exits 0. Under systemd it sends READY, STATUS and
-WATCHDOG notifications.
-
-options:
-  --config FILE      YAML configuration (the backendd section; every key: libcvo/config/default.yaml)
-  --lcm-url URL      LCM provider (backendd.lcm_url)
-  --store FILE       the keyframe store (backendd.store)
-  --publish-url URL  LCM provider CVO_MAP and CVO_STATUS go to (backendd.publish_url; default: --lcm-url)
-  --exit-on-eof      with a file:// --lcm-url (a recording): at its end, the final optimisation, the
-                     final map, exit 0 (backendd.exit_on_eof)
-  --set key=value    override one configuration key (repeatable)
-  --print-config     print the effective configuration as YAML and exit
-  --help             this text
-)";
+WATCHDOG notifications.)";
 
 struct Arguments {
-  bool help = false, print_config = false;
+  bool print_config = false;
   std::optional<std::string> config_file, lcm_url, store, publish_url;
   bool exit_on_eof = false;
   std::vector<std::string> sets;
 };
 
-Arguments parse_arguments(int argc, char** argv) {
-  Arguments args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw tools::UsageError(std::string(a) + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--help" || a == "-h") args.help = true;
-    else if (a == "--config") args.config_file = value();
-    else if (a == "--lcm-url") args.lcm_url = value();
-    else if (a == "--publish-url") args.publish_url = value();
-    else if (a == "--exit-on-eof") args.exit_on_eof = true;
-    else if (a == "--store") args.store = value();
-    else if (a == "--set") args.sets.push_back(value());
-    else if (a == "--print-config") args.print_config = true;
-    else throw tools::UsageError("unknown argument '" + std::string(a) + "'");
-  }
-  return args;
+void add_options(CLI::App& app, Arguments& args) {
+  app.add_option("--config", args.config_file,
+                 "YAML configuration (the backendd section; every key: libcvo/config/default.yaml)")
+      ->type_name("FILE");
+  app.add_option("--lcm-url", args.lcm_url, "LCM provider (backendd.lcm_url)")->type_name("URL");
+  app.add_option("--store", args.store, "the keyframe store (backendd.store)")->type_name("FILE");
+  app.add_option("--publish-url", args.publish_url,
+                 "LCM provider CVO_MAP and CVO_STATUS go to (backendd.publish_url; default: --lcm-url)")
+      ->type_name("URL");
+  app.add_flag("--exit-on-eof", args.exit_on_eof,
+               "with a file:// --lcm-url (a recording): at its end, the final optimisation, the final map, exit 0 "
+               "(backendd.exit_on_eof)");
+  app.add_option("--set", args.sets, "override one configuration key (repeatable)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+  app.add_flag("--print-config", args.print_config, "print the effective configuration as YAML and exit");
 }
 
 int run(const Arguments& args) {
@@ -96,4 +77,10 @@ int run(const Arguments& args) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return tools::cli_main("cvo-backendd", kUsage, argc, argv, parse_arguments, run); }
+int main(int argc, char** argv) {
+  Arguments args;
+  CLI::App app(kDescription, "cvo-backendd");
+  program::describe(app, "cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [options]");
+  add_options(app, args);
+  return program::cli_main(app, argc, argv, [&] { return run(args); });
+}

@@ -7,72 +7,50 @@
 #include <iostream>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "daemon/common/signals.hpp"
 #include "daemon/trackerd/trackerd.hpp"
 #include "libcvo/config/config.hpp"
-#include "tools/common/cli.hpp"
+#include "program/cli.hpp"
 
 namespace {
 
 using namespace cvo;
 
-constexpr std::string_view kUsage =
-    R"(usage: cvo-trackerd [--config FILE] [--source SPEC] [--lcm-url URL] [--exit-on-eof]
-                    [--deterministic] [--set key=value]... [--print-config]
-
-Tracks an RGB-D stream with keyframe-based CVO in a realtime thread and publishes on LCM:
+constexpr const char* kDescription =
+    R"(Tracks an RGB-D stream with keyframe-based CVO in a realtime thread and publishes on LCM:
 CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes one, and the open
 one at the end) and CVO_STATUS (once a second). Every start, and every camera that comes back
 after a disconnection, is a new session with a random id carried by every message. The map pose
 follows the newest CVO_MAP from cvo-backendd once it places this session. Stops cleanly on
-SIGTERM or SIGINT; under systemd it sends READY, STATUS and WATCHDOG notifications.
+SIGTERM or SIGINT; under systemd it sends READY, STATUS and WATCHDOG notifications.)";
 
-options:
-  --config FILE      YAML configuration (every key: libcvo/config/default.yaml; the trackerd
-                     section configures this daemon)
-  --source SPEC      frame source (trackerd.source):
-                       tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)
-                       lcm:URL              CVO_RGBD messages, live (udpm://...) or a log (file://...)
-                       openni2:URI          an OpenNI2 device (openni2:any) or an .oni recording
-                       v4l2:COLOUR[,DEPTH]  V4L2 device nodes (intrinsics from the camera key)
-  --lcm-url URL      where results are published (trackerd.lcm_url)
-  --exit-on-eof      exit 0 when a finite source ends, after tracking every frame
-  --deterministic    never drop frames: a replay gives the same poses every time
-  --set key=value    override one configuration key (repeatable), e.g. trackerd.ring_slots=8
-  --print-config     print the effective configuration as YAML and exit
-  --help             this text
-)";
+constexpr const char* kSources = R"(sources (--source, trackerd.source):
+  tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)
+  lcm:URL              CVO_RGBD messages, live (udpm://...) or a log (file://...)
+  openni2:URI          an OpenNI2 device (openni2:any) or an .oni recording
+  v4l2:COLOUR[,DEPTH]  V4L2 device nodes (intrinsics from the camera key))";
 
 struct Arguments {
-  bool help = false;
   bool print_config = false;
   std::optional<std::string> config_file, source, lcm_url;
   bool exit_on_eof = false, deterministic = false;
   std::vector<std::string> sets;
 };
 
-Arguments parse_arguments(int argc, char** argv) {
-  Arguments args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view a = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw tools::UsageError(std::string(a) + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--help" || a == "-h") args.help = true;
-    else if (a == "--config") args.config_file = value();
-    else if (a == "--source") args.source = value();
-    else if (a == "--lcm-url") args.lcm_url = value();
-    else if (a == "--exit-on-eof") args.exit_on_eof = true;
-    else if (a == "--deterministic") args.deterministic = true;
-    else if (a == "--set") args.sets.push_back(value());
-    else if (a == "--print-config") args.print_config = true;
-    else throw tools::UsageError("unknown argument '" + std::string(a) + "'");
-  }
-  return args;
+void add_options(CLI::App& app, Arguments& args) {
+  app.add_option("--config", args.config_file,
+                 "YAML configuration (every key: libcvo/config/default.yaml; the trackerd section configures this daemon)")
+      ->type_name("FILE");
+  app.add_option("--source", args.source, "frame source (trackerd.source; the forms below)")->type_name("SPEC");
+  app.add_option("--lcm-url", args.lcm_url, "where results are published (trackerd.lcm_url)")->type_name("URL");
+  app.add_flag("--exit-on-eof", args.exit_on_eof, "exit 0 when a finite source ends, after tracking every frame");
+  app.add_flag("--deterministic", args.deterministic, "never drop frames: a replay gives the same poses every time");
+  app.add_option("--set", args.sets, "override one configuration key (repeatable), e.g. trackerd.ring_slots=8")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+  app.add_flag("--print-config", args.print_config, "print the effective configuration as YAML and exit");
 }
 
 int run(const Arguments& args) {
@@ -93,4 +71,10 @@ int run(const Arguments& args) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return tools::cli_main("cvo-trackerd", kUsage, argc, argv, parse_arguments, run); }
+int main(int argc, char** argv) {
+  Arguments args;
+  CLI::App app(kDescription, "cvo-trackerd");
+  program::describe(app, "cvo-trackerd [--config FILE] [--source SPEC] [--lcm-url URL] [options]", kSources);
+  add_options(app, args);
+  return program::cli_main(app, argc, argv, [&] { return run(args); });
+}

@@ -20,12 +20,13 @@
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
-#include "daemon/common/allocation_counter.hpp"
+#include "program/allocation_counter.hpp"
 #include "daemon/common/latency_window.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "drivers/reconnecting_source.hpp"
+#include "libcvo/core/units.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -38,20 +39,13 @@
 namespace cvo::daemon::trackerd {
 namespace {
 
+using program::thread_allocations;
+
 using namespace std::chrono_literals;
 
 constexpr const char* kProcess = "cvo-trackerd";
 constexpr std::size_t kOutboxEvents = 64;  // 2 s at 30 Hz: the publisher may stall that long
 constexpr std::size_t kPoolSlots = 8;      // keyframes / local graphs in flight to the publisher
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch()).count();
-}
-
-std::int64_t wall_utime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // 64 random bits from the kernel: unique across restarts and machines. getrandom(2) neither
 // allocates nor blocks once the kernel's pool is ready (it was for the first session), so the
@@ -62,7 +56,7 @@ std::int64_t new_session_id(std::uint64_t previous = 0) {
   while (id == 0) {
     const auto n = getrandom(&id, sizeof id, 0);
     if (n == static_cast<ssize_t>(sizeof id) || (n < 0 && errno == EINTR)) continue;
-    std::uint64_t z = previous += 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(now_ns());
+    std::uint64_t z = previous += 0x9e3779b97f4a7c15ULL + static_cast<std::uint64_t>(core::steady_now_ns());
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
     id = z ^ (z >> 31);
@@ -231,7 +225,7 @@ int Trackerd::run() {
 
   auto last_watchdog = Clock::now();
   const auto alive = [&](const std::atomic<std::int64_t>& heartbeat) {
-    return now_ns() - heartbeat.load() < std::chrono::nanoseconds(5s).count();
+    return core::steady_now_ns() - heartbeat.load() < std::chrono::nanoseconds(5s).count();
   };
   while (!publisher_done_) {
     if (const auto signal = wait_for_stop_signal(50ms)) {
@@ -334,7 +328,7 @@ void Trackerd::acquire_loop() {
 void Trackerd::track_loop() {
   name_this_thread("cvo-track");
   const auto& t = config_.trackerd;
-  track_heartbeat_ns_ = now_ns();
+  track_heartbeat_ns_ = core::steady_now_ns();
   if (t.realtime_priority > 0)
     if (const auto why = make_this_thread_realtime(t.realtime_priority); !why.empty())
       note("warning: " + why + "; tracking at normal priority");
@@ -343,7 +337,7 @@ void Trackerd::track_loop() {
 
   Pipeline* p = nullptr;
   while (true) {
-    track_heartbeat_ns_ = now_ns();
+    track_heartbeat_ns_ = core::steady_now_ns();
     RingSlot* slot = ring_->begin_read(100ms);
     if (slot == nullptr) {
       if (ring_->drained()) break;
@@ -540,7 +534,7 @@ void Trackerd::publish_loop() {
   name_this_thread("cvo-publish");
   const auto& t = config_.trackerd;
   Publisher out(t, session_.load());
-  publish_heartbeat_ns_ = now_ns();
+  publish_heartbeat_ns_ = core::steady_now_ns();
 
   struct MapHandler {
     Trackerd* self;
@@ -565,7 +559,7 @@ void Trackerd::publish_loop() {
   const int fd = receives ? out.lcm.getFileno() : -1;
   Event event;
   while (true) {
-    publish_heartbeat_ns_ = now_ns();
+    publish_heartbeat_ns_ = core::steady_now_ns();
     if (pipeline_ready_) {
       if (pipeline_->outbox.pop(event, 10ms)) publish_event(out, event);
       else if (tracker_done_ && pipeline_->outbox.finished()) break;
@@ -596,7 +590,7 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
   if (event.has_pose && event.pose.keyframe_id >= 0) p.history.made(event.session, event.pose.keyframe_id);
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = p.outbox.graph(event.graph_slot);
-    const auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, wall_utime()));
+    const auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime()));
     out.lcm.publish("CVO_LOCAL_GRAPH", bytes.data(), static_cast<unsigned>(bytes.size()));
     p.history.keep_graph(event.session, g.keyframe_id, bytes);
   }
@@ -675,7 +669,7 @@ void Trackerd::publish_status(Publisher& out, std::int8_t state_override) {
   lcm::ProcessStatus s;
   s.process = kProcess;
   s.session = out.session;
-  s.utime = wall_utime();
+  s.utime = core::wall_utime();
   s.pid = static_cast<std::int32_t>(getpid());
   s.rate_hz = elapsed > 0 ? static_cast<double>(out.published - out.published_at_last_status) / elapsed : 0;
   const auto l = out.latency.summary();

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "libcvo/eval/trajectory_checks.hpp"
+#include "libcvo/core/units.hpp"
 
 namespace cvo::eval {
 
@@ -75,7 +76,7 @@ RpeResult relative_pose_error(const core::Trajectory& groundtruth, const core::T
     p.gt_timestamp_0 = gt_stamps[gi];
     p.gt_timestamp_1 = gt_stamps[gj];
     p.translation = e.translation().norm();
-    p.rotation_deg = rotation_angle_from_trace(e) * 180.0 / std::numbers::pi;
+    p.rotation_deg = core::degrees(rotation_angle_from_trace(e));
     trans.push_back(p.translation);
     rot.push_back(p.rotation_deg);
     result.pairs.push_back(p);

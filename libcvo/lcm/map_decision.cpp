@@ -8,6 +8,7 @@
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
+#include "libcvo/core/units.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -28,7 +29,7 @@ std::string rounded(double v) {
 std::string implausible_jump(const core::SE3& from, const core::SE3& to, const CorrectionLimits& limits) {
   const core::SE3 jump = from.inverse() * to;
   const double metres = jump.translation().norm();
-  const double degrees = jump.angle() * 180.0 / std::numbers::pi;
+  const double degrees = core::degrees(jump.angle());
   if (metres <= limits.max_jump_m && degrees <= limits.max_jump_deg) return {};
   return "its correction jumps " + rounded(metres) + " m and " + rounded(degrees) +
          " deg from the one applied (at most " + rounded(limits.max_jump_m) + " m and " +

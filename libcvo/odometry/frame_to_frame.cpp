@@ -2,15 +2,14 @@
 
 #include <chrono>
 
+#include "libcvo/core/units.hpp"
+
 namespace cvo::odometry {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = core::SteadyClock;
+using core::ms_since;
 
 bool selection_usable(registration::SelectionStatus s) {
   // A clamped selection still holds a full cloud; only its surplus points were dropped.

@@ -7,14 +7,13 @@
 
 #include <Eigen/Cholesky>
 
+#include "libcvo/core/units.hpp"
+
 namespace cvo::odometry {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = core::SteadyClock;
+using core::ms_since;
 
 bool usable(registration::SelectionStatus s) {
   return s == registration::SelectionStatus::kOk || s == registration::SelectionStatus::kCapacityClamped;
@@ -107,7 +106,7 @@ core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResu
                                             const registration::RegistrationResult& f2f, const core::SE3& chain) const {
   double w = parameters_.chain_weight;
   if (parameters_.chain_full_weight_deg > 0) {
-    const double ramp = chain.angle() * 180.0 / std::numbers::pi / parameters_.chain_full_weight_deg;
+    const double ramp = core::degrees(chain.angle()) / parameters_.chain_full_weight_deg;
     w *= std::min(1.0, ramp * ramp);
   }
   if (!(w > 0)) return kf.transform;
@@ -134,7 +133,7 @@ core::SE3 KeyframeOdometry::colour_T_depth(const core::RgbdFrame& frame) const {
   const double dt = frame.depth_timestamp - frame.timestamp + parameters_.selection.depth_time_offset_s;
   if (!(std::abs(dt) <= kMaxDt) || dt == 0) return {};
   const core::SE3 motion = core::SE3::exp((dt / velocity_dt_) * velocity_.log());
-  if (!motion.is_finite() || motion.angle() * 180.0 / std::numbers::pi > kMaxCompensationDeg) return {};
+  if (!motion.is_finite() || core::degrees(motion.angle()) > kMaxCompensationDeg) return {};
   return motion;
 }
 
@@ -142,7 +141,7 @@ bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
   const auto& k = parameters_.keyframe;
   if (gamma < k.inner_product_ratio_threshold) reason_ = KeyframeReason::kGamma;
   else if (T_mn.translation().norm() > k.translation_threshold_m) reason_ = KeyframeReason::kTranslation;
-  else if (T_mn.angle() * 180.0 / std::numbers::pi > k.rotation_threshold_deg) reason_ = KeyframeReason::kRotation;
+  else if (core::degrees(T_mn.angle()) > k.rotation_threshold_deg) reason_ = KeyframeReason::kRotation;
   else if (graphs_[graph_].full()) reason_ = KeyframeReason::kGraphFull;
   else return false;
   return true;

@@ -1,6 +1,7 @@
 #include "libcvo/odometry/opencv_odometry.hpp"
 
 #include "libcvo/odometry/motion_model.hpp"
+#include "libcvo/core/units.hpp"
 
 #include <array>
 #include <chrono>
@@ -17,12 +18,10 @@ namespace cvo::odometry {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using Clock = core::SteadyClock;
+using core::ms_since;
 using cv::rgbd::OdometryFrame;
 
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // As in frame_to_frame.cpp: V^s = exp(s log V), and the frames between two stream indices (1 when
 // they do not increase).

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "libcvo/core/units.hpp"
+
 namespace cvo::sim {
 namespace {
 
@@ -35,7 +37,7 @@ core::SE3 sweep(double seconds) {
   const double s = 0.5 - 0.5 * std::cos(2 * kPi * seconds / path_period(PathKind::sweep));  // 0 -> 1 -> 0
   const Eigen::Vector3d start(-0.8, -1.2, 1.2), end(0.8, -0.8, 1.45);
   const Eigen::Vector3d eye = start + s * (end - start);
-  const double yaw = (110.0 - 40.0 * s) * kPi / 180.0;
+  const double yaw = core::radians(110.0 - 40.0 * s);
   const double pitch = -0.25 + 0.1 * s;
   return look_at(eye, eye + direction(yaw, pitch), 0.04 * std::sin(kPi * s));
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "libcvo/sim/random.hpp"
+#include "libcvo/core/units.hpp"
 
 namespace cvo::sim {
 namespace {
@@ -135,7 +136,7 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const core
 
   std::vector<bool> edge;
   if (noise.enabled) edge = edge_mask(clean, w, h, noise);
-  const double cos_grazing = std::cos(noise.grazing_angle_deg * std::numbers::pi / 180.0);
+  const double cos_grazing = std::cos(core::radians(noise.grazing_angle_deg));
   for (int v = 0; v < h; ++v) {
     auto* depth = frame.depth.ptr<std::uint16_t>(v);
     for (int u = 0; u < w; ++u) {

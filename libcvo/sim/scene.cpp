@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "libcvo/sim/random.hpp"
+#include "libcvo/core/units.hpp"
 
 namespace cvo::sim {
 namespace {
@@ -65,7 +66,7 @@ std::vector<std::vector<Quad>> room_geometry() {
   add_box(objects[0], (kRoomMin + kRoomMax) / 2, (kRoomMax - kRoomMin) / 2, Eigen::Matrix3d::Identity(), true);
   for (const auto& f : kFurniture) {
     const Eigen::Matrix3d yaw =
-        Eigen::AngleAxisd(f.yaw_deg * std::numbers::pi / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+        Eigen::AngleAxisd(core::radians(f.yaw_deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     add_box(objects.emplace_back(), {f.x, f.y, f.base + f.sz / 2}, {f.sx / 2, f.sy / 2, f.sz / 2}, yaw, false);
   }
   return objects;

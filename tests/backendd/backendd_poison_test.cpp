@@ -25,6 +25,7 @@
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/daemon/daemon_process.hpp"
 #include "tests/daemon/lcm_log.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -163,6 +164,13 @@ TEST(BackenddPoison, EveryRefusalIsCountedByKindAndEveryGoodMessageIsUsed) {
       EXPECT_NEAR(a.keyframes[i].pose.position[c], b.keyframes[i].pose.position[c], 1e-9) << "keyframe " << i;
   }
   EXPECT_EQ(a.num_loops, b.num_loops);
+}
+
+TEST(Backendd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_cli_contract(
+      "cvo-backendd", "",
+      {"--config", "--lcm-url", "--store", "--publish-url", "--exit-on-eof", "--set", "--print-config"}, dir.path());
 }
 
 TEST(BackenddPoison, ExitOnEofNeedsALog) {

@@ -5,11 +5,13 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/common/allocation_counter.hpp"
+#include "program/allocation_counter.hpp"
 #include "daemon/trackerd/frame_ring.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {
+
+using program::thread_allocations;
 
 using namespace std::chrono_literals;
 

@@ -8,11 +8,13 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/common/allocation_counter.hpp"
+#include "program/allocation_counter.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {
+
+using program::thread_allocations;
 
 using Bytes = std::vector<std::uint8_t>;
 using Ids = std::vector<std::int64_t>;

@@ -26,6 +26,7 @@
 #include "tests/daemon/daemon_process.hpp"
 #include "tests/daemon/lcm_log.hpp"
 #include "tests/lcm/image_bombs.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -393,6 +394,23 @@ TEST(Trackerd, UnusableSourceOrSettingsFailWithAMessage) {
     EXPECT_NE(help.out.find(option), std::string::npos) << option;
 }
 
+TEST(Trackerd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_cli_contract("cvo-trackerd", "",
+                                    {"--config", "--source", "--lcm-url", "--exit-on-eof", "--deterministic", "--set",
+                                     "--print-config", "tum:DIR", "lcm:URL", "openni2:URI", "v4l2:COLOUR[,DEPTH]"},
+                                    dir.path());
+}
+
+TEST(Trackerd, RepeatedSetOptionsEachTakeOneValue) {
+  cvo::test::TempDir dir;
+  const auto r = cvo::testing::run_tool(
+      "cvo-trackerd", "--set trackerd.ring_slots=7 --set trackerd.warmup_frames=9 --print-config", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("ring_slots: 7"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("warmup_frames: 9"), std::string::npos) << r.out;
+}
+
 // cvo-log map: a recording with two CVO_MAPs (and a broken one after them) as the back end sends
 // them; the last readable one is written, its placed sessions' keyframes merged in time order.
 // CVO_RGBD messages as a recording, 33 ms apart.
@@ -604,6 +622,63 @@ TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
   EXPECT_FALSE(fs::exists(dir.path() / "x.txt"));
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "map " + cvo::testing::quoted(log_path), dir.path()).exit_code, 2)
       << "map needs --out";
+}
+
+TEST(CvoLog, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_cli_contract("cvo-log", "", {"poses", "map", "status"}, dir.path());
+  cvo::testing::expect_cli_contract("cvo-log", "poses", {"LOG", "--out", "--map"}, dir.path());
+  cvo::testing::expect_cli_contract("cvo-log", "map", {"LOG", "--out"}, dir.path());
+  cvo::testing::expect_cli_contract("cvo-log", "status", {"LOG", "--json"}, dir.path());
+}
+
+// cvo-log status --json: the status_t fields with their types (the 64-bit session and counters as
+// exact integers, the rates as numbers, bad_messages an array), on one line; the text form too.
+TEST(CvoLog, StatusJsonKeepsTheFieldTypes) {
+  cvo::test::TempDir dir;
+  cvo_lcm::status_t s{};
+  s.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  s.session = -0x123456789abcdef1;  // any 64 bits: not a double's
+  s.utime = 1'700'000'000'123'456;
+  s.pid = 4242;
+  s.state = cvo_lcm::status_t::STATE_DEGRADED;
+  s.rate_hz = 29.5;
+  s.rss_bytes = 123'456'789;
+  s.bad_messages[cvo_lcm::status_t::BAD_STALE] = 3;
+  s.process = "cvo-backendd";
+  s.detail = "a \"quoted\" note";
+  const auto log_path = dir.path() / "status.lcmlog";
+  {
+    ::lcm::LogFile log(log_path.string(), "w");
+    ASSERT_EQ(cvo::testing::write_event(log, "CVO_STATUS", lcm::encode(s), 1000), 0);
+  }
+  const auto r = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(log_path) + " --json", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << "one line\n" << r.out;
+  const auto json = nlohmann::ordered_json::parse(r.out, nullptr, false);
+  ASSERT_TRUE(json.contains("cvo-backendd")) << r.out;
+  const auto& status = json["cvo-backendd"];
+  EXPECT_EQ(status.begin().key(), "session");
+  EXPECT_EQ(status["session"].get<std::int64_t>(), s.session);
+  EXPECT_TRUE(status["utime"].is_number_integer()) << r.out;
+  EXPECT_EQ(status["utime"].get<std::int64_t>(), s.utime);
+  EXPECT_EQ(status["pid"], 4242);
+  EXPECT_EQ(status["state"], 2);
+  EXPECT_EQ(status["rate_hz"].get<double>(), 29.5);
+  EXPECT_EQ(status["rss_bytes"], 123'456'789);
+  ASSERT_TRUE(status["bad_messages"].is_array());
+  EXPECT_EQ(status["bad_messages"].size(), std::size_t{cvo_lcm::status_t::NUM_BAD_KINDS});
+  EXPECT_EQ(status["bad_messages"][cvo_lcm::status_t::BAD_STALE], 3);
+  EXPECT_EQ(status["detail"], s.detail);
+  EXPECT_EQ(status.back(), s.detail) << "detail last";
+
+  const auto text = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(log_path), dir.path());
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("cvo-backendd:\n  session: " + hex(s.session) + "\n"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("  pid: 4242\n"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("  bad_messages: 0 0 0 0 0 0 0 0 0 0 0 3 0 0\n  detail: a \"quoted\" note\n"),
+            std::string::npos)
+      << text.out;
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "eval/test_trajectories.hpp"
 #include "libcvo/io/trajectory_io.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 
 namespace cvo::eval {
@@ -110,6 +111,11 @@ TEST_F(CvoEvalCli, BadInputExitsOneNamingTheFile) {
 
   std::ofstream(dir_ / "empty.txt") << "# nothing\n";
   EXPECT_EQ(run(q(dir_ / "empty.txt") + " " + q(est_)).exit_code, 1);
+}
+
+TEST_F(CvoEvalCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  cvo::testing::expect_cli_contract("cvo-eval", "", {"GROUNDTRUTH", "ESTIMATE", "--json", "--plot", "--max-dt", "--delta", "--offset"},
+                                    dir_);
 }
 
 TEST_F(CvoEvalCli, BadArgumentsExitTwo) {

@@ -1,5 +1,5 @@
 // After warm-up, FrameToFrameOdometry::track() must not touch the heap: the tracker runs it in a
-// realtime thread. This binary links tests/support/allocation_counter.cpp (counts operator new);
+// realtime thread. This binary links program/allocation_counter.cpp (counts operator new);
 // the frames are rendered before counting starts.
 #include <new>
 #include <vector>
@@ -9,18 +9,18 @@
 #include "libcvo/odometry/frame_to_frame.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "tests/odometry/odometry_fixtures.hpp"
-#include "tests/support/allocation_counter.hpp"
+#include "program/allocation_counter.hpp"
 
-using cvo::testing::allocation_count;
+using cvo::program::process_allocations;
 
 namespace cvo::odometry {
 namespace {
 
 TEST(OdometryAllocation, CountingWorks) {
-  const long before = allocation_count();
+  const auto before = process_allocations();
   void* p = ::operator new(16);  // an explicit call: a new-expression pair may be elided
   ::operator delete(p);
-  EXPECT_EQ(allocation_count() - before, 1);
+  EXPECT_EQ(process_allocations() - before, 1);
 }
 
 TEST(OdometryAllocation, TrackAllocatesNothingAfterWarmUp) {
@@ -37,9 +37,9 @@ TEST(OdometryAllocation, TrackAllocatesNothingAfterWarmUp) {
   long allocations = 0;
   int tracked = 0;
   for (const core::RgbdFrame* frame : {&s.frames[2], &s.frames[3], &empty, &s.frames[5], &s.frames[6]}) {
-    const long before = allocation_count();
+    const auto before = process_allocations();
     const TrackResult r = odometry.track(*frame);
-    allocations += allocation_count() - before;
+    allocations += process_allocations() - before;
     tracked += r.status == TrackStatus::kOk;
   }
   EXPECT_EQ(tracked, 4);
@@ -63,9 +63,9 @@ TEST(OdometryAllocation, KeyframeTrackAllocatesNothingAfterWarmUp) {
   long allocations = 0;
   int keyframes = 0, closed = 0;
   for (const core::RgbdFrame* frame : {&s.frames[3], &s.frames[4], &empty, &s.frames[6], &s.frames[7], &s.frames[8]}) {
-    const long before = allocation_count();
+    const auto before = process_allocations();
     const TrackResult r = odometry.track(*frame);
-    allocations += allocation_count() - before;
+    allocations += process_allocations() - before;
     keyframes += r.keyframe;
     closed += odometry.local_graph_closed();
   }
@@ -92,13 +92,13 @@ TEST(OdometryAllocation, KeyframeResetStartsOverWithoutAllocating) {
   }
   ASSERT_GE(keyframes, 2) << "the first session moved past its first keyframe";
 
-  const long before = allocation_count();
+  const auto before = process_allocations();
   odometry.reset();
-  long allocations = allocation_count() - before;
+  auto allocations = process_allocations() - before;
   for (std::size_t i = 0; i < s.frames.size(); ++i) {
-    const long start = allocation_count();
+    const auto start = process_allocations();
     const TrackResult r = odometry.track(s.frames[i]);
-    allocations += allocation_count() - start;
+    allocations += process_allocations() - start;
     if (i == 0) {
       EXPECT_EQ(r.status, TrackStatus::kFirstFrame);
       EXPECT_TRUE(r.keyframe);

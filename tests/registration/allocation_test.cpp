@@ -1,24 +1,24 @@
 // After construction (and a first warm-up call), select(), align() and inner_product() must not
 // touch the heap: the tracker calls them from a realtime thread. This binary links
-// tests/support/allocation_counter.cpp, which counts every operator new.
+// program/allocation_counter.cpp, which counts every operator new.
 #include <new>
 
 #include <gtest/gtest.h>
 
 #include "libcvo/registration/registration.hpp"
 #include "tests/registration/registration_fixtures.hpp"
-#include "tests/support/allocation_counter.hpp"
+#include "program/allocation_counter.hpp"
 
-using cvo::testing::allocation_count;
+using cvo::program::process_allocations;
 
 namespace cvo::registration {
 namespace {
 
 TEST(Allocation, CountingWorks) {
-  const long before = allocation_count();
+  const auto before = process_allocations();
   void* p = ::operator new(16);  // an explicit call: a new-expression pair may be elided
   ::operator delete(p);
-  EXPECT_EQ(allocation_count() - before, 1);
+  EXPECT_EQ(process_allocations() - before, 1);
 }
 
 TEST(Allocation, SelectAlignAndInnerProductAllocateNothingAfterWarmUp) {
@@ -43,17 +43,17 @@ TEST(Allocation, SelectAlignAndInnerProductAllocateNothingAfterWarmUp) {
   // Counted separately so a failure names the culprit.
   long selection = 0, alignment = 0, inner_product = 0;
   for (int k = 0; k < 3; ++k) {
-    long before = allocation_count();
+    auto before = process_allocations();
     selector.select(frame_a, a);
     selector.select(frame_b, b);
-    selection += allocation_count() - before;
-    before = allocation_count();
+    selection += process_allocations() - before;
+    before = process_allocations();
     const auto r = registration.align(a, b, M_guess);
-    alignment += allocation_count() - before;
+    alignment += process_allocations() - before;
     EXPECT_TRUE(r.converged);
-    before = allocation_count();
+    before = process_allocations();
     EXPECT_GT(registration.inner_product(a, b, r.transform), 0.0);
-    inner_product += allocation_count() - before;
+    inner_product += process_allocations() - before;
   }
   EXPECT_EQ(selection, 0) << "heap allocations in point selection";
   EXPECT_EQ(alignment, 0) << "heap allocations in align()";
@@ -72,12 +72,12 @@ TEST(Allocation, DistortedSelectionAllocatesNothingAfterTheFirstFrame) {
   PointSelector selector(K.width, K.height, core::SelectionParameters{});
   PointCloud cloud(8192);
   selector.select(frame_a, cloud);  // warm-up: builds the table
-  const long before = allocation_count();
+  const auto before = process_allocations();
   for (int k = 0; k < 3; ++k) {
     selector.select(frame_a, cloud);
     selector.select(frame_b, cloud);
   }
-  EXPECT_EQ(allocation_count() - before, 0) << "heap allocations in distorted point selection";
+  EXPECT_EQ(process_allocations() - before, 0) << "heap allocations in distorted point selection";
   EXPECT_GT(cloud.size(), 2000u);
 }
 

@@ -6,9 +6,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 namespace cvo::testing {
 
@@ -24,12 +25,30 @@ inline std::string slurp(const std::filesystem::path& file) {
   return ss.str();
 }
 
-/// The value of "key": in a one-object JSON text (a tool's --json), as written (number, null,
-/// string or '['); "<missing>" when absent.
-inline std::string json_value(const std::string& json, const std::string& key) {
-  std::smatch m;
-  if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([^,\\n}]+)"))) return "<missing>";
-  return m[1];
+/// The first "key" in document order, depth first, or nullptr.
+inline const nlohmann::ordered_json* find_key(const nlohmann::ordered_json& json, const std::string& key) {
+  if (json.is_object())
+    for (const auto& [name, value] : json.items()) {
+      if (name == key) return &value;
+      if (const auto* inner = find_key(value, key)) return inner;
+    }
+  if (json.is_array())
+    for (const auto& value : json)
+      if (const auto* inner = find_key(value, key)) return inner;
+  return nullptr;
+}
+
+/// The value of "key" in a tool's JSON output (the first one, nested objects included) as JSON
+/// text: a number, null, a quoted string, or '[' / '{' for an array / object; "<missing>" when
+/// absent, "<not JSON>" when the text does not parse.
+inline std::string json_value(const std::string& text, const std::string& key) {
+  const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
+  if (json.is_discarded()) return "<not JSON>";
+  const auto* value = find_key(json, key);
+  if (value == nullptr) return "<missing>";
+  if (value->is_array()) return "[";
+  if (value->is_object()) return "{";
+  return value->dump();
 }
 
 /// Single-quoted for the shell. Built with append(): GCC 12 warns falsely (-Wrestrict) on chained

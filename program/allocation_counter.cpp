@@ -1,15 +1,18 @@
-#include "daemon/common/allocation_counter.hpp"
+#include "program/allocation_counter.hpp"
 
+#include <atomic>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
 
 namespace {
 thread_local std::int64_t t_allocations = 0;  // trivially initialised: safe before any constructor runs
+std::atomic<std::int64_t> g_allocations{0};     // constant-initialised: likewise
 
 // nullptr when out of memory (the nothrow forms return it, the others throw).
 void* counted_allocation(std::size_t size, std::size_t alignment) noexcept {
   ++t_allocations;
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
   return alignment <= alignof(std::max_align_t)
              ? std::malloc(size == 0 ? 1 : size)
              : std::aligned_alloc(alignment, (size + alignment - 1) / alignment * alignment);
@@ -22,7 +25,8 @@ void* counted_or_throw(std::size_t size, std::size_t alignment) {
 }
 }  // namespace
 
-std::int64_t cvo::daemon::thread_allocations() { return t_allocations; }
+std::int64_t cvo::program::thread_allocations() { return t_allocations; }
+std::int64_t cvo::program::process_allocations() { return g_allocations.load(std::memory_order_relaxed); }
 
 // Every replaceable form, the nothrow ones included: one left out would come from the runtime's
 // allocator (ASan's, under the asan preset) and be freed here with free() -- an

@@ -1,4 +1,4 @@
-#include "progress.hpp"
+#include "program/progress.hpp"
 
 #include <unistd.h>
 
@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-namespace cvo::tools {
+namespace cvo::program {
 
 ProgressBar::ProgressBar(std::size_t total, bool enabled)
     : total_(total), active_(enabled && ::isatty(STDERR_FILENO) == 1), start_(Clock::now()), last_draw_() {}
@@ -35,4 +35,4 @@ void ProgressBar::finish() {
   active_ = false;
 }
 
-}  // namespace cvo::tools
+}  // namespace cvo::program

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cstddef>
 
-namespace cvo::tools {
+namespace cvo::program {
 
 class ProgressBar {
  public:
@@ -25,4 +25,4 @@ class ProgressBar {
   Clock::time_point start_, last_draw_;
 };
 
-}  // namespace cvo::tools
+}  // namespace cvo::program
