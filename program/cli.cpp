@@ -1,6 +1,8 @@
 #include "program/cli.hpp"
 
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -66,9 +68,13 @@ bool looks_like_number(const std::string& text) {
 
 // An option the program does not know, if the command line had one: the message to give first,
 // even when a required argument is missing too (CLI11 reports that first).
+// A word where a subcommand was required names the subcommand that does not exist.
 std::optional<std::string> unknown_option(const CLI::App& app) {
-  for (const std::string& arg : app.remaining(true))
+  const auto remaining = app.remaining(true);
+  for (const std::string& arg : remaining)
     if (arg.size() > 1 && arg.front() == '-' && !looks_like_number(arg)) return "unknown option '" + arg + "'";
+  if (!remaining.empty() && app.get_require_subcommand_min() > 0 && app.get_subcommands().empty())
+    return "unknown command '" + remaining.front() + "'";
   return std::nullopt;
 }
 
@@ -82,6 +88,17 @@ const CLI::Validator kPositive(
       return {};
     },
     "> 0", "positive");
+
+const CLI::Validator kDecimal(
+    [](std::string& text) -> std::string {
+      std::uint64_t value = 0;
+      const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+      if (error != std::errc() || end != text.data() + text.size())
+        return "needs a whole number in decimal digits, not '" + text + "'";
+      text = std::to_string(value);
+      return {};
+    },
+    "", "decimal");
 
 void describe(CLI::App& app, const std::string& synopsis, const std::string& notes) {
   app.formatter(std::make_shared<Formatter>(synopsis));

@@ -33,4 +33,9 @@ int cli_main(CLI::App& app, int argc, char** argv, const std::function<int()>& r
 /// A validator for option values that must be finite numbers greater than zero.
 extern const CLI::Validator kPositive;
 
+/// A transform for counts: decimal digits only. CLI11 alone would also read "-1" into an unsigned
+/// (wrapped), "0x10" as hex and "010" as octal; the text is rewritten without leading zeros, so
+/// "010" is ten.
+extern const CLI::Validator kDecimal;
+
 }  // namespace cvo::program

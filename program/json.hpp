@@ -16,6 +16,11 @@ inline std::string to_text(const Json& json) {
   return json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
 }
 
+/// One line, no spaces: for output that other programs read a line at a time.
+inline std::string to_line(const Json& json) {
+  return json.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
+}
+
 /// A value, or null when there is none.
 template <class T>
 Json or_null(const std::optional<T>& value) {

@@ -28,6 +28,7 @@
 #include "tests/lcm/image_bombs.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
+#include "tests/support/slowdown.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace cvo::daemon {
@@ -323,13 +324,20 @@ TEST(Trackerd, NotifiesSystemd) {
   DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string()}), dir.path() / "stderr.txt",
                   {{"NOTIFY_SOCKET", socket_path.string()}, {"WATCHDOG_USEC", "200000"}});
   std::string received;
-  std::this_thread::sleep_for(500ms);
-  // Profilers and allocation counters attribute work by thread name.
+  // Profilers and allocation counters attribute work by thread name (named once they have started).
+  const std::vector<std::string> names = {"cvo-acquire", "cvo-track", "cvo-publish"};
   std::string threads;
-  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(d.pid()) + "/task"))
-    threads += cvo::testing::slurp(task.path() / "comm");
-  for (const char* name : {"cvo-acquire", "cvo-track", "cvo-publish"})
-    EXPECT_NE(threads.find(name), std::string::npos) << name << " in\n" << threads;
+  const auto all_named = [&] {
+    return std::all_of(names.begin(), names.end(), [&](const auto& n) { return threads.find(n) != std::string::npos; });
+  };
+  for (const auto until = std::chrono::steady_clock::now() + cvo::testing::scaled(3s);
+       !all_named() && std::chrono::steady_clock::now() < until;) {
+    std::this_thread::sleep_for(100ms);
+    threads.clear();
+    for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(d.pid()) + "/task"))
+      threads += cvo::testing::slurp(task.path() / "comm");
+  }
+  for (const auto& name : names) EXPECT_NE(threads.find(name), std::string::npos) << name << " in\n" << threads;
   const auto deadline = std::chrono::steady_clock::now() + 3s;
   char buffer[4096];
   while (std::chrono::steady_clock::now() < deadline) {

@@ -16,6 +16,7 @@
 #include "drivers/reconnecting_source.hpp"
 #include "drivers/usb_cameras.hpp"
 #include "libcvo/io/input_error.hpp"
+#include "support/cli_contract.hpp"
 #include "support/run_tool.hpp"
 #include "support/temp_dir.hpp"
 
@@ -309,6 +310,23 @@ TEST(CvoCameras, NoCameraIsAnEmptyListExitZeroAndValidJson) {
   }
   EXPECT_EQ(testing::run_tool("cvo-cameras", "--frob", dir.path()).exit_code, 2);
   EXPECT_EQ(testing::run_tool("cvo-cameras", "--table /no/such.tsv", dir.path()).exit_code, 1);
+}
+
+TEST(CvoCameras, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  test::TempDir dir;
+  testing::expect_cli_contract("cvo-cameras", "", {"--json", "--table"}, dir.path());
+}
+
+// --table names the table the report is about; an argument that is no option is a usage error.
+TEST(CvoCameras, TheTableGivenIsTheOneReported) {
+  test::TempDir dir;
+  const auto table = default_camera_table_file();
+  const auto json = testing::run_tool("cvo-cameras", "--json --table " + testing::quoted(table), dir.path());
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_EQ(testing::json_value(json.out, "table"), nlohmann::ordered_json(table.string()).dump()) << json.out;
+  EXPECT_EQ(testing::json_value(json.out, "known_ids"), std::to_string(CameraTable::load(table).cameras().size()));
+  EXPECT_EQ(testing::run_tool("cvo-cameras", "extra", dir.path()).exit_code, 2);
+  EXPECT_EQ(testing::run_tool("cvo-cameras", "--table", dir.path()).exit_code, 2) << "--table needs a file";
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "loop_closure/test_images.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -118,6 +119,32 @@ TEST(CvoVocabularyCli, UsageErrorsExitWithTwoAndHelpWithZero) {
   const ToolRun help = run(dir, "--help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.out.find("usage: cvo-vocabulary train"), std::string::npos);
+}
+
+TEST(CvoVocabularyCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  const test::TempDir dir;
+  cvo::testing::expect_cli_contract("cvo-vocabulary", "", {"train", "info"}, dir.path());
+  cvo::testing::expect_cli_contract("cvo-vocabulary", "train",
+                                    {"OUT.voc", "INPUT", "--k", "--levels", "--every", "--features", "--seed"},
+                                    dir.path());
+  cvo::testing::expect_cli_contract("cvo-vocabulary", "info", {"FILE.voc"}, dir.path());
+}
+
+// Counts are decimal: a negative seed is refused rather than wrapped, hexadecimal and octal too.
+TEST(CvoVocabularyCli, CountsTakeOnlyDecimalDigits) {
+  const test::TempDir dir;
+  const std::string train = "train out.voc " + quoted(testing::sample_dir());
+  for (const std::string option : {"--seed -1", "--seed 18446744073709551616", "--k 0x10", "--every 1.5"}) {
+    const ToolRun r = run(dir, train + " " + option);
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;
+    EXPECT_NE(r.err.find(option.substr(0, option.find(' '))), std::string::npos) << option << ": " << r.err;
+  }
+  const fs::path out = dir.path() / "k10.voc";
+  const ToolRun r = run(dir, "train " + quoted(out) + " " + quoted(testing::sample_dir()) +
+                                 " --k 010 --levels 01 --every 25 --features 200 --seed 007");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(Vocabulary::load(out).branching(), 10) << "010 is ten, not octal eight";
+  EXPECT_NE(r.out.find("seed 7\n"), std::string::npos) << r.out;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "tests/posegraph/indefinite_graph.hpp"
 #include "tests/posegraph/json_syntax.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -85,6 +86,28 @@ TEST(PgoBenchCli, BadInputAndArguments) {
   EXPECT_NE(r.err.find("bad.g2o:2"), std::string::npos) << r.err;
   r = run_tool("pgo-bench", "--no-such-option", dir.path());
   EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST(PgoBenchCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  const test::TempDir dir("pgo_bench");
+  cvo::testing::expect_cli_contract("pgo-bench", "", {"FILE.g2o", "--json", "--max-iterations", "--robust"}, dir.path());
+}
+
+// An iteration cap is a count in decimal: not negative, hexadecimal or fractional, nor 0.
+TEST(PgoBenchCli, MaxIterationsTakesOnlyAPositiveDecimalCount) {
+  const test::TempDir dir("pgo_bench");
+  const fs::path file = dir.write("indefinite.g2o", test_graphs::kIndefiniteGraph);
+  for (const char* value : {"0", "-1", "0x10", "1.5", "ten", "1000001"}) {
+    const auto r = run_tool("pgo-bench", quoted(file) + " --max-iterations " + value, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << value << ": " << r.err;
+    EXPECT_NE(r.err.find("--max-iterations"), std::string::npos) << value << ": " << r.err;
+  }
+  const auto r = run_tool("pgo-bench", quoted(file) + " --json --max-iterations 010", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json_value(r.out, "max_iterations"), "10") << "decimal, not octal";
+  EXPECT_EQ(json_value(r.out, "robust"), "false");
+  EXPECT_EQ(json_value(r.out, "nodes"), "4") << "an integer, not 4.0\n" << r.out;
+  EXPECT_EQ(json_value(r.out, "edges"), std::to_string(test_graphs::kEdges)) << r.out;
 }
 
 }  // namespace

@@ -4,65 +4,61 @@
 //
 // Contract: --json keys below, exit codes 0 ok (also with no camera) / 1 failure (the table does
 // not read, libusb does not start) / 2 usage error.
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <string>
-#include <string_view>
+#include <vector>
 
 #include "drivers/usb_cameras.hpp"
-#include "libcvo/io/json_writer.hpp"
-#include "tools/common/cli.hpp"
+#include "program/cli.hpp"
+#include "program/json.hpp"
 
 namespace {
 
 using namespace cvo;
 namespace fs = std::filesystem;
 
-constexpr std::string_view kUsage =
-    R"(usage: cvo-cameras [--json] [--table FILE]
-
-Lists the RGB-D cameras on the USB bus whose ids the camera table knows (default: cameras.tsv of
-the build tree or share/cvo-slam): ids, name, bus-port, USB speed (and the speed it needs),
-serial number (when this user may open the device), the --source spec that opens it, the V4L2
-nodes of its interfaces, and whether this user may open it, with the reason when not.
---json prints one object: {"table": FILE, "known_ids": N, "cameras": [{"ids" ("8086:0b07"),
-"name", "bus", "address", "port", "speed", "needs", "serial", "spec", "video_nodes", "node",
-"accessible", "problem"}]}; "problem" is "" when there is none.
-exit status: 0 ok (also when there is no camera), 1 failure, 2 usage error
+constexpr const char* kDescription =
+    R"(Lists the RGB-D cameras on the USB bus whose ids the camera table knows: ids, name, bus-port, USB
+speed (and the speed it needs), serial number (when this user may open the device), the --source
+spec that opens it, the V4L2 nodes of its interfaces, and whether this user may open it, with the
+reason when not.
 )";
 
+constexpr const char* kNotes =
+    R"(--json prints one object: {"table": FILE, "known_ids": N, "cameras": [{"ids" ("8086:0b07"),
+"name", "bus", "address", "port", "speed", "needs", "serial", "spec", "video_nodes", "node",
+"accessible", "problem"}]}; "problem" is "" when there is none.
+No camera on the bus is not an error (exit 0).)";
+
 struct Arguments {
-  bool help = false, json = false;
+  bool json = false;
   std::optional<fs::path> table;
 };
 
-Arguments parse(int argc, char** argv) {
-  Arguments a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view s = argv[i];
-    if (s == "--help" || s == "-h") a.help = true;
-    else if (s == "--json") a.json = true;
-    else if (s == "--table") {
-      if (++i >= argc) throw tools::UsageError("--table needs a file");
-      a.table = argv[i];
-    } else throw tools::UsageError("unexpected argument '" + std::string(s) + "'");
-  }
-  return a;
+void add_options(CLI::App& app, Arguments& args) {
+  app.add_flag("--json", args.json, "print one JSON object instead of the list");
+  app.add_option("--table", args.table, "the camera table (default: cameras.tsv of the build tree or share/cvo-slam)")
+      ->type_name("FILE");
 }
 
-std::string json_camera(const drivers::FoundCamera& c, const drivers::UserIds& user) {
-  std::string nodes;
-  for (const auto& n : c.video_nodes) nodes += (nodes.empty() ? "" : ", ") + io::json_string(n);
-  const auto problem = drivers::diagnose(c, user);
-  return std::string("{\"ids\": ") + io::json_string(drivers::to_string(c.known.ids)) +
-         ", \"name\": " + io::json_string(c.known.name) + ", \"bus\": " + std::to_string(c.bus) +
-         ", \"address\": " + std::to_string(c.address) + ", \"port\": " + io::json_string(drivers::port_text(c)) +
-         ", \"speed\": " + io::json_string(drivers::to_string(c.speed)) +
-         ", \"needs\": " + io::json_string(drivers::to_string(c.known.needs)) +
-         ", \"serial\": " + io::json_string(c.serial) + ", \"spec\": " + io::json_string(drivers::source_spec(c)) +
-         ", \"video_nodes\": [" + nodes + "], \"node\": " + io::json_string(c.node.path) +
-         ", \"accessible\": " + (drivers::may_open(c.node, user) ? "true" : "false") +
-         ", \"problem\": " + io::json_string(problem) + "}";
+program::Json camera_json(const drivers::FoundCamera& c, const drivers::UserIds& user) {
+  program::Json o;
+  o["ids"] = drivers::to_string(c.known.ids);
+  o["name"] = c.known.name;
+  o["bus"] = int{c.bus};  // uint8_t: a number, not a character
+  o["address"] = int{c.address};
+  o["port"] = drivers::port_text(c);
+  o["speed"] = drivers::to_string(c.speed);
+  o["needs"] = drivers::to_string(c.known.needs);
+  o["serial"] = c.serial;
+  o["spec"] = drivers::source_spec(c);
+  o["video_nodes"] = c.video_nodes;
+  o["node"] = c.node.path;
+  o["accessible"] = drivers::may_open(c.node, user);
+  o["problem"] = drivers::diagnose(c, user);
+  return o;
 }
 
 void print_text(const std::vector<drivers::FoundCamera>& found, const drivers::UserIds& user, std::size_t known) {
@@ -88,13 +84,21 @@ int run(const Arguments& args) {
     print_text(found, user, table.cameras().size());
     return 0;
   }
-  std::cout << "{\"table\": " << io::json_string(file.string()) << ", \"known_ids\": " << table.cameras().size()
-            << ", \"cameras\": [";
-  for (std::size_t i = 0; i < found.size(); ++i) std::cout << (i == 0 ? "" : ", ") << json_camera(found[i], user);
-  std::cout << "]}\n";
+  program::Json o;
+  o["table"] = file.string();
+  o["known_ids"] = table.cameras().size();
+  o["cameras"] = program::Json::array();
+  for (const auto& camera : found) o["cameras"].push_back(camera_json(camera, user));
+  std::cout << program::to_text(o);
   return 0;
 }
 
 }  // namespace
 
-int main(int argc, char** argv) { return tools::cli_main("cvo-cameras", kUsage, argc, argv, parse, run); }
+int main(int argc, char** argv) {
+  Arguments args;
+  CLI::App app(kDescription, "cvo-cameras");
+  program::describe(app, "cvo-cameras [--json] [--table FILE]", kNotes);
+  add_options(app, args);
+  return program::cli_main(app, argc, argv, [&] { return run(args); });
+}

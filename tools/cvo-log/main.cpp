@@ -3,13 +3,14 @@
 // map as a TUM trajectory of keyframe poses, and each process's last CVO_STATUS. Bad events are
 // reported and skipped.
 //
-// Contract: the three forms below, --json keys, exit codes 0 ok / 1 bad input / 2 usage error.
+// Contract: the three subcommands, --json keys, exit codes 0 ok / 1 bad input / 2 usage error.
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
-#include <string_view>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -18,23 +19,20 @@
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/io/input_error.hpp"
-#include "libcvo/io/json_writer.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
-#include "tools/common/cli.hpp"
+#include "program/cli.hpp"
+#include "program/json.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace cvo;
 
-constexpr std::string_view kUsage =
-    R"(usage: cvo-log poses LOG --out TRAJ.txt [--map]
-       cvo-log map LOG --out TRAJ.txt
-       cvo-log status LOG [--json]
-
+constexpr const char* kDescription =
+    R"(What a cvo-slam recording (an LCM log) says, for scripts:
 poses   writes the CVO_POSE messages of LOG as a TUM trajectory (odometry poses; --map: the
         map-corrected ones), stamped with the frames' colour timestamps: cvo-eval reads it.
 map     writes the last CVO_MAP of LOG as a TUM trajectory of keyframe poses, stamped with the
@@ -42,38 +40,37 @@ map     writes the last CVO_MAP of LOG as a TUM trajectory of keyframe poses, st
         file sorted by time. Sessions the map has not placed are left out and named on stderr.
 status  prints the last CVO_STATUS of each process in LOG, with its session (--json: one object
         keyed by process, with the status_t field names).
-exit status: 0 ok, 1 bad input (also: no CVO_MAP, or one that places no keyframe), 2 usage error
+Bad events are reported and skipped.
 )";
 
+constexpr const char* kNotes = "map: no CVO_MAP in LOG, or one that places no keyframe, is bad input (exit 1)";
+
 struct Arguments {
-  bool help = false;
   std::string command;
   fs::path log, out;
   bool map = false, json = false;
 };
 
-Arguments parse(int argc, char** argv) {
-  Arguments a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string_view s = argv[i];
-    if (s == "--help" || s == "-h") a.help = true;
-    else if (s == "--out") {
-      if (++i >= argc) throw tools::UsageError("--out needs a file");
-      a.out = argv[i];
-    } else if (s == "--map") a.map = true;
-    else if (s == "--json") a.json = true;
-    else if (s.starts_with("--")) throw tools::UsageError("unknown option '" + std::string(s) + "'");
-    else if (a.command.empty()) a.command = s;
-    else if (a.log.empty()) a.log = s;
-    else throw tools::UsageError("unexpected argument '" + std::string(s) + "'");
-  }
-  if (a.help) return a;
-  if (a.command != "poses" && a.command != "map" && a.command != "status")
-    throw tools::UsageError("expected 'poses', 'map' or 'status'");
-  if (a.log.empty()) throw tools::UsageError("no LOG given");
-  if ((a.command == "poses" || a.command == "map") && a.out.empty())
-    throw tools::UsageError(a.command + " needs --out TRAJ.txt");
-  return a;
+CLI::App* add_command(CLI::App& app, const std::string& name, const std::string& description,
+                      const std::string& synopsis, Arguments& args) {
+  CLI::App* command = app.add_subcommand(name, description);
+  program::describe(*command, synopsis);
+  command->add_option("LOG", args.log, "the LCM log (lcm-logger, a file:// provider)")->required();
+  return command;
+}
+
+void add_commands(CLI::App& app, Arguments& args) {
+  CLI::App* poses = add_command(app, "poses", "the CVO_POSE messages of LOG as a TUM trajectory",
+                                "cvo-log poses LOG --out TRAJ.txt [--map]", args);
+  poses->add_option("--out", args.out, "the TUM trajectory to write")->required()->type_name("TRAJ.txt");
+  poses->add_flag("--map", args.map, "the map-corrected poses instead of the odometry ones");
+  CLI::App* map = add_command(app, "map", "the last CVO_MAP of LOG as a TUM trajectory of its placed keyframes",
+                              "cvo-log map LOG --out TRAJ.txt", args);
+  map->add_option("--out", args.out, "the TUM trajectory to write")->required()->type_name("TRAJ.txt");
+  CLI::App* status = add_command(app, "status", "the last CVO_STATUS of each process in LOG",
+                                 "cvo-log status LOG [--json]", args);
+  status->add_flag("--json", args.json, "one JSON object keyed by process, with the status_t field names");
+  app.require_subcommand(1);
 }
 
 template <class Visit>
@@ -142,32 +139,47 @@ int write_map(const Arguments& a) {
   return 0;
 }
 
-void print_status(const std::string& process, const cvo_lcm::status_t& s, bool json) {
-  const std::pair<const char*, double> fields[] = {
-      {"utime", static_cast<double>(s.utime)}, {"pid", s.pid}, {"state", s.state}, {"rate_hz", s.rate_hz},
-      {"latency_median_ms", s.latency_median_ms}, {"latency_p99_ms", s.latency_p99_ms},
-      {"deadline_misses", static_cast<double>(s.deadline_misses)}, {"dropped_frames", static_cast<double>(s.dropped_frames)},
-      {"failed_frames", static_cast<double>(s.failed_frames)}, {"source_gaps", static_cast<double>(s.source_gaps)},
-      {"allocations_after_warmup", static_cast<double>(s.allocations_after_warmup)},
-      {"queue_depth", s.queue_depth}, {"rss_bytes", static_cast<double>(s.rss_bytes)},
-      {"unsaved_records", static_cast<double>(s.unsaved_records)}, {"queue_drops", static_cast<double>(s.queue_drops)},
-      {"keyframes_requested", static_cast<double>(s.keyframes_requested)},
-      {"keyframes_recovered", static_cast<double>(s.keyframes_recovered)},
-      {"keyframes_lost", static_cast<double>(s.keyframes_lost)}};
-  if (json) {
-    // The session as the 64-bit integer on the wire (a double would round it).
-    std::cout << io::json_string(process) << ":{\"session\":" << s.session << ",";
-    for (const auto& [k, v] : fields) std::cout << io::json_string(k) << ":" << io::json_number(v) << ",";
-    std::cout << "\"bad_messages\":[";
-    for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) std::cout << (k ? "," : "") << s.bad_messages[k];
-    std::cout << "],\"detail\":" << io::json_string(s.detail) << "}";
-    return;
+// The status_t fields, as integers and doubles like on the wire; the session first, as the
+// 64-bit integer it is (scripts match "session":N).
+program::Json status_json(const cvo_lcm::status_t& s) {
+  program::Json o;
+  o["session"] = s.session;
+  o["utime"] = s.utime;
+  o["pid"] = s.pid;
+  o["state"] = int{s.state};  // an int8_t, a number rather than a character
+  o["rate_hz"] = s.rate_hz;
+  o["latency_median_ms"] = s.latency_median_ms;
+  o["latency_p99_ms"] = s.latency_p99_ms;
+  o["deadline_misses"] = s.deadline_misses;
+  o["dropped_frames"] = s.dropped_frames;
+  o["failed_frames"] = s.failed_frames;
+  o["source_gaps"] = s.source_gaps;
+  o["allocations_after_warmup"] = s.allocations_after_warmup;
+  o["queue_depth"] = s.queue_depth;
+  o["rss_bytes"] = s.rss_bytes;
+  o["unsaved_records"] = s.unsaved_records;
+  o["queue_drops"] = s.queue_drops;
+  o["keyframes_requested"] = s.keyframes_requested;
+  o["keyframes_recovered"] = s.keyframes_recovered;
+  o["keyframes_lost"] = s.keyframes_lost;
+  o["bad_messages"] = s.bad_messages;
+  o["detail"] = s.detail;
+  return o;
+}
+
+// One "key: value" line per field; the session in the hex form the daemons log it in.
+void print_status_text(const std::string& process, const program::Json& status) {
+  std::cout << process << ":\n";
+  for (const auto& [key, value] : status.items()) {
+    std::cout << "  " << key << ":";
+    if (key == "session")
+      std::cout << " " << slam::session_name(value.get<std::int64_t>());
+    else if (value.is_array())
+      for (const auto& count : value) std::cout << " " << count.dump();
+    else
+      std::cout << " " << (value.is_string() ? value.get<std::string>() : value.dump());
+    std::cout << "\n";
   }
-  std::cout << process << ":\n  session: " << slam::session_name(s.session) << "\n";
-  for (const auto& [k, v] : fields) std::cout << "  " << k << ": " << io::json_number(v) << "\n";
-  std::cout << "  bad_messages:";
-  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) std::cout << " " << s.bad_messages[k];
-  std::cout << "\n  detail: " << s.detail << "\n";
 }
 
 int print_statuses(const Arguments& a) {
@@ -180,14 +192,14 @@ int print_statuses(const Arguments& a) {
     else skipped(a, e, error, bad);
   });
   if (last.empty()) throw io::InputError(a.log, "no CVO_STATUS messages");
-  if (a.json) std::cout << "{";
-  bool first = true;
-  for (const auto& [process, s] : last) {
-    if (a.json && !first) std::cout << ",";
-    print_status(process, s, a.json);
-    first = false;
+  program::Json statuses;
+  for (const auto& [process, s] : last) statuses[process] = status_json(s);
+  if (!a.json) {
+    for (const auto& [process, status] : statuses.items()) print_status_text(process, status);
+    return 0;
   }
-  if (a.json) std::cout << "}\n";
+  // On one line, as scripts grep it.
+  std::cout << program::to_line(statuses);
   return 0;
 }
 
@@ -199,4 +211,17 @@ int run(const Arguments& a) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return tools::cli_main("cvo-log", kUsage, argc, argv, parse, run); }
+int main(int argc, char** argv) {
+  Arguments args;
+  CLI::App app(kDescription, "cvo-log");
+  program::describe(app,
+                    "cvo-log poses LOG --out TRAJ.txt [--map]\n"
+                    "       cvo-log map LOG --out TRAJ.txt\n"
+                    "       cvo-log status LOG [--json]",
+                    kNotes);
+  add_commands(app, args);
+  return program::cli_main(app, argc, argv, [&] {
+    args.command = app.get_subcommands().front()->get_name();
+    return run(args);
+  });
+}

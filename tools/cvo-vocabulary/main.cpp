@@ -3,15 +3,12 @@
 //
 // A contract that scripts rely on: the subcommands, their arguments and the exit codes 0 (ok),
 // 1 (bad input; the message names the file) and 2 (usage error).
-#include <charconv>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <limits>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include <unistd.h>
@@ -21,38 +18,27 @@
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/loop_closure/orb_features.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
-#include "tools/common/cli.hpp"
+#include "program/cli.hpp"
 #include "tools/cvo-vocabulary/image_list.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace cvo;
-using tools::UsageError;
 
-constexpr std::string_view kUsage =
-    R"(usage: cvo-vocabulary train OUT.voc INPUT... [--k K] [--levels L] [--every N] [--features F] [--seed S]
-       cvo-vocabulary info FILE.voc
+constexpr const char* kDescription =
+    "Trains the bag-of-words vocabulary tree of loop closure from the ORB features of a set of images, and\n"
+    "describes a vocabulary file.\n";
 
-train  Extracts ORB features from every training image and builds a vocabulary tree on their
-       descriptors (hierarchical k-medians, Hamming distance, k-means++ seeding; TF-IDF weights
-       from the training images), written to OUT.voc. Each INPUT is an image file, a TUM-layout
-       folder (its rgb.txt is read) or a folder of image files.
-  --k K         branching factor, 2..256 (default 10)
-  --levels L    depth of the tree, 1..16 (default 4): at most K^L words
-  --every N     take every N-th image of each folder, from the first (default 1)
-  --features F  ORB features per image (default 1000)
-  --seed S      seed of the k-means++ seeding, unsigned 64-bit (default 0)
-               The same images and options always give the same file.
-info   Loads FILE.voc, verifies it (format, checksum, tree) and prints what it holds.
+constexpr const char* kTrainNotes =
+    R"(Extracts ORB features from every training image and builds a vocabulary tree on their descriptors
+(hierarchical k-medians, Hamming distance, k-means++ seeding; TF-IDF weights from the training
+images), written to OUT.voc. Each INPUT is an image file, a TUM-layout folder (its rgb.txt is read)
+or a folder of image files. The same images and options always give the same file.)";
 
-  -h, --help    this text
-
-exit status: 0 ok, 1 bad input, 2 usage error
-)";
+constexpr const char* kInfoDescription = "Loads FILE.voc, verifies it (format, checksum, tree) and prints what it holds.";
 
 struct Arguments {
-  bool help = false;
   std::string command;
   fs::path file;               // OUT.voc or FILE.voc
   std::vector<fs::path> inputs;
@@ -61,57 +47,33 @@ struct Arguments {
   std::size_t every = 1;
 };
 
-std::uint64_t parse_count(std::string_view option, std::string_view text, std::uint64_t lo, std::uint64_t hi) {
-  std::uint64_t v = 0;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (ec != std::errc() || end != text.data() + text.size() || v < lo || v > hi)
-    throw UsageError(std::string(option) + " needs an integer in " + std::to_string(lo) + ".." + std::to_string(hi) +
-                     ", not '" + std::string(text) + "'");
-  return v;
+template <class T>
+void add_count(CLI::App& command, const std::string& name, T& value, const std::string& help, T lo, T hi) {
+  command.add_option(name, value, help)->transform(program::kDecimal)->check(CLI::Range(lo, hi));
 }
 
-Arguments parse_arguments(int argc, char** argv) {
-  Arguments args;
-  std::vector<std::string> positional;
-  constexpr auto kMax = std::numeric_limits<std::uint64_t>::max();
-  for (int k = 1; k < argc; ++k) {
-    const std::string_view arg = argv[k];
-    const auto value = [&]() -> std::string_view {
-      if (k + 1 >= argc) throw UsageError(std::string(arg) + " needs a value");
-      return argv[++k];
-    };
-    if (arg == "--help" || arg == "-h") {
-      args.help = true;
-    } else if (arg == "--k") {
-      args.vocabulary.branching = static_cast<int>(parse_count(arg, value(), 2, 256));
-    } else if (arg == "--levels") {
-      args.vocabulary.levels = static_cast<int>(parse_count(arg, value(), 1, 16));
-    } else if (arg == "--every") {
-      args.every = parse_count(arg, value(), 1, 1'000'000);
-    } else if (arg == "--features") {
-      args.orb.features = static_cast<int>(parse_count(arg, value(), 1, 1'000'000));
-    } else if (arg == "--seed") {
-      args.vocabulary.seed = parse_count(arg, value(), 0, kMax);
-    } else if (arg.size() > 1 && arg.front() == '-') {
-      throw UsageError("unknown option '" + std::string(arg) + "'");
-    } else {
-      positional.emplace_back(arg);
-    }
-  }
-  if (args.help) return args;
-  if (positional.empty()) throw UsageError("expected a command: train or info");
-  args.command = positional[0];
-  if (args.command == "train") {
-    if (positional.size() < 3) throw UsageError("train needs OUT.voc and at least one INPUT");
-    args.file = positional[1];
-    args.inputs.assign(positional.begin() + 2, positional.end());
-  } else if (args.command == "info") {
-    if (positional.size() != 2) throw UsageError("info needs exactly one FILE.voc");
-    args.file = positional[1];
-  } else {
-    throw UsageError("unknown command '" + args.command + "' (train or info)");
-  }
-  return args;
+void add_train(CLI::App& app, Arguments& args) {
+  CLI::App* train = app.add_subcommand("train", "Trains a vocabulary tree on the ORB features of images.");
+  program::describe(*train,
+                    "cvo-vocabulary train OUT.voc INPUT... [--k K] [--levels L] [--every N] [--features F] [--seed S]",
+                    kTrainNotes);
+  train->add_option("OUT.voc", args.file, "the vocabulary file to write")->required();
+  train->add_option("INPUT", args.inputs, "an image file, a TUM-layout folder or a folder of image files")
+      ->required()
+      ->default_str("");  // no default to show
+  add_count(*train, "--k", args.vocabulary.branching, "branching factor", 2, 256);
+  add_count(*train, "--levels", args.vocabulary.levels, "depth of the tree: at most K^L words", 1, 16);
+  add_count<std::size_t>(*train, "--every", args.every, "take every N-th image of each folder, from the first", 1,
+                         1'000'000);
+  add_count(*train, "--features", args.orb.features, "ORB features per image", 1, 1'000'000);
+  train->add_option("--seed", args.vocabulary.seed, "seed of the k-means++ seeding, unsigned 64-bit")
+      ->transform(program::kDecimal);
+}
+
+void add_info(CLI::App& app, Arguments& args) {
+  CLI::App* info = app.add_subcommand("info", kInfoDescription);
+  program::describe(*info, "cvo-vocabulary info FILE.voc");
+  info->add_option("FILE.voc", args.file, "the vocabulary file to verify and describe")->required();
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -172,5 +134,16 @@ int run(const Arguments& args) { return args.command == "train" ? train(args) : 
 }  // namespace
 
 int main(int argc, char** argv) {
-  return tools::cli_main("cvo-vocabulary", kUsage, argc, argv, parse_arguments, run);
+  Arguments args;
+  CLI::App app(kDescription, "cvo-vocabulary");
+  program::describe(app,
+                    "cvo-vocabulary train OUT.voc INPUT... [--k K] [--levels L] [--every N] [--features F] [--seed S]\n"
+                    "       cvo-vocabulary info FILE.voc");
+  add_train(app, args);
+  add_info(app, args);
+  app.require_subcommand(1);
+  return program::cli_main(app, argc, argv, [&] {
+    args.command = app.get_subcommands().front()->get_name();
+    return run(args);
+  });
 }

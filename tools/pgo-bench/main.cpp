@@ -19,27 +19,27 @@
 // own messages go to standard error too, so standard output holds only the report.
 //
 // Exit status: 0 done, 1 bad input file, 2 bad command line.
+#include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <string>
-#include <string_view>
 
 #include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/io/input_error.hpp"
-#include "libcvo/io/json_writer.hpp"
 #include "libcvo/posegraph/cost.hpp"
 #include "libcvo/posegraph/g2o_io.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
-#include "tools/common/cli.hpp"
+#include "program/cli.hpp"
+#include "program/json.hpp"
 
 namespace {
 
+namespace program = cvo::program;
 using cvo::posegraph::Edge;
 using cvo::posegraph::NodeId;
 using cvo::posegraph::PoseGraph;
@@ -49,7 +49,6 @@ struct Options {
   bool json = false;
   bool robust = false;
   int max_iterations = 100;
-  bool help = false;
 };
 
 struct Result {
@@ -154,52 +153,40 @@ Result run_ceres(PoseGraph graph, const Options& options) {
   return r;
 }
 
-constexpr std::string_view kUsage =
-    R"(usage: pgo-bench FILE.g2o [--json] [--max-iterations N] [--robust]
-
-Optimises the pose graph of FILE.g2o (VERTEX_SE3:QUAT / EDGE_SE3:QUAT) twice from the same initial
+constexpr const char* kDescription =
+    R"(Optimises the pose graph of FILE.g2o (VERTEX_SE3:QUAT / EDGE_SE3:QUAT) twice from the same initial
 guess, first pose fixed: with cvo::posegraph (Levenberg-Marquardt on SE(3), CHOLMOD) and with Ceres
 Solver (quaternion + translation blocks, sparse normal Cholesky). Both final costs are computed by
 one function, 1/2 sum rho(e' Omega e) with e = [t_E; 2 vec(q_E)], E = Z^-1 Ti^-1 Tj.
 An information matrix that is not positive semi-definite is replaced by the nearest positive-
 definite one, with one warning on standard error.
-
-  --json              one JSON object: repaired_information (edges), per solver initial_cost,
-                      final_cost, iterations, seconds
-  --max-iterations N  iteration cap of both solvers (default 100)
-  --robust            Cauchy kernel (delta 2) on every edge
-  -h, --help          this text
-
-exit status: 0 ok, 1 bad input, 2 usage error
 )";
 
-[[noreturn]] void usage(const std::string& why) { throw cvo::tools::UsageError(why); }
+void add_options(CLI::App& app, Options& options) {
+  app.add_option("FILE.g2o", options.file, "the pose graph")->required();
+  app.add_flag("--json", options.json,
+               "one JSON object: repaired_information (edges), per solver initial_cost, final_cost, iterations, "
+               "seconds");
+  app.add_option("--max-iterations", options.max_iterations, "iteration cap of both solvers")
+      ->transform(program::kDecimal)
+      ->check(CLI::Range(1, 1000000));
+  app.add_flag("--robust", options.robust, "Cauchy kernel (delta 2) on every edge");
+}
 
-Options parse_arguments(int argc, char** argv) {
-  Options o;
-  for (int k = 1; k < argc; ++k) {
-    const std::string arg = argv[k];
-    if (arg == "--help" || arg == "-h") {
-      o.help = true;
-    } else if (arg == "--json") {
-      o.json = true;
-    } else if (arg == "--robust") {
-      o.robust = true;
-    } else if (arg == "--max-iterations") {
-      if (++k == argc) usage("--max-iterations needs a value");
-      char* end = nullptr;
-      const long n = std::strtol(argv[k], &end, 10);
-      if (*end != '\0' || n < 1 || n > 1000000) usage("--max-iterations needs a positive integer");
-      o.max_iterations = static_cast<int>(n);
-    } else if (!arg.empty() && arg[0] == '-') {
-      usage("unknown option " + arg);
-    } else if (o.file.empty()) {
-      o.file = arg;
-    } else {
-      usage("more than one file");
-    }
-  }
-  if (o.file.empty() && !o.help) usage("no g2o file given");
+program::Json report_json(const Options& options, const PoseGraph& graph, const cvo::posegraph::G2oRepairs& repairs,
+                          const Result (&results)[2]) {
+  program::Json o;
+  o["file"] = options.file;
+  o["nodes"] = graph.nodes().size();
+  o["edges"] = graph.edges().size();
+  o["repaired_information"] = repairs.edges;
+  o["robust"] = options.robust;
+  o["max_iterations"] = options.max_iterations;
+  program::Json& solvers = o["solvers"] = program::Json::object();
+  for (const Result& r : results)
+    solvers[r.solver] = {{"initial_cost", r.initial_cost}, {"final_cost", r.final_cost}, {"iterations", r.iterations},
+                         {"seconds", r.seconds},           {"converged", r.converged},   {"solver_cost", r.solver_cost},
+                         {"stop_reason", r.stop_reason}};
   return o;
 }
 
@@ -218,22 +205,8 @@ int run(const Options& options) {
   }
   const Result results[] = {run_ours(graph, options), run_ceres(graph, options)};
 
-  using cvo::io::json_number;
-  using cvo::io::json_string;
   if (options.json) {
-    std::cout << "{\"file\": " << json_string(options.file) << ", \"nodes\": " << graph.nodes().size()
-              << ", \"edges\": " << graph.edges().size() << ", \"repaired_information\": " << repairs.edges
-              << ", \"robust\": " << (options.robust ? "true" : "false")
-              << ", \"max_iterations\": " << options.max_iterations << ", \"solvers\": {";
-    for (std::size_t k = 0; k < 2; ++k) {
-      const Result& r = results[k];
-      std::cout << (k ? ", " : "") << json_string(r.solver) << ": {\"initial_cost\": " << json_number(r.initial_cost)
-                << ", \"final_cost\": " << json_number(r.final_cost) << ", \"iterations\": " << r.iterations
-                << ", \"seconds\": " << json_number(r.seconds) << ", \"converged\": " << (r.converged ? "true" : "false")
-                << ", \"solver_cost\": " << json_number(r.solver_cost) << ", \"stop_reason\": " << json_string(r.stop_reason)
-                << "}";
-    }
-    std::cout << "}}\n";
+    std::cout << program::to_text(report_json(options, graph, repairs, results));
     return 0;
   }
   std::printf("%s: %zu nodes, %zu edges, %s, at most %d iterations; cost = 1/2 sum rho(chi2), our residual\n",
@@ -250,5 +223,9 @@ int run(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return cvo::tools::cli_main("pgo-bench", kUsage, argc, argv, parse_arguments, run);
+  Options options;
+  CLI::App app(kDescription, "pgo-bench");
+  program::describe(app, "pgo-bench FILE.g2o [--json] [--max-iterations N] [--robust]");
+  add_options(app, options);
+  return program::cli_main(app, argc, argv, [&] { return run(options); });
 }
