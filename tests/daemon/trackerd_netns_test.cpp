@@ -29,6 +29,7 @@
 #include "tests/daemon/lcm_log.hpp"
 #include "tests/daemon/private_network.hpp"
 #include "tests/support/run_tool.hpp"
+#include "tests/support/slowdown.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace cvo::daemon {
@@ -40,6 +41,8 @@ using cvo::testing::DaemonProcess;
 using cvo::testing::which;
 
 constexpr const char* kUrl = cvo::testing::kPrivateLcmUrl;
+using cvo::testing::kSlowdown;
+using cvo::testing::scaled;
 const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
 
 struct Replay {
@@ -72,21 +75,21 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
                          {"--source", std::string("lcm:") + kUrl, "--lcm-url", kUrl, "--deterministic", "--set",
                           "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
                          dir / (name + ".trackerd.txt"));
-  std::this_thread::sleep_for(700ms);  // both subscribed
+  std::this_thread::sleep_for(scaled(700ms));  // both subscribed
   r.session = logged_session(dir / (name + ".trackerd.txt"));
-  DaemonProcess player(which("lcm-logplayer"), {"--lcm-url=" + std::string(kUrl), "-s", "0.5", recording.string()},
+  DaemonProcess player(which("lcm-logplayer"), {"--lcm-url=" + std::string(kUrl), "-s", std::to_string(0.5 / kSlowdown), recording.string()},
                        dir / (name + ".player.txt"));
-  std::this_thread::sleep_for(500ms);
+  std::this_thread::sleep_for(scaled(500ms));
   ::lcm::LCM lcm(kUrl);
   for (const auto& map : maps(r.session)) {
-    std::this_thread::sleep_for(500ms);
+    std::this_thread::sleep_for(scaled(500ms));
     lcm.publish("CVO_MAP", map.data(), static_cast<unsigned>(map.size()));
   }
-  EXPECT_TRUE(player.wait_for(30s)) << "lcm-logplayer did not finish";
-  std::this_thread::sleep_for(1500ms);  // the last frames tracked and published
+  EXPECT_TRUE(player.wait_for(scaled(30s))) << "lcm-logplayer did not finish";
+  std::this_thread::sleep_for(scaled(1500ms));  // the last frames tracked and published
   const auto t0 = std::chrono::steady_clock::now();
   trackerd.signal(SIGTERM);
-  if (const auto code = trackerd.wait_for(5s)) r.trackerd_exit = *code;
+  if (const auto code = trackerd.wait_for(scaled(5s))) r.trackerd_exit = *code;
   r.shutdown_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   std::this_thread::sleep_for(300ms);
   logger.signal(SIGINT);
@@ -144,7 +147,7 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
         map_message(4, {{session, true, other, 1, 0, core::SE3::from_translation({10, 0, 0})}})};
   });
   EXPECT_EQ(first.trackerd_exit, 0) << cvo::testing::slurp(dir.path() / "first.trackerd.txt");
-  EXPECT_LT(first.shutdown_ms, 1000);
+  EXPECT_LT(first.shutdown_ms, 1000 * kSlowdown);
   expect_one_complete_session(first);
   const auto& poses = first.published.poses;
   ASSERT_EQ(poses.size(), 50u) << cvo::testing::slurp(dir.path() / "first.trackerd.txt");
