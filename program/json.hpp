@@ -10,16 +10,14 @@ namespace cvo::program {
 
 using Json = nlohmann::ordered_json;
 
-/// Two-space indented text and a final newline. NaN and infinity print as null (JSON has neither);
-/// bytes that are not UTF-8 (a file name) print as U+FFFD rather than failing the report.
-inline std::string to_text(const Json& json) {
-  return json.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
-}
+/// The project's layout of a report: one key a line, each element of a list on a line of its own
+/// (a failed frame, a loop, a session), anything deeper on that line as {"key": value, ...}, so
+/// that scripts can grep a row. NaN and infinity print as null (JSON has neither); bytes that are
+/// not UTF-8 (a file name) print as U+FFFD rather than failing the report.
+std::string to_text(const Json& json);
 
 /// One line, no spaces: for output that other programs read a line at a time.
-inline std::string to_line(const Json& json) {
-  return json.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
-}
+std::string to_line(const Json& json);
 
 /// A value, or null when there is none.
 template <class T>

@@ -598,7 +598,7 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
   else if (event.has_pose && event.pose.is_keyframe)  // no outbox slot: counted by the outbox
     p.history.never_sent(event.session, event.pose.keyframe_id);
   if (event.has_pose) {
-    const double latency_ms = std::chrono::duration<double, std::milli>(Clock::now() - event.pose.received).count();
+    const double latency_ms = core::ms_since(event.pose.received);
     const cvo_lcm::pose_t m = lcm::pose_message(event.session, event.pose, latency_ms);
     out.lcm.publish("CVO_POSE", &m);
     out.latency.add(m.latency_ms);

@@ -9,6 +9,7 @@
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
+#include "support/cli_contract.hpp"
 #include "support/run_tool.hpp"
 #include "support/temp_dir.hpp"
 
@@ -118,6 +119,14 @@ TEST(Tum2Lcm, ToTumRoundTripIsExactForLosslessEncodings) {
       EXPECT_TRUE(identical(a.depth, b.depth)) << i;
     }
   }
+}
+
+TEST(Tum2Lcm, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  test::TempDir dir("tum2lcm");
+  testing::expect_cli_contract("tum2lcm", "",
+                               {"INPUT", "OUTPUT", "--to-tum", "--colour", "--color", "--depth", "--jpeg-quality",
+                                "--channel", "--max-frames"},
+                               dir.path());
 }
 
 TEST(Tum2Lcm, ExitCodes) {

@@ -16,6 +16,7 @@
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/sim/sequence.hpp"
 #include "tests/odometry/odometry_fixtures.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 
 namespace cvo::odometry {
@@ -146,6 +147,23 @@ TEST(CvoRunCli, UsageErrorsExitTwo) {
   const ToolRun help = run_tool(dir, "--help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.out.find("usage: cvo-run SEQUENCE --out TRAJ.txt"), std::string::npos);
+}
+
+TEST(CvoRunCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  const test::TempDir dir("cvo_run");
+  cvo::testing::expect_cli_contract("cvo-run", "",
+                                    {"SEQUENCE", "--out", "--mode", "--max-frames", "--groundtruth", "--plot", "--json",
+                                     "--config", "--set", "--vocabulary"},
+                                    dir.path());
+}
+
+// --set takes one value per occurrence: the folder after it is the SEQUENCE.
+TEST(CvoRunCli, AFolderAfterSetIsTheSequence) {
+  const test::TempDir dir("cvo_run");
+  const ToolRun r = run_tool(dir, "--set camera=tum_fr1 " + q(CVO_TEST_DATA_DIR "/fr1_rpy_50") + " --out " +
+                                      q(dir.path() / "t.txt") + " --max-frames 2 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json_value(r.out, "frames"), "2");
 }
 
 TEST(CvoRunCli, KeyframeModeEndToEnd) {

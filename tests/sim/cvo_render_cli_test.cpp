@@ -10,6 +10,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "tests/support/cli_contract.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -82,6 +84,14 @@ TEST(CvoRenderCli, BadArgumentsExitTwoIoErrorsExitOne) {
   std::ofstream(file) << "x";
   EXPECT_EQ(run((file / "sub").string() + " --frames 1"), 1);
   fs::remove(file);
+}
+
+TEST(CvoRenderCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
+  const fs::path scratch = temp_path("cvo_render_cli_contract");
+  fs::create_directories(scratch);
+  cvo::testing::expect_cli_contract("cvo-render", "", {"OUTDIR", "--scene", "--path", "--frames", "--seed", "--noise"},
+                                    scratch);
+  fs::remove_all(scratch);
 }
 
 }  // namespace

@@ -39,15 +39,15 @@ inline const nlohmann::ordered_json* find_key(const nlohmann::ordered_json& json
 }
 
 /// The value of "key" in a tool's JSON output (the first one, nested objects included) as JSON
-/// text: a number, null, a quoted string, or '[' / '{' for an array / object; "<missing>" when
+/// text: a number, null, a quoted string, '[]' / '{}' when empty, '[' / '{' for an array / object; "<missing>" when
 /// absent, "<not JSON>" when the text does not parse.
 inline std::string json_value(const std::string& text, const std::string& key) {
   const auto json = nlohmann::ordered_json::parse(text, nullptr, false);
   if (json.is_discarded()) return "<not JSON>";
   const auto* value = find_key(json, key);
   if (value == nullptr) return "<missing>";
-  if (value->is_array()) return "[";
-  if (value->is_object()) return "{";
+  if (value->is_array()) return value->empty() ? "[]" : "[";
+  if (value->is_object()) return value->empty() ? "{}" : "{";
   return value->dump();
 }
 

@@ -7,13 +7,10 @@
 //   cvo-run --mode slam SEQUENCE [SEQUENCE ...] ...: each folder a session of one map
 //   --json prints one JSON object on stdout (keys in report.cpp; the human summary then goes to
 //   stderr); exit status 0 ok, 1 bad input (the message names the file), 2 usage error.
-#include <unistd.h>
-
 #include <algorithm>
-#include <charconv>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
-#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -27,6 +24,7 @@
 
 #include "libcvo/config/config.hpp"
 #include "libcvo/core/camera.hpp"
+#include "libcvo/core/units.hpp"
 #include "libcvo/eval/ate.hpp"
 #include "libcvo/eval/plot.hpp"
 #include "libcvo/eval/rpe.hpp"
@@ -39,22 +37,23 @@
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/opencv_odometry.hpp"
 #include "libcvo/slam/trajectory_correction.hpp"
-#include "progress.hpp"
+#include "program/cli.hpp"
+#include "program/progress.hpp"
 #include "report.hpp"
 #include "slam_pipeline.hpp"
-#include "tools/common/cli.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace cvo;
 
-constexpr std::string_view kUsage =
-    R"(usage: cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]
-               [--plot PNG] [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]
-       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [options as above]
+constexpr const char* kSynopsis =
+    "cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]\n"
+    "               [--plot PNG] [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]\n"
+    "       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [options as above]";
 
-Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
+constexpr const char* kDescription =
+    R"(Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
 groundtruth.txt), and writes the estimated poses T_world_camera as a TUM trajectory, stamped with
 the colour images' timestamps. A frame whose images cannot be read is skipped and reported (it has
 no pose); a frame that cannot be tracked keeps the constant-velocity prediction and is reported.
@@ -65,44 +64,26 @@ the first one's map at its first verified loop to it. TRAJ.txt holds every joine
 in the first session's map frame; a session that never joined is left out and reported so (--json:
 "sessions"). Ground truth: --groundtruth, else every folder's groundtruth.txt together.
 
-options:
-  --out TRAJ.txt     the trajectory to write (required)
-  --mode MODE        cvo: frame-to-frame CVO, the paper's baseline (default)
-                     kf-cvo: keyframe-based CVO (paper section 4; keyframes by γ, t, θ)
-                     slam: CVO SLAM, kf-cvo with loop closure and the robust pose graph
-                     (paper sections 5-6); the trajectory written is the final global
-                     optimisation's, and the report also gives kf-cvo's own ATE
-                     opencv-rgbd: OpenCV contrib's dense photometric RGB-D odometry
-                     opencv-rgbd-icp: OpenCV's photometric + point-to-plane ICP odometry
-                     (both frame to frame with the same motion model; depth 0.1-5 m, from
-                     selection.min_depth_m / max_depth_m)
-  --max-frames N     only the first N frames (of each folder)
-  --groundtruth GT   evaluate against this TUM trajectory (default: SEQUENCE/groundtruth.txt)
-  --plot PNG         write the evaluation figure (needs ground truth)
-  --json             print one JSON object on stdout; the summary then goes to stderr
-  --config FILE      parameters (YAML, see libcvo/config/default.yaml)
-  --set KEY=VALUE    override one parameter, e.g. --set cvo.ell_init=0.12 (repeatable)
-  --vocabulary FILE  the ORB vocabulary of --mode slam (default: the committed one of the
-                     source tree it was built from, else the installed share/cvo-slam copy)
-  --help             this text
+modes (--mode):
+  cvo              frame-to-frame CVO, the paper's baseline (default)
+  kf-cvo           keyframe-based CVO (paper section 4; keyframes by γ, t, θ)
+  slam             CVO SLAM, kf-cvo with loop closure and the robust pose graph (paper sections
+                   5-6); the trajectory written is the final global optimisation's, and the
+                   report also gives kf-cvo's own ATE
+  opencv-rgbd      OpenCV contrib's dense photometric RGB-D odometry
+  opencv-rgbd-icp  OpenCV's photometric + point-to-plane ICP odometry
+                   (both frame to frame with the same motion model; depth 0.1-5 m, from
+                   selection.min_depth_m / max_depth_m))";
 
-camera: --set camera=PRESET|FILE, else the config file's camera if it differs from the default,
+constexpr const char* kNotes =
+    R"(camera: --set camera=PRESET|FILE, else the config file's camera if it differs from the default,
 else SEQUENCE/camera.yaml (cvo-render writes one), else the preset the folder name names
 (fr1/fr2/fr3, freiburg1..3); without any of these cvo-run stops (exit 1).
 
-exit status: 0 ok, 1 bad input, 2 usage error
-)";
+vocabulary: --vocabulary, else the committed one of the source tree cvo-run was built from, else the
+installed share/cvo-slam copy.)";
 
-using tools::UsageError;
-
-// Every mode the contract names. Implementing one is a row flipped here and a branch in
-// make_tracker().
-struct ModeInfo {
-  std::string_view name;
-  bool implemented;
-};
-constexpr ModeInfo kModes[] = {
-    {"cvo", true}, {"kf-cvo", true}, {"slam", true}, {"opencv-rgbd", true}, {"opencv-rgbd-icp", true}};
+using program::UsageError;
 
 struct Arguments {
   std::vector<fs::path> sequences;
@@ -112,69 +93,28 @@ struct Arguments {
   std::optional<fs::path> groundtruth, plot, config, vocabulary;
   std::vector<std::string> sets;
   bool json = false;
-  bool help = false;
 };
 
-Arguments parse_arguments(int argc, char** argv) {
-  Arguments args;
-  std::vector<std::string> positional;
-  for (int k = 1; k < argc; ++k) {
-    const std::string_view arg = argv[k];
-    const auto value = [&]() -> std::string_view {
-      if (k + 1 >= argc) throw UsageError(std::string(arg) + " needs a value");
-      return argv[++k];
-    };
-    if (arg == "--help" || arg == "-h") {
-      args.help = true;
-    } else if (arg == "--json") {
-      args.json = true;
-    } else if (arg == "--out") {
-      args.out = fs::path(value());
-    } else if (arg == "--mode") {
-      args.mode = value();
-    } else if (arg == "--max-frames") {
-      const std::string_view text = value();
-      std::size_t n = 0;
-      const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
-      if (ec != std::errc() || end != text.data() + text.size() || n == 0)
-        throw UsageError("--max-frames needs a positive whole number, not '" + std::string(text) + "'");
-      args.max_frames = n;
-    } else if (arg == "--groundtruth") {
-      args.groundtruth = fs::path(value());
-    } else if (arg == "--plot") {
-      args.plot = fs::path(value());
-    } else if (arg == "--config") {
-      args.config = fs::path(value());
-    } else if (arg == "--set") {
-      args.sets.emplace_back(value());
-    } else if (arg == "--vocabulary") {
-      args.vocabulary = fs::path(value());
-    } else if (arg.size() > 1 && arg.front() == '-') {
-      throw UsageError("unknown option '" + std::string(arg) + "'");
-    } else {
-      positional.emplace_back(arg);
-    }
-  }
-  if (args.help) return args;
-  if (positional.empty()) throw UsageError("expected a SEQUENCE folder");
-  if (positional.size() > 1 && args.mode != "slam")
-    throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " + std::to_string(positional.size()) +
-                     " for mode '" + args.mode + "'");
-  args.sequences.assign(positional.begin(), positional.end());
-  if (args.out.empty()) throw UsageError("--out TRAJ.txt is required");
-
-  const ModeInfo* mode = nullptr;
-  for (const auto& m : kModes)
-    if (m.name == args.mode) mode = &m;
-  if (mode == nullptr)
-    throw UsageError("unknown mode '" + args.mode + "' (cvo, kf-cvo, slam, opencv-rgbd or opencv-rgbd-icp)");
-  if (!mode->implemented) {
-    std::string implemented;
-    for (const auto& m : kModes)
-      if (m.implemented) implemented.append(implemented.empty() ? "" : ", ").append(m.name);
-    throw UsageError("mode '" + args.mode + "' is not implemented yet; these are: " + implemented);
-  }
-  return args;
+void add_options(CLI::App& app, Arguments& args) {
+  app.add_option("SEQUENCE", args.sequences, "TUM RGB-D folder; with --mode slam, one per session")->required();
+  app.add_option("--out", args.out, "the trajectory to write")->required()->type_name("TRAJ.txt");
+  app.add_option("--mode", args.mode, "the odometry (see modes above)")
+      ->check(CLI::IsMember({"cvo", "kf-cvo", "slam", "opencv-rgbd", "opencv-rgbd-icp"}));
+  app.add_option("--max-frames", args.max_frames, "only the first N frames (of each folder)")
+      ->transform(program::kDecimal)
+      ->check(program::kPositive)
+      ->default_str("all");
+  app.add_option("--groundtruth", args.groundtruth, "evaluate against this TUM trajectory")
+      ->type_name("GT")
+      ->default_str("SEQUENCE/groundtruth.txt");
+  app.add_option("--plot", args.plot, "write the evaluation figure (needs ground truth)")->type_name("PNG");
+  app.add_flag("--json", args.json, "print one JSON object on stdout; the summary then goes to stderr");
+  app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
+  app.add_option("--set", args.sets, "override one parameter, e.g. --set cvo.ell_init=0.12 (repeatable)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+  app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
+      ->type_name("FILE");
 }
 
 // The config file (an InputError, exit 1, when bad), then the --set overrides (a usage error).
@@ -190,7 +130,7 @@ config::Config make_config(const Arguments& args) {
   return config;
 }
 
-// See "camera:" in the usage text. nullopt: TumSequence takes SEQUENCE/camera.yaml or the preset
+// See "camera:" in the help's notes. nullopt: TumSequence takes SEQUENCE/camera.yaml or the preset
 // the folder name names, and says so clearly when there is neither.
 std::optional<core::Intrinsics> choose_camera(const Arguments& args, const config::Config& config) {
   bool explicit_camera = args.config && config.camera != config::Config{}.camera;
@@ -275,10 +215,10 @@ core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::T
 // returns the poses of the frames tracked. `keyframes` counts this folder's keyframes.
 template <class Track>
 core::Trajectory stream(io::TumSequence& sequence, Track&& track, tools::RunReport& report, std::size_t& keyframes) {
-  using Clock = std::chrono::steady_clock;
+  using Clock = core::SteadyClock;
   core::Trajectory trajectory;
   trajectory.reserve(sequence.size());
-  tools::ProgressBar progress(sequence.size());
+  program::ProgressBar progress(sequence.size());
   const auto run_start = Clock::now();
   for (std::size_t frames = 0;;) {
     const std::size_t index = sequence.position();
@@ -295,7 +235,7 @@ core::Trajectory stream(io::TumSequence& sequence, Track&& track, tools::RunRepo
     if (!frame) break;
     const auto start = Clock::now();
     const odometry::TrackResult r = track(*frame);
-    report.track_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
+    report.track_ms.push_back(core::ms_since(start));
     trajectory.push_back({frame->timestamp, r.pose});
     report.points.push_back(static_cast<double>(r.points));
     if (r.iterations > 0) report.iterations.push_back(r.iterations);
@@ -383,6 +323,9 @@ void evaluate(const Arguments& args, const core::Trajectory& groundtruth, const 
 }
 
 int run(const Arguments& args) {
+  if (args.sequences.size() > 1 && args.mode != "slam")
+    throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " + std::to_string(args.sequences.size()) +
+                     " for mode '" + args.mode + "'");
   const config::Config config = make_config(args);
   std::vector<io::TumSequence> sequences = open_sequences(args, config);
 
@@ -415,12 +358,16 @@ int run(const Arguments& args) {
   if (!groundtruth.empty() && !trajectory.empty()) evaluate(args, groundtruth, trajectory, report);
 
   tools::print_text(args.json ? stderr : stdout, report);
-  if (args.json) std::cout << tools::to_json(report) << std::flush;
+  if (args.json) std::cout << program::to_text(tools::to_json(report)) << std::flush;
   return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  return tools::cli_main("cvo-run", kUsage, argc, argv, parse_arguments, run);
+  Arguments args;
+  CLI::App app(kDescription, "cvo-run");
+  program::describe(app, kSynopsis, kNotes);
+  add_options(app, args);
+  return program::cli_main(app, argc, argv, [&] { return run(args); });
 }

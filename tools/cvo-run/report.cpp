@@ -3,9 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
-
-#include "libcvo/io/json_writer.hpp"
+#include <utility>
 
 namespace cvo::tools {
 
@@ -24,36 +22,52 @@ double median(const std::vector<double>& v) { return percentile(v, 50); }
 
 double fps(const RunReport& r) { return r.wall_s > 0 ? static_cast<double>(r.frames) / r.wall_s : 0.0; }
 
-// [{"from": j, "to": i, "chi2": s, "weight": w}, ...] one loop a line; null outside slam mode.
-std::string loop_list(const RunReport& r) {
-  if (!r.slam) return "null";
-  if (r.slam->loops.empty()) return "[]";
-  std::string out = "[";
-  for (std::size_t k = 0; k < r.slam->loops.size(); ++k) {
-    const auto& l = r.slam->loops[k];
-    out.append(k ? ",\n    " : "\n    ")
-        .append("{\"from\": " + std::to_string(l.from) + ", \"to\": " + std::to_string(l.to))
-        .append(", \"chi2\": " + io::json_number(l.chi2) + ", \"weight\": " + io::json_number(l.weight))
-        .append(", \"from_session\": " + std::to_string(l.from_session) + ", \"to_session\": " +
-                std::to_string(l.to_session) + "}");
+// One object per accepted loop, in acceptance order; null outside slam mode.
+program::Json loop_list(const RunReport& r) {
+  if (!r.slam) return nullptr;
+  program::Json list = program::Json::array();
+  for (const auto& l : r.slam->loops) {
+    program::Json loop;
+    loop["from"] = l.from;
+    loop["to"] = l.to;
+    loop["chi2"] = l.chi2;
+    loop["weight"] = l.weight;
+    loop["from_session"] = l.from_session;
+    loop["to_session"] = l.to_session;
+    list.push_back(std::move(loop));
   }
-  return out + "\n  ]";
+  return list;
 }
 
-// [{"sequence": ..., "session": n, "frames": .., "keyframes": .., "joined": .., "joined_at_keyframe": ..}]
-std::string session_list(const RunReport& r) {
-  if (!r.slam) return "null";
-  std::string out = "[";
-  for (std::size_t k = 0; k < r.slam->sessions.size(); ++k) {
-    const auto& s = r.slam->sessions[k];
-    out.append(k ? ",\n    " : "\n    ")
-        .append("{\"sequence\": " + io::json_string(s.sequence) + ", \"session\": " + std::to_string(s.session))
-        .append(", \"frames\": " + std::to_string(s.frames) + ", \"keyframes\": " + std::to_string(s.keyframes))
-        .append(std::string(", \"joined\": ") + (s.joined ? "true" : "false") + ", \"joined_at_keyframe\": ")
-        .append(s.joined_at_keyframe ? std::to_string(*s.joined_at_keyframe) : "null")
-        .append("}");
+// One object per folder, in order; null outside slam mode.
+program::Json session_list(const RunReport& r) {
+  if (!r.slam) return nullptr;
+  program::Json list = program::Json::array();
+  for (const auto& s : r.slam->sessions) {
+    program::Json session;
+    session["sequence"] = s.sequence;
+    session["session"] = s.session;
+    session["frames"] = s.frames;
+    session["keyframes"] = s.keyframes;
+    session["joined"] = s.joined;
+    session["joined_at_keyframe"] = program::or_null(s.joined_at_keyframe);
+    list.push_back(std::move(session));
   }
-  return out + (r.slam->sessions.empty() ? "]" : "\n  ]");
+  return list;
+}
+
+// One object per frame skipped or predicted, in frame order.
+program::Json failed_frame_list(const RunReport& r) {
+  program::Json list = program::Json::array();
+  for (const auto& f : r.failed) {
+    program::Json frame;
+    frame["index"] = f.index;
+    frame["timestamp"] = f.timestamp;
+    frame["stage"] = f.stage;
+    frame["reason"] = f.reason;
+    list.push_back(std::move(frame));
+  }
+  return list;
 }
 
 }  // namespace
@@ -107,66 +121,45 @@ void print_text(std::FILE* out, const RunReport& r) {
     std::fprintf(out, "RPE         n/a (the run is too short for 1 s pairs)\n");
 }
 
-std::string to_json(const RunReport& r) {
-  using io::json_number;
-  using io::json_string;
-  const auto ate = [&](auto get) -> std::optional<double> {
-    if (!r.ate) return std::nullopt;
-    return get(*r.ate);
-  };
-  const auto rpe = [&](auto get) -> std::optional<double> {
-    if (!r.rpe) return std::nullopt;
-    return get(*r.rpe);
-  };
-  const auto slam = [&](auto get) -> std::optional<double> {
-    if (!r.slam) return std::nullopt;
-    return get(*r.slam);
-  };
-  std::ostringstream o;
-  o << "{\n"
-    << "  \"mode\": " << json_string(r.mode) << ",\n"
-    << "  \"sequence\": " << json_string(r.sequence) << ",\n"
-    << "  \"trajectory\": " << json_string(r.trajectory) << ",\n"
-    << "  \"frames\": " << r.frames << ",\n"
-    << "  \"poses\": " << r.poses << ",\n"
-    << "  \"keyframes\": " << r.keyframes << ",\n"
-    << "  \"failed_frames\": " << r.failed.size() << ",\n"  // a count, like frames and keyframes
-    << "  \"failed_frame_list\": [";
-  for (std::size_t k = 0; k < r.failed.size(); ++k) {
-    const auto& f = r.failed[k];
-    o << (k ? ",\n" : "\n") << "    {\"index\": " << f.index << ", \"timestamp\": " << json_number(f.timestamp)
-      << ", \"stage\": " << json_string(f.stage) << ", \"reason\": " << json_string(f.reason) << "}";
-  }
-  o << (r.failed.empty() ? "],\n" : "\n  ],\n")
-    << "  \"wall_s\": " << json_number(r.wall_s) << ",\n"
-    << "  \"fps\": " << json_number(fps(r)) << ",\n"
-    << "  \"ms_per_frame_median\": " << json_number(median(r.track_ms)) << ",\n"
-    << "  \"ms_per_frame_p90\": " << json_number(percentile(r.track_ms, 90)) << ",\n"
-    << "  \"ms_per_frame_p99\": " << json_number(percentile(r.track_ms, 99)) << ",\n"
-    << "  \"ms_per_frame_max\": " << json_number(percentile(r.track_ms, 100)) << ",\n"
-    << "  \"points_median\": " << json_number(median(r.points)) << ",\n"
-    << "  \"iterations_median\": " << json_number(median(r.iterations)) << ",\n"
-    << "  \"groundtruth\": " << (r.groundtruth.empty() ? "null" : json_string(r.groundtruth)) << ",\n"
-    << "  \"ate_pairs\": " << (r.ate ? r.ate->pairs.size() : 0) << ",\n"
-    << "  \"ate_rmse_m\": " << json_number(ate([](const auto& a) { return a.error.rmse; })) << ",\n"
-    << "  \"ate_mean_m\": " << json_number(ate([](const auto& a) { return a.error.mean; })) << ",\n"
-    << "  \"ate_max_m\": " << json_number(ate([](const auto& a) { return a.error.max; })) << ",\n"
-    << "  \"rpe_pairs\": " << (r.rpe ? r.rpe->pairs.size() : 0) << ",\n"
-    << "  \"rpe_trans_m_s\": " << json_number(rpe([](const auto& p) { return p.translation.rmse; })) << ",\n"
-    << "  \"rpe_rot_deg_s\": " << json_number(rpe([](const auto& p) { return p.rotation_deg.rmse; })) << ",\n"
-    << "  \"loops_accepted\": " << (r.slam ? std::to_string(r.slam->loops_accepted) : "null") << ",\n"
-    << "  \"loops_tried\": " << (r.slam ? std::to_string(r.slam->loops_tried) : "null") << ",\n"
-    << "  \"loop_list\": " << loop_list(r) << ",\n"
-    << "  \"sessions\": " << session_list(r) << ",\n"
-    << "  \"backend_ms_total\": " << json_number(slam([](const auto& s) { return s.backend_ms; })) << ",\n"
-    << "  \"final_optimisation_ms\": " << json_number(slam([](const auto& s) { return s.final_optimisation_ms; }))
-    << ",\n"
-    << "  \"ate_rmse_m_odometry\": " << json_number(slam([](const auto& s) -> std::optional<double> {
-         if (!s.ate_odometry) return std::nullopt;
-         return s.ate_odometry->error.rmse;
-       })) << "\n"
-    << "}\n";
-  return o.str();
+program::Json to_json(const RunReport& r) {
+  // The evaluation's values: null when there was none.
+  const auto ate = [&](auto get) { return r.ate ? program::Json(get(*r.ate)) : program::Json(); };
+  const auto rpe = [&](auto get) { return r.rpe ? program::Json(get(*r.rpe)) : program::Json(); };
+  const auto slam = [&](auto get) { return r.slam ? program::Json(get(*r.slam)) : program::Json(); };
+  program::Json o;
+  o["mode"] = r.mode;
+  o["sequence"] = r.sequence;
+  o["trajectory"] = r.trajectory;
+  o["frames"] = r.frames;
+  o["poses"] = r.poses;
+  o["keyframes"] = r.keyframes;
+  o["failed_frames"] = r.failed.size();  // a count, like frames and keyframes
+  o["failed_frame_list"] = failed_frame_list(r);
+  o["wall_s"] = r.wall_s;
+  o["fps"] = fps(r);
+  o["ms_per_frame_median"] = median(r.track_ms);  // NaN (no frame tracked) prints as null
+  o["ms_per_frame_p90"] = percentile(r.track_ms, 90);
+  o["ms_per_frame_p99"] = percentile(r.track_ms, 99);
+  o["ms_per_frame_max"] = percentile(r.track_ms, 100);
+  o["points_median"] = median(r.points);
+  o["iterations_median"] = median(r.iterations);
+  o["groundtruth"] = r.groundtruth.empty() ? program::Json() : program::Json(r.groundtruth);
+  o["ate_pairs"] = r.ate ? r.ate->pairs.size() : 0;
+  o["ate_rmse_m"] = ate([](const auto& a) { return a.error.rmse; });
+  o["ate_mean_m"] = ate([](const auto& a) { return a.error.mean; });
+  o["ate_max_m"] = ate([](const auto& a) { return a.error.max; });
+  o["rpe_pairs"] = r.rpe ? r.rpe->pairs.size() : 0;
+  o["rpe_trans_m_s"] = rpe([](const auto& p) { return p.translation.rmse; });
+  o["rpe_rot_deg_s"] = rpe([](const auto& p) { return p.rotation_deg.rmse; });
+  o["loops_accepted"] = slam([](const auto& s) { return s.loops_accepted; });
+  o["loops_tried"] = slam([](const auto& s) { return s.loops_tried; });
+  o["loop_list"] = loop_list(r);
+  o["sessions"] = session_list(r);
+  o["backend_ms_total"] = slam([](const auto& s) { return s.backend_ms; });
+  o["final_optimisation_ms"] = slam([](const auto& s) { return s.final_optimisation_ms; });
+  o["ate_rmse_m_odometry"] =
+      r.slam && r.slam->ate_odometry ? program::Json(r.slam->ate_odometry->error.rmse) : program::Json();
+  return o;
 }
 
 }  // namespace cvo::tools

@@ -10,6 +10,7 @@
 
 #include "libcvo/eval/ate.hpp"
 #include "libcvo/eval/rpe.hpp"
+#include "program/json.hpp"
 
 namespace cvo::tools {
 
@@ -71,6 +72,7 @@ struct RunReport {
 double percentile(std::vector<double> values, double p);
 
 void print_text(std::FILE* out, const RunReport& report);
-std::string to_json(const RunReport& report);
+program::Json to_json(const RunReport& report);
+
 
 }  // namespace cvo::tools

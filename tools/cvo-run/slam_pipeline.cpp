@@ -3,14 +3,13 @@
 #include <chrono>
 #include <utility>
 
+#include "libcvo/core/units.hpp"
+
 namespace cvo::tools {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = core::SteadyClock;
+using core::ms_since;
 
 }  // namespace
 
