@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include <opencv2/calib3d.hpp>
+#include "libcvo/core/pixel_rays.hpp"
 
 namespace cvo::registration {
 namespace {
@@ -68,18 +68,10 @@ std::size_t PointSelector::count_for_cell_size(int s) {
 }
 
 void PointSelector::build_ray_table(const core::Intrinsics& K) {
-  const auto n = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
-  cv::Mat pixels(static_cast<int>(n), 1, CV_32FC2);
-  auto* p = pixels.ptr<cv::Vec2f>();
-  for (int v = 0; v < height_; ++v)
-    for (int u = 0; u < width_; ++u) *p++ = {static_cast<float>(u), static_cast<float>(v)};
-  const cv::Matx33d camera(K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1);
-  // OpenCV's default is 5 fixed-point iterations, a few tenths of a pixel short in the corners for
-  // fr1's strong barrel distortion; iterate until the reprojection is within 1e-4 px instead.
-  rays_.resize(2 * n);
-  cv::Mat rays(static_cast<int>(n), 1, CV_32FC2, rays_.data());  // written in place
-  cv::undistortPoints(pixels, rays, camera, K.distortion, cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-4));
+  core::Intrinsics sized = K;
+  sized.width = width_;
+  sized.height = height_;
+  rays_ = core::undistorted_pixel_rays(sized);
   ray_intrinsics_ = K;
 }
 

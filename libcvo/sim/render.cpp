@@ -157,4 +157,14 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const core
   return frame;
 }
 
+core::RgbdFrame render_separate_depth(const Scene& scene, const core::Intrinsics& colour,
+                                      const core::DepthSensor& depth, const core::SE3& T_world_colour,
+                                      const NoiseOptions& noise, std::uint64_t seed, const RenderOptions& options) {
+  core::RgbdFrame frame = render(scene, colour, T_world_colour, {}, seed, options);
+  RenderOptions depth_only = options;
+  depth_only.supersample = false;  // its colour is thrown away
+  frame.depth = render(scene, depth.intrinsics, T_world_colour * depth.T_colour_depth, noise, seed, depth_only).depth;
+  return frame;
+}
+
 }  // namespace cvo::sim

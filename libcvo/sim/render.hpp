@@ -24,6 +24,7 @@
 #include <cstdint>
 
 #include "libcvo/core/camera.hpp"
+#include "libcvo/core/depth_sensor.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
 #include "libcvo/sim/scene.hpp"
@@ -52,5 +53,14 @@ double axial_noise_sigma(double z);
 /// intrinsics do not validate.
 core::RgbdFrame render(const Scene& scene, const core::Intrinsics& intrinsics, const core::SE3& T_world_camera,
                        const NoiseOptions& noise = {}, std::uint64_t seed = 0, const RenderOptions& options = {});
+
+/// The frame a camera with a separate depth sensor delivers, before registration: colour seen from
+/// T_world_colour through `colour`, depth seen by `depth` from T_world_colour * T_colour_depth, at
+/// the depth sensor's own size and units. frame.intrinsics is the colour camera's. Rendering the
+/// same pose with render() gives the exact registered depth to compare with.
+core::RgbdFrame render_separate_depth(const Scene& scene, const core::Intrinsics& colour,
+                                      const core::DepthSensor& depth, const core::SE3& T_world_colour,
+                                      const NoiseOptions& noise = {}, std::uint64_t seed = 0,
+                                      const RenderOptions& options = {});
 
 }  // namespace cvo::sim
