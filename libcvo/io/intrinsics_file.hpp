@@ -9,17 +9,37 @@
 //         fy: 516.5
 //         ...
 //         k1: 0.2624
+//     A camera whose depth is a separate sensor (RealSense, most UVC depth cameras) adds a
+//     depth_sensor mapping: the depth sensor's own intrinsics (the same keys) and its pose in the
+//     colour camera's frame, T_colour_depth: [tx, ty, tz, qx, qy, qz, qw] (TUM's order):
+//         depth_sensor:
+//           fx: 425.0
+//           ...
+//           T_colour_depth: [-0.015, 0, 0, 0, 0, 0, 1]
 //   - ETH3D's calibration.txt: a single line "fx fy cx cy". It gives no image size, so width and
 //     height are returned as 0, meaning "take them from the images" (TumSequence does).
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
 #include "libcvo/core/camera.hpp"
+#include "libcvo/core/depth_sensor.hpp"
 
 namespace cvo::io {
 
-/// Reads and validates an intrinsics file. Throws InputError naming the file, the line where
+/// A camera file: the colour camera (to which depth is registered), and the depth sensor when the
+/// camera's depth is a separate sensor whose depth the driver registers.
+struct CameraFile {
+  core::Intrinsics colour;
+  std::optional<core::DepthSensor> depth_sensor;
+};
+
+/// The whole camera file, depth_sensor included. Throws InputError as read_intrinsics_file.
+CameraFile read_camera_file(const std::filesystem::path& file);
+CameraFile parse_camera(std::string_view text, const std::filesystem::path& name_for_errors);
+
+/// Reads and validates an intrinsics file (its colour camera). Throws InputError naming the file, the line where
 /// known, and the offending key (unknown key, missing key, duplicate key, bad value).
 core::Intrinsics read_intrinsics_file(const std::filesystem::path& file);
 core::Intrinsics parse_intrinsics(std::string_view text, const std::filesystem::path& name_for_errors);
@@ -32,6 +52,7 @@ std::string format_intrinsics_yaml(const core::Intrinsics& intrinsics, std::stri
 /// A camera given as a preset name (core::camera_preset_names()) or else a path to an intrinsics
 /// file; throws InputError when it is neither.
 core::Intrinsics load_camera(std::string_view preset_or_file);
+CameraFile load_camera_file(std::string_view preset_or_file);
 
 /// Intrinsics::validate(), except that width = height = 0 ("from the images") is allowed.
 [[nodiscard]] std::string validate_allowing_unknown_size(const core::Intrinsics& intrinsics);

@@ -26,6 +26,50 @@ TEST(IntrinsicsFile, ReadsYaml) {
   EXPECT_DOUBLE_EQ(k.depth_scale, 1000.0);
 }
 
+constexpr const char* kSeparateDepth =
+    "fx: 615\nfy: 615\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\ndepth_scale: 1000\n"
+    "depth_sensor:\n  fx: 425\n  fy: 425\n  cx: 423.5\n  cy: 239.5\n  width: 848\n  height: 480\n"
+    "  depth_scale: 1000\n  k1: 0.01\n  T_colour_depth: [-0.015, 0.001, 0, 0, 0, 0.7071068, 0.7071068]\n";
+
+TEST(IntrinsicsFile, ASeparateDepthSensorHasItsOwnIntrinsicsAndItsPoseInTheColourCamera) {
+  const CameraFile camera = parse_camera(kSeparateDepth, "d435.yaml");
+  EXPECT_EQ(camera.colour.width, 640);
+  ASSERT_TRUE(camera.depth_sensor);
+  const auto& depth = *camera.depth_sensor;
+  EXPECT_EQ(depth.intrinsics.width, 848);
+  EXPECT_DOUBLE_EQ(depth.intrinsics.fx, 425.0);
+  EXPECT_DOUBLE_EQ(depth.intrinsics.distortion[0], 0.01);
+  EXPECT_NEAR(depth.T_colour_depth.translation().x(), -0.015, 1e-12);
+  EXPECT_NEAR((depth.T_colour_depth * Eigen::Vector3d::UnitX()).y(), 1.001, 1e-6);  // 90 deg about z, then t
+  // Whoever reads only the colour camera reads the same file.
+  EXPECT_DOUBLE_EQ(parse_intrinsics(kSeparateDepth, "d435.yaml").fx, 615.0);
+  EXPECT_FALSE(parse_camera(kValid, "cam.yaml").depth_sensor);
+}
+
+TEST(IntrinsicsFile, ABadDepthSensorSectionNamesWhatIsWrong) {
+  const std::string colour = "fx: 615\nfy: 615\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n";
+  const std::string sensor = "depth_sensor:\n  fx: 425\n  fy: 425\n  cx: 423.5\n  cy: 239.5\n  width: 848\n  height: 480\n";
+  const auto error_of = [](const std::string& text) {
+    try {
+      parse_camera(text, "d435.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of(colour + sensor).find("missing key 'T_colour_depth'"), std::string::npos);
+  EXPECT_NE(error_of(colour + sensor + "  T_colour_depth: [0, 0, 0]\n").find("[tx, ty, tz, qx, qy, qz, qw]"),
+            std::string::npos);
+  EXPECT_NE(error_of(colour + sensor + "  T_colour_depth: [0, 0, 0, 0, 0, 0, 0]\n").find("unit quaternion"),
+            std::string::npos);
+  EXPECT_NE(error_of(colour + sensor + "  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n  baseline: 5\n").find("baseline"),
+            std::string::npos);
+  EXPECT_NE(error_of(colour + "depth_sensor: 5\n").find("expected a mapping"), std::string::npos);
+  EXPECT_NE(error_of(colour + "depth_sensor:\n  fx: 425\n  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n").find("missing key"),
+            std::string::npos);
+  EXPECT_EQ(error_of(colour + sensor + "  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n"), "no error");
+}
+
 TEST(IntrinsicsFile, DepthScaleDefaultsToTums) {
   const auto k = parse_intrinsics("{fx: 500, fy: 500, cx: 320, cy: 240, width: 640, height: 480}", "cam.yaml");
   EXPECT_DOUBLE_EQ(k.depth_scale, 5000.0);
