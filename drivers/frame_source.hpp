@@ -19,6 +19,7 @@
 #include <string_view>
 
 #include "libcvo/core/camera.hpp"
+#include "libcvo/core/depth_sensor.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/bad_kind.hpp"
@@ -49,6 +50,9 @@ struct SourceOptions {
   // Intrinsics for sources that do not carry them (v4l2; TUM folders without camera.yaml and
   // with an unrecognised name). nullopt: the source's own, or its best guess.
   std::optional<core::Intrinsics> intrinsics;
+  // A depth node that is a separate sensor (v4l2): its depth is registered to the colour camera
+  // (depth_registration.hpp) before the frame leaves the driver. nullopt: depth is registered.
+  std::optional<core::DepthSensor> depth_sensor;
   int width = 640, height = 480, fps = 30;  // requested mode of devices (openni2, v4l2)
 };
 

@@ -67,13 +67,17 @@ std::int64_t new_session_id(std::uint64_t previous = 0) {
 
 bool is_device(const std::string& spec) { return spec.starts_with("openni2:") || spec.starts_with("v4l2:"); }
 
-// Intrinsics for the sources that carry none (v4l2): the configured camera (a bad camera file
-// throws here, at start-up, not in a thread). The others bring their own (TUM folder, CVO_RGBD
+// Intrinsics for the sources that carry none (v4l2): the configured camera, and its depth sensor
+// when depth is separate (a bad camera file throws here, at start-up, not in a thread). The others bring their own (TUM folder, CVO_RGBD
 // message, OpenNI2 stream).
 drivers::SourceOptions source_options(const config::Config& config) {
   drivers::SourceOptions options;
   options.realtime = config.trackerd.paced;
-  if (config.trackerd.source.starts_with("v4l2:")) options.intrinsics = io::load_camera(config.camera);
+  if (config.trackerd.source.starts_with("v4l2:")) {
+    const io::CameraFile camera = io::load_camera_file(config.camera);
+    options.intrinsics = camera.colour;
+    options.depth_sensor = camera.depth_sensor;
+  }
   return options;
 }
 
