@@ -28,14 +28,18 @@ DepthRegistration::DepthRegistration(const core::DepthSensor& depth, const core:
   corners.cy += 0.5;
   corners.width += 1;
   corners.height += 1;
-  corners_ = core::undistorted_pixel_rays(corners);
-  R_ = depth.T_colour_depth.rotation().toRotationMatrix().cast<float>();
+  const std::vector<float> rays = core::undistorted_pixel_rays(corners);
+  const Eigen::Matrix3f R = depth.T_colour_depth.rotation().toRotationMatrix().cast<float>();
+  corners_.resize(rays.size() / 2 * 3);
+  for (std::size_t i = 0; i < rays.size() / 2; ++i)  // turned into the colour camera's axes once
+    Eigen::Map<Eigen::Vector3f>(corners_.data() + 3 * i) = R * Eigen::Vector3f(rays[2 * i], rays[2 * i + 1], 1.0f);
   t_ = depth.T_colour_depth.translation().cast<float>();
 }
 
-// Where the point at depth z on `ray` (x, y) lands in the colour image, in pixels; nullopt behind it.
+// Where the point at depth z on `ray` (R (x, y, 1)) lands in the colour image, in pixels, and its
+// colour-camera z; nullopt behind the colour camera.
 std::optional<Eigen::Vector3f> DepthRegistration::land(const float* ray, float z) const {
-  const Eigen::Vector3f X = R_ * Eigen::Vector3f(ray[0] * z, ray[1] * z, z) + t_;
+  const Eigen::Vector3f X = z * Eigen::Map<const Eigen::Vector3f>(ray) + t_;
   if (!(X.z() > 0)) return std::nullopt;
   float x = X.x() / X.z(), y = X.y() / X.z();
   if (colour_.has_distortion()) {
@@ -56,7 +60,7 @@ void DepthRegistration::apply(const cv::Mat& depth, cv::Mat& registered) const {
   for (int y = 0; y < registered.rows; ++y)  // not setTo(0): that allocates
     std::fill_n(registered.ptr<std::uint16_t>(y), registered.cols, std::uint16_t{0});
   const auto to_metres = static_cast<float>(1.0 / d.depth_scale), to_raw = static_cast<float>(colour_.depth_scale);
-  const auto corner = [&](int u, int v) { return corners_.data() + 2 * (static_cast<std::size_t>(v) * (d.width + 1) + u); };
+  const auto corner = [&](int u, int v) { return corners_.data() + 3 * (static_cast<std::size_t>(v) * (d.width + 1) + u); };
   for (int v = 0; v < d.height; ++v) {
     const auto* row = depth.ptr<std::uint16_t>(v);
     for (int u = 0; u < d.width; ++u) {

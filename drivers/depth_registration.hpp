@@ -48,8 +48,8 @@ class DepthRegistration {
 
   core::DepthSensor depth_;
   core::Intrinsics colour_;
-  std::vector<float> corners_;  // rays of the (width + 1) x (height + 1) pixel corners of the depth sensor
-  Eigen::Matrix3f R_;
+  // R_colour_depth (x, y, 1) of the (width + 1) x (height + 1) pixel corners of the depth sensor
+  std::vector<float> corners_;
   Eigen::Vector3f t_;
 };
 
