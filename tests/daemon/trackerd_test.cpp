@@ -293,14 +293,17 @@ TEST(Trackerd, ShutdownUnderLoadIsCleanAndFastAndDropsAreCounted) {
   std::this_thread::sleep_for(1500ms);
   ASSERT_TRUE(d.running()) << cvo::testing::slurp(dir.path() / "stderr.txt");
   d.signal(SIGTERM);
-  const auto code = d.wait_for(1000ms);
-  ASSERT_TRUE(code) << "not stopped within a second of SIGTERM";
+  const auto code = d.wait_for(cvo::testing::scaled(1000ms));
+  ASSERT_TRUE(code) << "not stopped within a second of SIGTERM (times the build's slowdown)";
   const auto err = cvo::testing::slurp(dir.path() / "stderr.txt");
   EXPECT_EQ(*code, 0) << err;
   EXPECT_NE(err.find("stopping on SIGTERM"), std::string::npos) << err;
   const auto log = cvo::testing::read_published(out);
   ASSERT_FALSE(log.statuses.empty());
-  EXPECT_GT(log.statuses.back().dropped_frames, 0) << err;
+  // A sanitizer slows the source's decoding as much as tracking: only a plain build is outpaced.
+  if (cvo::testing::kSlowdown == 1) {
+    EXPECT_GT(log.statuses.back().dropped_frames, 0) << err;
+  }
   // Frames still unread at SIGTERM are neither: the recording simply stopped being played.
   EXPECT_LE(log.poses.size() + static_cast<std::size_t>(log.statuses.back().dropped_frames), 50u);
   EXPECT_NE(err.find("tracked " + std::to_string(log.poses.size()) + " frames"), std::string::npos)
@@ -345,7 +348,7 @@ TEST(Trackerd, NotifiesSystemd) {
     if (n > 0) received.append(buffer, static_cast<std::size_t>(n)).append("\n");
   }
   d.signal(SIGTERM);
-  const auto code = d.wait_for(2000ms);
+  const auto code = d.wait_for(cvo::testing::scaled(2000ms));
   for (int i = 0; i < 10; ++i) {
     const auto n = recv(fd, buffer, sizeof buffer, 0);
     if (n > 0) received.append(buffer, static_cast<std::size_t>(n)).append("\n");
