@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "drivers/frame_gaps.hpp"
+#include "drivers/openni2_virtual/virtual_device.hpp"
 #include "drivers/read_result.hpp"
 #include "drivers/usb_cameras.hpp"
 
@@ -71,25 +72,65 @@ openni::VideoMode find_mode(const openni::VideoStream& stream, openni::PixelForm
                               "@" + std::to_string(o.fps) + " (offers: " + (offered.empty() ? "none" : offered) + ")");
 }
 
-core::Intrinsics from_fields_of_view(const openni::VideoStream& colour, int width, int height) {
+// The device's own camera model when it gives one (the cvo-virtual driver does), else from the
+// colour stream's fields of view with the principal point at the image centre.
+core::Intrinsics device_intrinsics(openni::VideoStream& colour, int width, int height, double depth_scale) {
   core::Intrinsics k;
   k.width = width;
   k.height = height;
-  k.fx = width / 2.0 / std::tan(colour.getHorizontalFieldOfView() / 2.0);
-  k.fy = height / 2.0 / std::tan(colour.getVerticalFieldOfView() / 2.0);
+  k.depth_scale = depth_scale;
+  namespace virt = virtual_device;
+  if (virt::StreamIntrinsics own; colour.isPropertySupported(virt::kIntrinsicsProperty) &&
+                                  colour.getProperty(virt::kIntrinsicsProperty, &own) == openni::STATUS_OK) {
+    k.fx = own.fx;
+    k.fy = own.fy;
+    k.cx = own.cx;
+    k.cy = own.cy;
+    std::copy(std::begin(own.distortion), std::end(own.distortion), k.distortion.begin());
+    return k;
+  }
+  // A float field of view holds about 7 digits, a focal length to some 1e-5 px: rounded to 1e-4 px
+  // so that no digit is made up and a focal length given to 4 decimals (calibrations, the virtual
+  // device's folders) comes back exactly.
+  const auto focal = [](double size, float fov) { return std::round(size / 2.0 / std::tan(fov / 2.0) * 1e4) / 1e4; };
+  k.fx = focal(width, colour.getHorizontalFieldOfView());
+  k.fy = focal(height, colour.getVerticalFieldOfView());
   k.cx = width / 2.0;
   k.cy = height / 2.0;
-  k.depth_scale = 1000.0;  // PIXEL_FORMAT_DEPTH_1_MM
   return k;
 }
 
-// OpenNI reports an unplugged device only through this callback (its streams just go quiet). The
-// callback runs on an OpenNI thread, hence the atomic.
-class UnplugWatch final : public openni::OpenNI::DeviceDisconnectedListener {
+// Depth units per metre of OpenNI's depth formats; 0 for others.
+double depth_units_per_metre(openni::PixelFormat format) {
+  if (format == openni::PIXEL_FORMAT_DEPTH_1_MM) return 1000.0;
+  if (format == openni::PIXEL_FORMAT_DEPTH_100_UM) return 10000.0;
+  return 0.0;
+}
+
+// 1 mm depth from cameras (16 bits of 100 µm would end their range at 6.5 m); 100 µm from the
+// virtual device, exact for TUM's 0.2 mm units, when it offers the mode asked for.
+openni::VideoMode find_depth_mode(const openni::VideoStream& depth, const SourceOptions& o, const std::string& spec,
+                                  bool fine) {
+  const auto& modes = depth.getSensorInfo().getSupportedVideoModes();
+  for (int i = 0; fine && i < modes.getSize(); ++i) {
+    const auto& m = modes[i];
+    if (m.getPixelFormat() == openni::PIXEL_FORMAT_DEPTH_100_UM && m.getResolutionX() == o.width &&
+        m.getResolutionY() == o.height && m.getFps() == o.fps)
+      return m;
+  }
+  return find_mode(depth, openni::PIXEL_FORMAT_DEPTH_1_MM, o, spec, "the depth sensor");
+}
+
+// OpenNI reports an unplugged device only through this callback (its streams just go quiet); a
+// device that plays a recording (the cvo-virtual driver) says it has ended with the device state
+// DEVICE_STATE_EOF. The callbacks run on OpenNI's or the driver's threads, hence the atomics.
+class UnplugWatch final : public openni::OpenNI::DeviceDisconnectedListener,
+                          public openni::OpenNI::DeviceStateChangedListener {
  public:
   UnplugWatch() = default;
   ~UnplugWatch() override {
     if (registered_) openni::OpenNI::removeDeviceDisconnectedListener(this);
+    if (state_registered_) openni::OpenNI::removeDeviceStateChangedListener(this);
   }
   UnplugWatch(const UnplugWatch&) = delete;
   UnplugWatch& operator=(const UnplugWatch&) = delete;
@@ -98,16 +139,21 @@ class UnplugWatch final : public openni::OpenNI::DeviceDisconnectedListener {
   void watch(std::string uri) {
     uri_ = std::move(uri);
     registered_ = openni::OpenNI::addDeviceDisconnectedListener(this) == openni::STATUS_OK;
+    state_registered_ = openni::OpenNI::addDeviceStateChangedListener(this) == openni::STATUS_OK;
   }
   void onDeviceDisconnected(const openni::DeviceInfo* info) override {
     if (info != nullptr && uri_ == info->getUri()) unplugged_ = true;
   }
+  void onDeviceStateChanged(const openni::DeviceInfo* info, openni::DeviceState state) override {
+    if (info != nullptr && uri_ == info->getUri() && state == openni::DEVICE_STATE_EOF) ended_ = true;
+  }
   [[nodiscard]] bool unplugged() const { return unplugged_; }
+  [[nodiscard]] bool ended() const { return ended_; }
 
  private:
-  bool registered_ = false;
+  bool registered_ = false, state_registered_ = false;
   std::string uri_;  // set before the listener is registered, then only read
-  std::atomic<bool> unplugged_{false};
+  std::atomic<bool> unplugged_{false}, ended_{false};
 };
 
 class OpenNi2Source final : public FrameSource {
@@ -123,14 +169,18 @@ class OpenNi2Source final : public FrameSource {
     create(colour_, openni::SENSOR_COLOR, "colour");
 
     if (auto* playback = device_.getPlaybackControl(); playback != nullptr) {
-      // A recording plays once, at its recorded rate: like the camera, and without skipping frames
-      // for a consumer that keeps up.
+      // A recording plays once: realtime at its recorded rate, like the camera (without skipping
+      // frames for a consumer that keeps up); else frame by frame as read (OpenNI's speed -1), so
+      // that none is skipped.
       playback->setRepeatEnabled(false);
-      playback->setSpeed(1.0f);
+      playback->setSpeed(options.realtime ? 1.0f : -1.0f);
       frames_in_file_ = {playback->getNumberOfFrames(depth_), playback->getNumberOfFrames(colour_)};
     } else {
-      set_mode(depth_, find_mode(depth_, openni::PIXEL_FORMAT_DEPTH_1_MM, options, spec_, "the depth sensor"));
+      set_mode(depth_, find_depth_mode(depth_, options, spec_, uri.starts_with(virtual_device::kScheme)));
       set_mode(colour_, find_mode(colour_, openni::PIXEL_FORMAT_RGB888, options, spec_, "the colour sensor"));
+      // The virtual device can also play frame by frame; cameras have no such property.
+      if (!options.realtime && device_.isPropertySupported(virtual_device::kPacedProperty))
+        device_.setProperty(virtual_device::kPacedProperty, 0);
     }
     registered_ = device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) &&
                   device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) == openni::STATUS_OK;
@@ -140,15 +190,16 @@ class OpenNi2Source final : public FrameSource {
     colour_.setMirroringEnabled(false);
 
     const auto depth_mode = depth_.getVideoMode(), colour_mode = colour_.getVideoMode();
-    if (depth_mode.getPixelFormat() != openni::PIXEL_FORMAT_DEPTH_1_MM ||
-        colour_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
-      throw SourceError(spec_, "needs 1 mm depth and RGB888 colour (a recording of other formats?)");
+    const double depth_scale = depth_units_per_metre(depth_mode.getPixelFormat());
+    if (depth_scale == 0 || colour_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
+      throw SourceError(spec_, "needs 1 mm or 100 um depth and RGB888 colour (a recording of other formats?)");
     width_ = colour_mode.getResolutionX();
     height_ = colour_mode.getResolutionY();
     if (depth_mode.getResolutionX() != width_ || depth_mode.getResolutionY() != height_)
       throw SourceError(spec_, "depth is " + mode_text(depth_mode) + " but colour " + mode_text(colour_mode) +
                                    ": registered depth needs one size");
-    intrinsics_ = options.intrinsics ? *options.intrinsics : from_fields_of_view(colour_, width_, height_);
+    intrinsics_ = options.intrinsics ? *options.intrinsics : device_intrinsics(colour_, width_, height_, depth_scale);
+    intrinsics_.depth_scale = depth_scale;  // the stream's unit, whatever a camera file says
     if (const auto bad = intrinsics_.validate(); !bad.empty()) throw SourceError(spec_, "intrinsics: " + bad);
     if (intrinsics_.width != width_ || intrinsics_.height != height_)
       throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
@@ -159,8 +210,19 @@ class OpenNi2Source final : public FrameSource {
   }
 
   ~OpenNi2Source() override {
+    recorder_.destroy();  // closes the file; before the streams it records go
     colour_.stop();
     depth_.stop();
+  }
+
+  /// From now on OpenNI's own Recorder writes both streams, as the device sends them, to `file`
+  /// (depth losslessly compressed, colour uncompressed).
+  void record_to(const std::filesystem::path& file) {
+    const auto fail = [&](const std::string& doing) { throw SourceError(file, doing + ": " + openni_error()); };
+    if (recorder_.create(file.c_str()) != openni::STATUS_OK) fail("cannot create the recording");
+    if (recorder_.attach(depth_, false) != openni::STATUS_OK) fail("cannot record the depth stream");
+    if (recorder_.attach(colour_, false) != openni::STATUS_OK) fail("cannot record the colour stream");
+    if (recorder_.start() != openni::STATUS_OK) fail("the recorder does not start");
   }
   OpenNi2Source(const OpenNi2Source&) = delete;
   OpenNi2Source& operator=(const OpenNi2Source&) = delete;
@@ -171,11 +233,13 @@ class OpenNi2Source final : public FrameSource {
     while (!(fresh_[0] && fresh_[1])) {
       if (recording_ended()) return result(ReadStatus::kEndOfStream);
       if (watch_.unplugged()) return result(ReadStatus::kDisconnected, spec_ + ": device unplugged");
+      // Once the device has ended, only the frames it sent before are still to read.
+      const bool ended = watch_.ended();
       const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();
       int ready = -1;
-      const auto status = openni::OpenNI::waitForAnyStream(streams.data(), 2, &ready,
-                                                            static_cast<int>(std::clamp<long long>(left, 0, INT_MAX)));
-      if (status == openni::STATUS_TIME_OUT) return result(ReadStatus::kTimeout);
+      const auto status = openni::OpenNI::waitForAnyStream(
+          streams.data(), 2, &ready, ended ? 0 : static_cast<int>(std::clamp<long long>(left, 0, INT_MAX)));
+      if (status == openni::STATUS_TIME_OUT) return result(ended ? ReadStatus::kEndOfStream : ReadStatus::kTimeout);
       if (status != openni::STATUS_OK || ready < 0 || ready > 1) return disconnected("waiting for frames");
       const auto s = static_cast<std::size_t>(ready);
       if (streams[s]->readFrame(&frames_[s]) != openni::STATUS_OK || !frames_[s].isValid())
@@ -254,6 +318,7 @@ class OpenNi2Source final : public FrameSource {
   UnplugWatch watch_;
   openni::Device device_;  // declared first: the streams are destroyed before it closes
   openni::VideoStream depth_, colour_;
+  openni::Recorder recorder_;  // after the streams: destroyed before them
   std::array<openni::VideoFrameRef, 2> frames_;  // [0] depth, [1] colour, as in read()'s stream list
   std::array<bool, 2> fresh_{false, false};      // frames_[s] not yet returned
   std::array<int, 2> last_index_{0, 0};
@@ -271,6 +336,13 @@ class OpenNi2Source final : public FrameSource {
 
 std::unique_ptr<FrameSource> open_openni2(std::string_view uri, const SourceOptions& options) {
   return std::make_unique<OpenNi2Source>(std::string(uri), options);
+}
+
+std::unique_ptr<FrameSource> open_openni2_recording(std::string_view uri, const std::filesystem::path& oni,
+                                                    const SourceOptions& options) {
+  auto source = std::make_unique<OpenNi2Source>(std::string(uri), options);
+  source->record_to(oni);
+  return source;
 }
 
 std::string openni2_version() {

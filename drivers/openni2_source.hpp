@@ -1,20 +1,32 @@
 #pragma once
 // openni2:URI — an OpenNI2 device (PrimeSense, Asus Xtion, Orbbec, Kinect through its driver) or
-// an .oni recording.
-//   URI: "" or "any" the first device; a device URI as OpenNI lists it; a path ending in ".oni".
+// an .oni recording, or the project's virtual device.
+//   URI: "" or "any" the first device; a device URI as OpenNI lists it; a path ending in ".oni";
+//   "cvo-virtual:DIR[?unplug_after=N&replug_after_s=S]" the project's virtual device playing the
+//   TUM folder DIR (drivers/openni2_virtual/virtual_device.hpp). The programs load OpenNI2 through
+//   the project's runtime directory, whose drivers repository holds the system's drivers and that
+//   one (drivers/openni2_virtual/CMakeLists.txt).
 //
-// Opening sets up a depth stream (PIXEL_FORMAT_DEPTH_1_MM) and a colour stream (RGB888) of
-// options.width x height at options.fps (a recording keeps its own mode), mirroring off, depth
-// registered to colour when the device can, depth/colour frame sync on. Intrinsics:
-// options.intrinsics, else from the colour stream's fields of view, fx = w / 2 / tan(hfov / 2)
-// with the principal point at the image centre (OpenNI's own convention); depth_scale 1000.
+// Opening sets up a depth stream (PIXEL_FORMAT_DEPTH_1_MM; the virtual device's DEPTH_100_UM, exact
+// for TUM's units) and a colour stream (RGB888) of options.width x height at options.fps (a recording
+// keeps its own mode), mirroring off, depth registered to colour when the device can, depth/colour
+// frame sync on. Intrinsics: options.intrinsics, else the device's own (the virtual device's
+// kIntrinsicsProperty), else from the colour stream's fields of view, fx = w / 2 / tan(hfov / 2)
+// with the principal point at the image centre (OpenNI's own convention, and all an .oni file
+// keeps); depth_scale is the depth format's, 1000 or 10000.
+//
+// options.realtime false: a recording plays frame by frame as read (speed -1), and the virtual
+// device likewise (its kPacedProperty), so that a slow consumer loses none; else both play at the
+// recorded rate.
 //
 // read() waits (OpenNI::waitForAnyStream, up to the timeout) until it holds a new depth and a new
-// colour frame, and returns them as one frame: colour as BGR, depth in millimetres. Timestamps are
-// the device clock moved onto the system clock at the first frame. A device error is
-// kDisconnected; the end of a recording (played once, at its recorded rate) is kEndOfStream.
+// colour frame, and returns them as one frame: colour as BGR, depth in the stream's unit. Timestamps are
+// the device clock moved onto the system clock at the first frame. A device error or a
+// disconnection is kDisconnected; the end of a recording (played once) or a device state of
+// DEVICE_STATE_EOF (the virtual device at the end of its folder) is kEndOfStream.
 // OpenNI keeps only the newest frame of a stream, so a consumer that falls behind loses frames;
 // they are counted (from OpenNI's frame indices) in lost_frames().
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -26,6 +38,13 @@ namespace cvo::drivers {
 /// Throws SourceError, with OpenNI's own explanation, when no device (or file) opens or a stream
 /// cannot be set up.
 std::unique_ptr<FrameSource> open_openni2(std::string_view uri, const SourceOptions& options);
+
+/// open_openni2(uri, options) whose streams OpenNI's own Recorder also writes to the .oni file `oni`
+/// from the moment it returns until the source is destroyed: every frame the device sends, read or
+/// not (with options.realtime false the virtual device sends one per read). Throws SourceError as
+/// open_openni2 does, and naming the file when the recording cannot be made.
+std::unique_ptr<FrameSource> open_openni2_recording(std::string_view uri, const std::filesystem::path& oni,
+                                                    const SourceOptions& options);
 
 /// Initialises OpenNI (once per process: its drivers then watch USB for devices until exit) and
 /// returns its version, e.g. "2.2.0.33". Throws SourceError when it cannot initialise (no drivers).

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "drivers/depth_registration.hpp"
 #include "drivers/frame_gaps.hpp"
 #include "drivers/read_result.hpp"
 #include "drivers/stream_pairing.hpp"
@@ -213,12 +214,19 @@ struct Waiting {
 
 class V4l2Source final : public FrameSource {
  public:
-  V4l2Source(const std::string& colour, const std::string& depth, const core::Intrinsics& intrinsics, int fps)
-      : colour_(colour, "colour"), depth_(depth, "depth"), intrinsics_(intrinsics), max_dt_(0.5 / std::max(fps, 1)) {
+  // depth_sensor: the depth node is a separate sensor of its own size, registered to colour.
+  V4l2Source(const std::string& colour, const std::string& depth, const core::Intrinsics& intrinsics,
+             const std::optional<core::DepthSensor>& depth_sensor, int fps)
+      : colour_(colour, "colour"),
+        depth_(depth, "depth"),
+        intrinsics_(intrinsics),
+        depth_size_(depth_sensor ? depth_sensor->intrinsics : intrinsics),
+        max_dt_(0.5 / std::max(fps, 1)) {
     static constexpr std::array<std::uint32_t, 2> kColour{V4L2_PIX_FMT_YUYV, V4L2_PIX_FMT_MJPEG};
     static constexpr std::array<std::uint32_t, 1> kDepth{V4L2_PIX_FMT_Z16};
     colour_.set_format(kColour, intrinsics.width, intrinsics.height, fps);
-    depth_.set_format(kDepth, intrinsics.width, intrinsics.height, fps);
+    depth_.set_format(kDepth, depth_size_.width, depth_size_.height, fps);
+    if (depth_sensor) registration_.emplace(*depth_sensor, intrinsics);
     colour_.start();
     depth_.start();
   }
@@ -232,6 +240,7 @@ class V4l2Source final : public FrameSource {
         waiting_[action == PairAction::kDropColour ? 0 : 1].fresh = false;
         ++unpaired_;
       }
+      if (!gone_.empty()) return disconnected(gone_);  // once what arrived before it is paired
       std::array<pollfd, 2> fds{pollfd{colour_.fd(), POLLIN, 0}, pollfd{depth_.fd(), POLLIN, 0}};
       const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();
       const int n = ::poll(fds.data(), fds.size(), static_cast<int>(std::clamp<long long>(left, 0, INT_MAX)));
@@ -240,17 +249,23 @@ class V4l2Source final : public FrameSource {
       if (n == 0) return result(ReadStatus::kTimeout);
       for (std::size_t k = 0; k < 2; ++k) {
         V4l2Node& node = k == 0 ? colour_ : depth_;
-        if ((fds[k].revents & (POLLERR | POLLHUP | POLLNVAL)) != 0)
-          return disconnected(node.path() + ": device error (unplugged?)");
+        if ((fds[k].revents & (POLLERR | POLLHUP | POLLNVAL)) != 0) {
+          gone_ = node.path() + ": device error (unplugged?)";
+          break;
+        }
         if ((fds[k].revents & POLLIN) == 0) continue;
         if (const auto stop = take(node, k); stop) return *stop;
+        if (!gone_.empty()) break;
       }
     }
   }
 
   [[nodiscard]] std::string describe() const override {
+    const std::string depth = registration_ ? ", depth " + std::to_string(depth_size_.width) + "x" +
+                                                  std::to_string(depth_size_.height) + " registered to colour"
+                                            : "";
     return "v4l2:" + colour_.path() + "," + depth_.path() + " (" + std::to_string(intrinsics_.width) + "x" +
-           std::to_string(intrinsics_.height) + ", colour " + fourcc_text(colour_.fourcc()) + ")";
+           std::to_string(intrinsics_.height) + ", colour " + fourcc_text(colour_.fourcc()) + depth + ")";
   }
 
   [[nodiscard]] std::uint64_t lost_frames() const override {
@@ -259,25 +274,28 @@ class V4l2Source final : public FrameSource {
 
  private:
   // Dequeues one buffer of node k into waiting_[k] and gives the buffer back to the driver at
-  // once. A result only when read() must return it (bad frame, device gone).
+  // once. A result only when read() must return it (bad frame). A device that went away sets
+  // gone_: a frame dequeued before that is whole and still paired (the camera may go between
+  // DQBUF and QBUF), and read() reports the disconnection after it.
   std::optional<ReadResult> take(V4l2Node& node, std::size_t k) {
     const Dequeued d = node.dequeue();
     if (d.error == EAGAIN) return std::nullopt;
-    if (d.error != 0)
-      return device_gone(d.error) ? disconnected(node.path() + ": " + errno_text(d.error))
-                                  : bad_input(BadInput::kContent, node.path() + ": VIDIOC_DQBUF: " + errno_text(d.error));
+    if (d.error != 0 && device_gone(d.error)) {
+      gone_ = node.path() + ": " + errno_text(d.error);
+      return std::nullopt;
+    }
+    if (d.error != 0) return bad_input(BadInput::kContent, node.path() + ": VIDIOC_DQBUF: " + errno_text(d.error));
     std::string bad;
     if (d.corrupt) {
       bad = "the driver marks the frame corrupt";
     } else if (k == 1) {
-      bad = z16_to_depth(d.data, intrinsics_.width, intrinsics_.height, node.bytes_per_line(), 1.0, waiting_[k].image);
+      bad = z16_to_depth(d.data, depth_size_.width, depth_size_.height, node.bytes_per_line(), 1.0, waiting_[k].image);
     } else if (node.fourcc() == V4L2_PIX_FMT_MJPEG) {
       bad = mjpeg_to_bgr(d.data, intrinsics_.width, intrinsics_.height, waiting_[k].image);
     } else {
       bad = yuyv_to_bgr(d.data, intrinsics_.width, intrinsics_.height, node.bytes_per_line(), waiting_[k].image);
     }
-    const bool requeued = node.requeue(d.index);
-    if (!requeued && device_gone(errno)) return disconnected(node.path() + ": " + errno_text(errno));
+    if (!node.requeue(d.index) && device_gone(errno)) gone_ = node.path() + ": " + errno_text(errno);
     if (!bad.empty()) {
       if (waiting_[k].fresh) ++replaced_;  // its image may be half written now
       waiting_[k].fresh = false;
@@ -293,7 +311,10 @@ class V4l2Source final : public FrameSource {
   ReadResult emit(core::RgbdFrame& frame) {
     // Swapped, not copied: the caller's old images become the next frames' buffers.
     std::swap(frame.bgr, waiting_[0].image);
-    std::swap(frame.depth, waiting_[1].image);
+    if (registration_)
+      registration_->apply(waiting_[1].image, frame.depth);  // into the caller's buffer: no allocation
+    else
+      std::swap(frame.depth, waiting_[1].image);
     frame.timestamp = waiting_[0].timestamp;
     frame.depth_timestamp = waiting_[1].timestamp;
     frame.index = next_index_++;
@@ -308,10 +329,13 @@ class V4l2Source final : public FrameSource {
 
   V4l2Node colour_, depth_;
   const core::Intrinsics intrinsics_;
+  const core::Intrinsics depth_size_;  // the depth node's camera: the colour one unless separate
+  std::optional<DepthRegistration> registration_;
   const double max_dt_;
   std::array<Waiting, 2> waiting_;  // [0] colour, [1] depth
   std::array<FrameGaps, 2> gaps_;
   std::uint64_t unpaired_ = 0, replaced_ = 0, next_index_ = 0;
+  std::string gone_;  // why the device is gone; empty while it is there
 };
 
 }  // namespace
@@ -324,8 +348,11 @@ std::unique_ptr<FrameSource> open_v4l2(std::string_view nodes, const SourceOptio
     throw SourceError(spec, "needs a colour and a depth device node: v4l2:COLOUR,DEPTH");
   if (!options.intrinsics) throw SourceError(spec, "v4l2 needs intrinsics (--camera ...)");
   if (const auto bad = options.intrinsics->validate(); !bad.empty()) throw SourceError(spec, "intrinsics: " + bad);
+  if (options.depth_sensor)
+    if (const auto bad = options.depth_sensor->intrinsics.validate(); !bad.empty())
+      throw SourceError(spec, "depth sensor intrinsics: " + bad);
   return std::make_unique<V4l2Source>(std::string(nodes.substr(0, comma)), std::string(nodes.substr(comma + 1)),
-                                      *options.intrinsics, options.fps);
+                                      *options.intrinsics, options.depth_sensor, options.fps);
 }
 
 }  // namespace cvo::drivers

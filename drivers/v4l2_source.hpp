@@ -12,7 +12,8 @@
 // dropped and counted in lost_frames(), as are frames the driver skipped (buffer sequence gaps).
 // Timestamps are the buffers' (monotonic) capture times moved onto the system clock. A frame the
 // driver marks corrupt, or one that does not convert, is kBadInput / kContent; a device that goes
-// away (ENODEV, poll errors) is kDisconnected.
+// away (ENODEV, poll errors) is kDisconnected, once the frames dequeued before it are paired (a
+// camera unplugged between DQBUF and QBUF leaves a whole frame).
 #include <memory>
 #include <string_view>
 

@@ -1,0 +1,78 @@
+#pragma once
+// What the cvo-virtual OpenNI2 driver (cvo_virtual_driver.cpp) and its users agree on: the device
+// URI and two properties of its own. Header-only, no OpenNI2 types, so that the driver plug-in and
+// drivers/openni2_source.cpp can both include it.
+//
+// URI: "cvo-virtual:DIR" plays the TUM folder DIR; options follow a '?', '&'-separated:
+//   unplug_after=N     the device disconnects after N frames (once)
+//   replug_after_s=S   ... and is connected again S seconds later (without it: never)
+// The whole URI, options included, is the device's OpenNI URI (at most 255 characters).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace cvo::drivers::virtual_device {
+
+inline constexpr std::string_view kScheme = "cvo-virtual:";
+
+/// Stream property (read only): the colour camera's intrinsics, which OpenNI's fields of view
+/// cannot carry (the principal point, the lens distortion). Its value is `StreamIntrinsics`. The
+/// depth stream answers it too: depth is registered to colour.
+inline constexpr int kIntrinsicsProperty = 0x43564F01;  // "CVO" 1, clear of OpenNI's and PS1080's ids
+struct StreamIntrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  double distortion[5] = {0, 0, 0, 0, 0};  // k1, k2, p1, p2, k3 as core::Intrinsics
+};
+
+/// Device property (int, 1 or 0): 1 (the default) plays at the recorded rate, as a camera would;
+/// 0 produces the next frame only when the application waits for one with none pending
+/// (OpenNI's "manual trigger", as a recording played at speed -1), so that a slow consumer loses
+/// no frame.
+inline constexpr int kPacedProperty = 0x43564F02;
+
+struct Uri {
+  std::string dir;
+  std::optional<std::uint64_t> unplug_after;
+  std::optional<double> replug_after_s;
+};
+
+/// Parses a "cvo-virtual:" URI; nullopt, with the reason in `error`, when it is not one or an
+/// option is unknown or malformed.
+inline std::optional<Uri> parse_uri(std::string_view uri, std::string* error) {
+  const auto fail = [&](const std::string& why) -> std::optional<Uri> {
+    if (error != nullptr) *error = why;
+    return std::nullopt;
+  };
+  if (!uri.starts_with(kScheme)) return fail("not a " + std::string(kScheme) + " URI");
+  uri.remove_prefix(kScheme.size());
+  Uri out;
+  const auto q = uri.find('?');
+  out.dir = std::string(uri.substr(0, q));
+  if (out.dir.empty()) return fail("no folder after " + std::string(kScheme));
+  std::string_view options = q == std::string_view::npos ? std::string_view{} : uri.substr(q + 1);
+  while (!options.empty()) {
+    const auto amp = options.find('&');
+    const auto option = options.substr(0, amp);
+    options = amp == std::string_view::npos ? std::string_view{} : options.substr(amp + 1);
+    const auto eq = option.find('=');
+    const std::string key(option.substr(0, eq)), value(eq == std::string_view::npos ? "" : option.substr(eq + 1));
+    std::size_t used = 0;
+    try {
+      if (key == "unplug_after") {
+        out.unplug_after = std::stoull(value, &used);
+      } else if (key == "replug_after_s") {
+        out.replug_after_s = std::stod(value, &used);
+        if (*out.replug_after_s < 0) used = 0;
+      } else {
+        return fail("unknown option '" + key + "' (known: unplug_after, replug_after_s)");
+      }
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size()) return fail("bad value '" + value + "' of " + key);
+  }
+  return out;
+}
+
+}  // namespace cvo::drivers::virtual_device
