@@ -2,7 +2,12 @@
 // loads it from the project's drivers repository: frames, intrinsics and timestamps as the TUM
 // folder has them; cvo-trackerd on it as on the folder; an .oni recorded with OpenNI's Recorder and
 // replayed; an unplug and a return.
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +16,8 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -24,6 +31,7 @@
 #include "tests/drivers/tum_copy.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
+#include "tests/support/slowdown.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace cvo::drivers {
@@ -68,14 +76,15 @@ struct TrackerdRun {
 };
 
 // cvo-trackerd on `spec` to its end, as fast as it tracks (every frame: --deterministic, unpaced).
-TrackerdRun run_trackerd(const fs::path& dir, const std::string& name, const std::string& spec) {
+TrackerdRun run_trackerd(const fs::path& dir, const std::string& name, const std::string& spec,
+                         const std::vector<std::pair<std::string, std::string>>& env = {}) {
   const auto out = dir / (name + ".lcmlog");
   const auto err = dir / (name + ".stderr");
   cvo::testing::DaemonProcess d(kTrackerd,
                                 {"--lcm-url", "file://" + out.string() + "?mode=w", "--set", "trackerd.realtime_priority=0",
                                  "--set", "trackerd.lock_memory=false", "--set", "trackerd.paced=false", "--source", spec,
                                  "--exit-on-eof", "--deterministic"},
-                                err);
+                                err, env);
   TrackerdRun run;
   const auto code = d.wait_for(300s);
   run.err = cvo::testing::slurp(err);
@@ -290,6 +299,82 @@ TEST(VirtualDevice, UnplugAndReturnIsAGapAndANewSession) {
   EXPECT_EQ(run.log.poses[20].status, +cvo_lcm::pose_t::STATUS_FIRST_FRAME);
   ASSERT_FALSE(run.log.statuses.empty());
   EXPECT_EQ(run.log.statuses.back().source_gaps, 1);
+}
+
+// systemd's notification socket, as the service manager holds it: every datagram with the time it
+// arrived, gathered by a thread while the daemon runs.
+class NotifySocket {
+ public:
+  explicit NotifySocket(const fs::path& path) : path_(path), fd_(::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0)) {
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::snprintf(address.sun_path, sizeof address.sun_path, "%s", path.c_str());
+    EXPECT_EQ(::bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    timeval tv{0, 50000};
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    reader_ = std::thread([this] {
+      char buffer[4096];
+      while (!stop_) {
+        const auto n = ::recv(fd_, buffer, sizeof buffer, 0);
+        if (n > 0) received_.emplace_back(std::chrono::steady_clock::now(), std::string(buffer, static_cast<std::size_t>(n)));
+      }
+    });
+  }
+  ~NotifySocket() {
+    stop_reading();
+    ::close(fd_);
+  }
+  NotifySocket(const NotifySocket&) = delete;
+  NotifySocket& operator=(const NotifySocket&) = delete;
+
+  /// Once the daemon has exited: the longest time between two WATCHDOG=1 pings, and their count.
+  std::pair<std::chrono::milliseconds, int> watchdog_pings() {
+    stop_reading();
+    std::optional<std::chrono::steady_clock::time_point> last;
+    std::chrono::milliseconds longest{0};
+    int count = 0;
+    for (const auto& [when, text] : received_) {
+      if (text.find("WATCHDOG=1") == std::string::npos) continue;
+      if (last) longest = std::max(longest, std::chrono::duration_cast<std::chrono::milliseconds>(when - *last));
+      last = when;
+      ++count;
+    }
+    return {longest, count};
+  }
+
+ private:
+  void stop_reading() {
+    stop_ = true;
+    if (reader_.joinable()) reader_.join();
+  }
+
+  fs::path path_;
+  int fd_;
+  std::atomic<bool> stop_{false};
+  std::vector<std::pair<std::chrono::steady_clock::time_point, std::string>> received_;
+  std::thread reader_;
+};
+
+// Under systemd the watchdog must go on being served while the camera is away (here 3 s, fifteen
+// watchdog periods): a daemon that stopped pinging would be killed, and restarted without need.
+TEST(VirtualDevice, TheWatchdogIsServedWhileTheCameraIsAway) {
+  cvo::test::TempDir dir;
+  const auto socket_path = dir.path() / "notify.sock";
+  std::pair<std::chrono::milliseconds, int> pings;
+  TrackerdRun run;
+  {
+    NotifySocket notify(socket_path);
+    run = run_trackerd(dir.path(), "watchdog",
+                       "openni2:cvo-virtual:" + kClip.string() + "?unplug_after=10&replug_after_s=3",
+                       {{"NOTIFY_SOCKET", socket_path.string()}, {"WATCHDOG_USEC", "200000"}});
+    pings = notify.watchdog_pings();  // the daemon has exited: nothing more arrives
+  }
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("source lost"), std::string::npos) << run.err;
+  EXPECT_EQ(run.log.poses.size(), 50u) << run.err;
+  EXPECT_GE(pings.second, 10) << "WATCHDOG=1 pings";
+  // Not a speed limit: a daemon that stopped pinging for the 3 s away would show a 3 s gap.
+  EXPECT_LT(pings.first, cvo::testing::scaled(std::chrono::milliseconds(1500))) << "longest time without a ping";
 }
 
 }  // namespace
