@@ -41,8 +41,6 @@ class DepthRegistration {
   /// CV_16UC1 of the colour camera's size ((re)allocated only when it is not).
   void apply(const cv::Mat& depth, cv::Mat& registered) const;
 
-  [[nodiscard]] const core::Intrinsics& colour() const { return colour_; }
-
  private:
   std::optional<Eigen::Vector3f> land(const float* ray, float z) const;
 
