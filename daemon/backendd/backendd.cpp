@@ -38,6 +38,9 @@ constexpr const char* kProcess = "cvo-backendd";
 // At a stop, messages already in the socket are taken in; a tracker that is still sending must
 // not keep the drain going for ever.
 constexpr int kMaxDrainMessages = 10000;
+// Records that may wait in the store for the back end (each queued as a few bytes): hours of a
+// tracker's keyframes; beyond it live input is refused and counted (queue_drops).
+constexpr std::int64_t kMaxWaitingInStore = 16384;
 
 std::string fixed(double value, int digits) {
   char text[64];
@@ -213,7 +216,7 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     door_.admit(*key, crc);
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key->session, key->id, Clock::now());  // a gap in the store is asked for too
-    queue_.push({std::move(record), std::nullopt});
+    queue_.push({std::move(record), std::nullopt, std::nullopt});
   }
 }
 
@@ -291,24 +294,37 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       gaps_.seen(KeyframeGaps::Seen::kGraphWithoutKeyframe, key->session, key->id, Clock::now());
       return refuse(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME, "skipped " + describe(*key) + ": its keyframe never came");
     }
-    // Room first (a log waits for it): a record refused here is neither stored nor let in, so its
-    // re-send is new.
-    const bool room = is_log(config_.backendd.lcm_url) ? queue_.wait_for_room([&] { return stop_.load(); })
-                                                       : queue_.has_room();
-    if (!room) {
+    // Room first (a log waits for it). Live input that finds the queue full waits in the store
+    // (only its place is queued), unless the store cannot take it now or too many wait there
+    // already. A record refused here is neither stored nor let in, so its re-send is new.
+    const bool log = is_log(config_.backendd.lcm_url);
+    const bool room = log ? queue_.wait_for_room([&] { return stop_.load(); }) : queue_.has_room();
+    const bool to_store = !room && !log && !store_->health().failing && waiting_in_store_ < kMaxWaitingInStore;
+    if (!room && !to_store) {
       ++queue_drops_;
-      return note_limited("queue full", describe(*key) + " refused: " + std::to_string(queue_.capacity()) +
+      return note_limited("queue full", describe(*key) + " refused: " + std::to_string(queue_.size()) +
                                             " records wait for the back end already");
     }
-    QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now()};
+    QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now(), std::nullopt};
     // Used in any case; what the store cannot write now it holds and writes later, within a bound.
-    if (store_->append(queued.record.kind, queued.record.payload) == Appended::kNotDurable)
+    RecordRef where;
+    const auto appended = store_->append(queued.record.kind, queued.record.payload, &where);
+    if (appended == Appended::kNotDurable)
       note_limited("not stored", "warning: " + describe(*key) + " used but not stored (lost on restart): " +
                                      describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
     door_.admit(*key, crc);
     gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key->session, key->id, Clock::now());
+    // Had the store failed just now, the record is queued whole, past the bound by this one.
+    if (to_store && appended == Appended::kStored) {
+      queued.in_store = where;
+      queued.record.payload = {};
+      ++waiting_in_store_;
+      ++waited_in_store_;
+      note_limited("waiting in the store", describe(*key) + " waits in the store: " + std::to_string(queue_.size()) +
+                                               " records wait for the back end already");
+    }
     queue_.push(std::move(queued));
   } catch (const std::exception& e) {  // out of memory, most likely: this message is lost, not the daemon
     note_limited("receive failure", "skipped " + channel + ": " + e.what());
@@ -402,7 +418,7 @@ void Backendd::work_loop() {
   while (true) {
     work_heartbeat_ns_ = core::steady_now_ns();
     const bool receiver_done = receiver_done_;  // read first: it pushes nothing after setting it
-    const auto queued = queue_.pop(50ms);
+    auto queued = queue_.pop(50ms);
     if (queued) process(*queued);
     else if (receiver_done && queue_.size() == 0) break;
     if (Clock::now() - work_->last_status >= status_period)
@@ -414,8 +430,15 @@ void Backendd::work_loop() {
 
 // One record into the mapper. What it cannot apply changed nothing (slam::Mapper's promise): it is
 // noted and the daemon goes on with the next.
-void Backendd::process(const QueuedRecord& queued) {
+void Backendd::process(QueuedRecord& queued) {
   try {
+    if (queued.in_store) {
+      --waiting_in_store_;
+      std::string error;
+      auto record = store_->read(*queued.in_store, &error);
+      if (!record) return note_limited("unreadable", "a record that waited in the store is lost: " + error);
+      queued.record = std::move(*record);
+    }
     if (queued.record.kind == RecordKind::kKeyframe) apply_keyframe(queued);
     else apply_local_graph(queued.record);
   } catch (const slam::MapperError& e) {
@@ -514,6 +537,9 @@ void Backendd::finish() {
        std::to_string(w.mapper.loops_accepted()) + " loops accepted of " + std::to_string(w.mapper.loops_tried()) +
        " tried");
   for (const auto& join : w.joins) note(join);
+  if (const auto waited = waited_in_store_.load(); waited > 0)
+    note(std::to_string(waited) + " records waited in the store while the back end was behind (backendd.queue_max " +
+         std::to_string(queue_.capacity()) + ")");
   publish_status(cvo_lcm::status_t::STATE_STOPPING);
 }
 

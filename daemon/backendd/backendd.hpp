@@ -5,9 +5,10 @@
 //   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded and checked -> the door (each
 //                 keyframe (session, id) and local graph once; a repeat with other content is
 //                 refused, message_door.hpp) -> appended to the keyframe store (durable before
-//                 anything else happens) -> work queue; what never came of a session (a gap in its
-//                 keyframe ids, a local graph or CVO_POSE naming an unknown keyframe) is asked for
-//                 again on CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
+//                 anything else happens) -> work queue (when it is full, only where the record
+//                 lies in the store is queued, and it is read back in its turn); what never came
+//                 of a session (a gap in its keyframe ids, a local graph or CVO_POSE naming an
+//                 unknown keyframe) is asked for again on CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
 //   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
 //                 keyframe-graph optimisation) -> CVO_MAP after each change; CVO_STATUS once a
 //                 period
@@ -62,8 +63,9 @@ class Backendd {
  private:
   struct Work;
   struct QueuedRecord {
-    StoredRecord record;
+    StoredRecord record;  // its payload empty while it waits in the store (`in_store`)
     std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
+    std::optional<RecordRef> in_store;  // the queue was full: read back from the store when its turn comes
   };
 
   void let_in_recovered(std::vector<StoredRecord> recovered);
@@ -75,7 +77,7 @@ class Backendd {
   void note_store_change();
   void retry_store(bool final);
   void work_loop();
-  void process(const QueuedRecord& queued);
+  void process(QueuedRecord& queued);
   void apply_keyframe(const QueuedRecord& queued);
   void apply_local_graph(const StoredRecord& record);
   void publish_map(const std::vector<std::int64_t>& joined);
@@ -102,6 +104,9 @@ class Backendd {
   std::atomic<bool> stop_{false}, receiver_done_{false};
   std::atomic<bool> input_ended_{false};  // a file:// input log was read to its end
   std::atomic<std::int64_t> queue_drops_{0};
+  // Records that found the queue full and wait in the store instead (queued by reference), now
+  // and in all: a back end slower than its trackers loses nothing and holds no more in memory.
+  std::atomic<std::int64_t> waiting_in_store_{0}, waited_in_store_{0};
   std::atomic<std::int64_t> bad_messages_[cvo_lcm::status_t::NUM_BAD_KINDS]{};
   // Keyframes lost in transport (gaps_'s counts, for CVO_STATUS): asked for, recovered, given up.
   std::atomic<std::int64_t> keyframes_requested_{0}, keyframes_recovered_{0}, keyframes_lost_{0};

@@ -404,15 +404,44 @@ int KeyframeStore::write_at_end(const std::uint8_t* data, std::size_t size) {
   return error;
 }
 
-Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>& payload) {
+Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>& payload, RecordRef* where) {
   auto record = encode_record(kind, payload);
+  const std::size_t bytes = record.size();
   const std::lock_guard lock(mutex_);
   held_.push_back(std::move(record));  // behind every record held before it: the order is kept
-  if (write_held()) return Appended::kStored;
+  if (write_held()) {
+    if (where != nullptr) *where = {end_ - static_cast<off_t>(bytes), bytes};  // written last
+    return Appended::kStored;
+  }
   if (held_.size() <= held_max_) return Appended::kHeld;
   held_.pop_back();
   ++health_.not_durable;
   return Appended::kNotDurable;
+}
+
+std::optional<StoredRecord> KeyframeStore::read(const RecordRef& where, std::string* error) const {
+  const auto fail = [&](const std::string& why) -> std::optional<StoredRecord> {
+    if (error != nullptr) *error = "record at byte " + std::to_string(where.offset) + " of " + file_.string() + ": " + why;
+    return std::nullopt;
+  };
+  {
+    const std::lock_guard lock(mutex_);
+    if (where.offset < static_cast<off_t>(kFileMagic.size()) || where.bytes < kHeaderBytes ||
+        where.offset + static_cast<off_t>(where.bytes) > end_)
+      return fail("not within the records written");
+  }
+  std::vector<std::uint8_t> bytes(where.bytes);
+  for (std::size_t done = 0; done < bytes.size();) {  // records below end_ are never written again
+    const ssize_t n = ::pread(fd_, bytes.data() + done, bytes.size() - done, where.offset + static_cast<off_t>(done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return fail(std::strerror(errno));
+    if (n == 0) return fail("the file ends before it");
+    done += static_cast<std::size_t>(n);
+  }
+  const auto check = check_record(bytes.data(), bytes.size(), 0);
+  if (!check.why.empty()) return fail(check.why);
+  if (check.total != bytes.size()) return fail("its length is not the one written");
+  return StoredRecord{static_cast<RecordKind>(bytes[4]), {bytes.begin() + kHeaderBytes, bytes.end()}};
 }
 
 bool KeyframeStore::retry() {

@@ -30,6 +30,7 @@
 #include <deque>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,13 @@ std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t
 struct StoredRecord {
   RecordKind kind;
   std::vector<std::uint8_t> payload;
+};
+
+/// Where a record lies in the store file: the start of its header and its whole size. Lets a
+/// reader that is behind take a record back from disk instead of holding it in memory.
+struct RecordRef {
+  off_t offset = 0;
+  std::size_t bytes = 0;  // header and payload
 };
 
 /// What became of an appended record.
@@ -82,8 +90,12 @@ class KeyframeStore {
   KeyframeStore& operator=(const KeyframeStore&) = delete;
 
   /// Writes the held records, then this one, durably; never throws for a write error (only
-  /// std::bad_alloc): the record is held, or counted as not durable (see Appended).
-  Appended append(RecordKind kind, const std::vector<std::uint8_t>& payload);
+  /// std::bad_alloc): the record is held, or counted as not durable (see Appended). When it is
+  /// stored and `where` is given, `*where` says where (for read()).
+  Appended append(RecordKind kind, const std::vector<std::uint8_t>& payload, RecordRef* where = nullptr);
+  /// The record append() stored at `where`, read back from disk and checked as at recovery
+  /// (magic, kind, length, checksum); nullopt with `*error` saying why when it cannot be.
+  std::optional<StoredRecord> read(const RecordRef& where, std::string* error) const;
   /// Writes the held records, oldest first, as far as the store allows; true when none is left.
   bool retry();
   [[nodiscard]] StoreHealth health() const;

@@ -1,9 +1,10 @@
 #pragma once
 // The records cvo-receive hands to cvo-backend, bounded: the back end's memory must not grow with
-// a tracker (or an attacker) that outruns it. Live input that finds the queue full is refused by
-// the caller and counted (a keyframe lost that way is a gap the tracker is asked to fill); a log
-// can wait for room instead (push_waiting), since nothing is lost by reading it slower. What a
-// restart replays from the store is on disk and in memory already: it enters unbounded.
+// a tracker (or an attacker) that outruns it. Live input that finds the queue full is queued by
+// the caller as a reference to where it lies in the store (a few bytes; read back in its turn),
+// so a back end slower than its trackers loses nothing; a log can wait for room instead
+// (wait_for_room), since nothing is lost by reading it slower. What a restart replays from the
+// store is on disk and in memory already: it enters unbounded.
 // One producer and one consumer; either may wait.
 #include <chrono>
 #include <condition_variable>

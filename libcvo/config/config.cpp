@@ -165,8 +165,8 @@ const std::vector<Field>& table() {
       row("backendd.exit_on_eof", &Config::backendd, &BackenddParameters::exit_on_eof, kAny,
           "exit 0 when a file:// lcm_url ends, after the final optimisation and the final map"),
       row("backendd.queue_max", &Config::backendd, &BackenddParameters::queue_max, kAtLeastOne,
-          "received records waiting for the back end; beyond it a live message is refused and counted "
-          "(asked for again as a gap), a log waits"),
+          "received records waiting for the back end in memory; beyond it a live message waits in the store, "
+          "a log waits"),
       row("backendd.unsaved_records_max", &Config::backendd, &BackenddParameters::unsaved_records_max, kNonNegative,
           "records held in memory while the store cannot be written (disk full), saved in order when it can; "
           "beyond it a record is used but lost on restart"),

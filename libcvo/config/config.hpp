@@ -55,7 +55,7 @@ struct BackenddParameters {
   double status_period_s = 1.0;
   std::string publish_url = "lcm_url";  // where CVO_MAP and CVO_STATUS go; "lcm_url": the same provider
   bool exit_on_eof = false;      // a file:// lcm_url that ends: final optimisation, final map, exit 0
-  std::size_t queue_max = 64;    // records waiting for the back end's thread; more are refused and counted
+  std::size_t queue_max = 64;    // records waiting for the back end's thread in memory; more wait in the store
   // Accepted records held in memory while the keyframe store cannot be written (disk full, file
   // size limit), written in order when it works again; beyond this they are used but not stored.
   // A 640x480 keyframe with JPEG colour is about 300 kB.

@@ -77,18 +77,20 @@ class BackenddNetns : public ::testing::Test {
     return names;
   }
 
-  // Publishes messages as a tracker would; 10 Hz, so that nothing overflows a socket.
-  static void send(Iterator begin, Iterator end) {
+  // Publishes messages as a tracker would; 10 Hz by default, so that nothing overflows a socket.
+  static void send(Iterator begin, Iterator end, std::chrono::milliseconds pause = 100ms) {
     ::lcm::LCM lcm(kUrl);
     for (auto it = begin; it != end; ++it) {
       lcm.publish(it->channel, it->bytes.data(), static_cast<unsigned int>(it->bytes.size()));
-      std::this_thread::sleep_for(100ms);
+      std::this_thread::sleep_for(pause);
     }
   }
 
-  // Starts cvo-backendd and waits for its first CVO_STATUS: from then on it receives.
-  static std::unique_ptr<DaemonProcess> start(LcmCapture& capture, const fs::path& store, const fs::path& stderr_file) {
-    auto backendd = cvo::testing::start_backendd(store, stderr_file);
+  // Starts cvo-backendd (with `settings`, each a --set) and waits for its first CVO_STATUS: from
+  // then on it receives.
+  static std::unique_ptr<DaemonProcess> start(LcmCapture& capture, const fs::path& store, const fs::path& stderr_file,
+                                              const std::vector<std::string>& settings = {}) {
+    auto backendd = cvo::testing::start_backendd(store, stderr_file, settings);
     const int pid = backendd->pid();
     EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(pid); }, 60s))
         << "no CVO_STATUS from cvo-backendd\n" << cvo::testing::slurp(stderr_file);
@@ -209,6 +211,36 @@ TEST_F(BackenddNetns, AKeyframeRepeatedWithOtherContentIsRefusedAndCounted) {
   const Captured captured = capture.snapshot();
   ASSERT_TRUE(captured.map);
   EXPECT_EQ(captured.map->keyframes.size(), keyframes_in(messages_.begin(), messages_.end()).size());
+}
+
+// A back end slower than its tracker: room for one record in its queue, the messages ten times
+// faster than it applies them, and no tracker left to ask again (it exited after its last frame,
+// as one with --exit-on-eof does). What finds the queue full waits in the store and is applied
+// after the rest: the final map holds every keyframe and local graph, nothing refused or lost.
+TEST_F(BackenddNetns, ABackEndSlowerThanItsTrackerLosesNoKeyframe) {
+  cvo::test::TempDir dir;
+  LcmCapture capture(dir.path() / "maps.lcmlog");
+  ASSERT_TRUE(capture.good());
+  const auto err = dir.path() / "backendd.txt";
+  auto backendd = start(capture, dir.path() / "keyframes.store", err, {"backendd.queue_max=1"});
+  send(messages_.begin(), messages_.end(), 10ms);
+  stop(*backendd, capture, err);
+  const auto log = cvo::testing::slurp(err);
+
+  const Captured captured = capture.snapshot();
+  ASSERT_TRUE(captured.map) << log;
+  const auto all = keyframes_in(messages_.begin(), messages_.end());
+  EXPECT_TRUE(captured.map_holds(all)) << log;
+  EXPECT_EQ(captured.map->keyframes.size(), all.size()) << log;
+  std::smatch graphs;
+  ASSERT_TRUE(std::regex_search(log, graphs, std::regex("; (\\d+) local graphs;"))) << log;
+  EXPECT_EQ(std::stoul(graphs[1]), all.size()) << log;
+  ASSERT_FALSE(captured.backend_statuses.empty());
+  const auto& status = captured.backend_statuses.back();
+  EXPECT_EQ(status.queue_drops, 0) << log;
+  EXPECT_EQ(status.keyframes_lost, 0) << log;
+  // It did have to wait: the queue was full for most of the burst.
+  EXPECT_NE(log.find("waited in the store"), std::string::npos) << log;
 }
 
 // cvo-trackerd --deterministic and cvo-run track the same frames with the same KF-CVO; the daemon's

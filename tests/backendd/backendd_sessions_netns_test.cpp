@@ -185,7 +185,10 @@ class BackenddSessions : public ::testing::Test {
     int across = 0;
     for (const auto& l : last.loops) across += l.from_session != l.to_session;
     EXPECT_GT(across, 0) << two.backend_log;
-    EXPECT_TRUE(two.captured.map_holds(two.captured.keyframes)) << "a keyframe the trackers sent is not in the map";
+    std::string missing;
+    for (const auto& k : two.captured.keyframes)
+      if (!two.captured.map_holds({k})) missing += " " + std::to_string(k.second) + " of " + slam::session_name(k.first);
+    EXPECT_TRUE(missing.empty()) << "keyframes the trackers sent are not in the map:" << missing << "\n" << two.backend_log;
     for (const auto session : two.sessions) EXPECT_FALSE(two.captured.keyframes_of(session).empty());
 
     std::smatch join;

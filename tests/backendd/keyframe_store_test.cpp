@@ -3,7 +3,7 @@
 // aside and a clean store written in its place; a last record cut short costs only itself;
 // writes that fail (EFBIG under a file-size limit, as a full disk) lose nothing: records are held
 // in order, within a bound that is counted, and written once writing works again; a foreign file
-// is refused.
+// is refused. A stored record reads back from where append() says it is.
 #include <signal.h>
 #include <sys/resource.h>
 
@@ -115,6 +115,41 @@ TEST(KeyframeStore, RecordsSurviveAReopenInOrder) {
   const auto records = reopen(file, warning);
   EXPECT_TRUE(warning.empty()) << warning;
   expect_all_but(records, written, {});
+}
+
+// What append() stored can be read back where it says, while the store is open (how the back end
+// takes a record that waited in the store); a place that holds no record it wrote, or a record
+// damaged since, is refused with a reason.
+TEST(KeyframeStore, AStoredRecordIsReadBackWhereAppendSaysItIs) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  std::vector<StoredRecord> none;
+  std::string warning;
+  KeyframeStore store(file, none, warning);
+  RecordRef first, second;
+  ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(40, 1), &first), Appended::kStored);
+  ASSERT_EQ(store.append(RecordKind::kLocalGraph, payload(7, 2), &second), Appended::kStored);
+  EXPECT_EQ(second.offset, first.offset + static_cast<off_t>(first.bytes));
+
+  std::string error;
+  const auto a = store.read(first, &error), b = store.read(second, &error);
+  ASSERT_TRUE(a && b) << error;
+  EXPECT_EQ(a->kind, RecordKind::kKeyframe);
+  EXPECT_EQ(a->payload, payload(40, 1));
+  EXPECT_EQ(b->kind, RecordKind::kLocalGraph);
+  EXPECT_EQ(b->payload, payload(7, 2));
+
+  EXPECT_FALSE(store.read({second.offset + 1, second.bytes}, &error));
+  EXPECT_NE(error.find("not within the records written"), std::string::npos) << error;
+  EXPECT_FALSE(store.read({first.offset + 1, first.bytes}, &error));
+  EXPECT_NE(error.find("bad record magic"), std::string::npos) << error;
+
+  auto bytes = bytes_of(file);  // one payload byte of the first record flipped on disk
+  bytes[static_cast<std::size_t>(first.offset) + 20] ^= 0x10;
+  std::fstream(file, std::ios::binary | std::ios::in | std::ios::out).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  EXPECT_FALSE(store.read(first, &error));
+  EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << error;
+  EXPECT_TRUE(store.read(second, &error)) << error;
 }
 
 // Each field of the third record of twenty damaged in turn (one bit or byte): the 19 others are

@@ -137,8 +137,10 @@ class LcmCapture {
 };
 
 inline std::unique_ptr<DaemonProcess> start_backendd(const std::filesystem::path& store,
-                                                     const std::filesystem::path& stderr_file) {
-  const std::vector<std::string> args{"--lcm-url", kUrl, "--store", store.string()};
+                                                     const std::filesystem::path& stderr_file,
+                                                     const std::vector<std::string>& settings = {}) {
+  std::vector<std::string> args{"--lcm-url", kUrl, "--store", store.string()};
+  for (const auto& s : settings) args.insert(args.end(), {"--set", s});
   return std::make_unique<DaemonProcess>(std::filesystem::path(CVO_TOOLS_DIR) / "cvo-backendd", args, stderr_file);
 }
 
