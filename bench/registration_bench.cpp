@@ -69,7 +69,8 @@ void BM_PointSelection(benchmark::State& state) {
 BENCHMARK(BM_PointSelection)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Args: {isa: 0 scalar / 1 SIMD, threads, reading: 0 = σ, σ_c as standard deviations (default),
-//        1 = as variances (σ = sqrt(0.1), the looser reading compared in core/parameters.hpp)}
+//        1 = as variances (σ = sqrt(0.1), the looser reading compared in core/parameters.hpp),
+//        candidate pairs per point (registration.hpp; 0: every iteration searches the cells)}
 void BM_Align(benchmark::State& state) {
   const auto& d = data();
   // 1: the SIMD kernel this machine has (AVX2+FMA or NEON).
@@ -81,7 +82,7 @@ void BM_Align(benchmark::State& state) {
   core::CvoParameters parameters;
   parameters.threads = static_cast<int>(state.range(1));
   if (state.range(2) == 1) parameters.sigma = std::sqrt(0.1);
-  registration::Registration reg(registration::Capacities{8192}, parameters, isa);
+  registration::Registration reg(registration::Capacities{8192, static_cast<std::size_t>(state.range(3))}, parameters, isa);
   std::size_t i = 0;
   double iterations = 0, pairs = 0;
   for (auto _ : state) {
@@ -97,13 +98,15 @@ void BM_Align(benchmark::State& state) {
   state.counters["pairs_per_iteration"] = benchmark::Counter(pairs / std::max(iterations, 1.0));
   state.counters["pairs_per_s"] = benchmark::Counter(pairs, benchmark::Counter::kIsRate);
   state.SetLabel(std::string(registration::kernel::to_string(isa)) + ", " + std::to_string(parameters.threads) +
-                 " thread(s)" + (state.range(2) == 1 ? ", variance reading" : ""));
+                 " thread(s)" + (state.range(2) == 1 ? ", variance reading" : "") +
+                 (state.range(3) == 0 ? ", no candidate pairs" : ""));
 }
 BENCHMARK(BM_Align)
-    ->Args({0, 1, 0})
-    ->Args({1, 1, 0})
-    ->Args({1, 2, 0})
-    ->Args({1, 1, 1})
+    ->Args({0, 1, 0, 32})
+    ->Args({1, 1, 0, 0})
+    ->Args({1, 1, 0, 32})
+    ->Args({1, 2, 0, 32})
+    ->Args({1, 1, 1, 32})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -1,8 +1,10 @@
 #include "libcvo/posegraph/cholmod_handles.hpp"
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
 #include <mutex>
+#include <stdexcept>
 
 #include "libcvo/posegraph/optimizer.hpp"
 
@@ -39,6 +41,32 @@ CholmodCommon::CholmodCommon() {
   cholmod_l_start(&common_);
   common_.print = 0;  // CHOLMOD prints nothing itself ...
   common_.error_handler = log_cholmod_error;  // ... real errors are logged here
+}
+
+bool Cholmod::factorize() {
+  cholmod_common* cc = common.get();
+  factorized = cholmod_l_factorize(matrix.get(), factor.get(), cc) != 0 && cc->status != CHOLMOD_NOT_POSDEF;
+  return factorized;
+}
+
+const double* Cholmod::solve(const double* b) {
+  cholmod_common* cc = common.get();
+  const std::size_t n = matrix->nrow;
+  if (!rhs || rhs->nrow != n) {
+    rhs = wrap(cholmod_l_allocate_dense(n, 1, n, CHOLMOD_REAL, cc));
+    if (!rhs) throw std::runtime_error("pose graph: CHOLMOD could not allocate the right-hand side");
+  }
+  std::copy(b, b + n, static_cast<double*>(rhs->x));
+  // solve2 reuses (or resizes) solution, Y and E instead of allocating them on every call.
+  cholmod_dense* x = solution.release();
+  cholmod_dense* y = solve_y.release();
+  cholmod_dense* e = solve_e.release();
+  const int ok = cholmod_l_solve2(CHOLMOD_A, factor.get(), rhs.get(), nullptr, &x, nullptr, &y, &e, cc);
+  solution = wrap(x);
+  solve_y = wrap(y);
+  solve_e = wrap(e);
+  if (!ok || !solution) throw std::runtime_error("pose graph: CHOLMOD solve failed");
+  return static_cast<const double*>(solution->x);
 }
 
 }  // namespace detail

@@ -47,13 +47,32 @@ using SparsePtr = std::unique_ptr<cholmod_sparse, SparseDeleter>;
 using FactorPtr = std::unique_ptr<cholmod_factor, FactorDeleter>;
 using DensePtr = std::unique_ptr<cholmod_dense, DenseDeleter>;
 
-/// A common with the matrix and symbolic factor that belong to it.
+/// A common with the matrix, its factor and the dense workspaces of its solves, all belonging to
+/// it. The workspaces (right-hand side, solution, and cholmod_l_solve2's Y and E) are kept between
+/// solves, so a solve allocates nothing once their size is set.
 struct Cholmod {
   CholmodCommon common;
   SparsePtr matrix{nullptr, SparseDeleter{common.get()}};
   FactorPtr factor{nullptr, FactorDeleter{common.get()}};
+  DensePtr rhs{nullptr, DenseDeleter{common.get()}};
+  DensePtr solution{nullptr, DenseDeleter{common.get()}};
+  DensePtr solve_y{nullptr, DenseDeleter{common.get()}};
+  DensePtr solve_e{nullptr, DenseDeleter{common.get()}};
+  double factor_flops = 0;     // of one numeric factorisation, from the symbolic analysis
+  double factor_nonzeros = 0;  // nnz(L), likewise
+  bool factorized = false;     // factor holds the numeric factorisation of a positive definite matrix
 
   DensePtr wrap(cholmod_dense* p) { return DensePtr(p, DenseDeleter{common.get()}); }
+  SparsePtr wrap(cholmod_sparse* p) { return SparsePtr(p, SparseDeleter{common.get()}); }
+  FactorPtr wrap(cholmod_factor* p) { return FactorPtr(p, FactorDeleter{common.get()}); }
+
+  /// Numeric factorisation of matrix into factor (whose symbolic analysis it must hold); false
+  /// when the matrix is not positive definite. Sets `factorized` to the result.
+  bool factorize();
+  /// x = A^-1 b with the factor of the last successful factorize(); b and the result have
+  /// matrix->nrow entries. The result points into `solution`, valid until the next solve. Throws
+  /// std::runtime_error when CHOLMOD fails (out of memory).
+  const double* solve(const double* b);
 };
 
 }  // namespace cvo::posegraph::detail

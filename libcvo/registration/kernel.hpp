@@ -60,11 +60,29 @@ PointSums point_neon(const FixedCloudView& fixed, const Range* ranges, int range
                      const float feature[kFeatureDim], const Constants& k);
 #endif
 
+/// Candidate pairs (registration.hpp): the fixed points of `ranges` within sqrt(reach_sq) of w
+/// whose colour term c = |Δf|² / 2ℓ_c² alone leaves the threshold reachable (log_amplitude - c ≥
+/// log_threshold), in range order: their indices into `index`, their colour terms into `colour`.
+/// Returns how many, or capacity + 1 as soon as there are more than `capacity`.
+using CollectFunction = std::size_t (*)(const FixedCloudView& fixed, const Range* ranges, int range_count,
+                                        const float w[3], const float feature[kFeatureDim], const Constants& k,
+                                        float reach_sq, std::uint32_t* index, float* colour, std::size_t capacity);
+
+std::size_t collect_scalar(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                           const float feature[kFeatureDim], const Constants& k, float reach_sq, std::uint32_t* index,
+                           float* colour, std::size_t capacity);
+#if defined(CVO_HAVE_AVX2)
+std::size_t collect_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                         const float feature[kFeatureDim], const Constants& k, float reach_sq, std::uint32_t* index,
+                         float* colour, std::size_t capacity);
+#endif
+
 enum class Isa { kScalar, kAvx2, kNeon };
 /// The best kernel this CPU runs (AVX2+FMA when built in and supported; NEON on AArch64, where it
 /// is always present), or the requested one.
 Isa best_isa();
 PointFunction point_function(Isa isa);
+CollectFunction collect_function(Isa isa);  // NEON: the scalar one (collection is rare)
 const char* to_string(Isa isa);
 
 }  // namespace cvo::registration::kernel

@@ -75,4 +75,48 @@ PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range
   return {horizontal_sum(sa), horizontal_sum(sx), horizontal_sum(sy), horizontal_sum(sz), pairs};
 }
 
+std::size_t collect_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                         const float feature[kFeatureDim], const Constants& k, float reach_sq, std::uint32_t* index,
+                         float* colour, std::size_t capacity) {
+  const __m256 wx = _mm256_set1_ps(w[0]), wy = _mm256_set1_ps(w[1]), wz = _mm256_set1_ps(w[2]);
+  __m256 fz[kFeatureDim];
+  for (std::size_t c = 0; c < kFeatureDim; ++c) fz[c] = _mm256_set1_ps(feature[c]);
+  const __m256 inv_c = _mm256_set1_ps(k.inv_two_ell_color_sq), reach = _mm256_set1_ps(reach_sq);
+  const __m256 max_colour = _mm256_set1_ps(k.log_amplitude - k.log_threshold);
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  std::size_t count = 0;
+  alignas(32) float terms[8];
+  for (int r = 0; r < range_count; ++r) {
+    for (std::uint32_t i = ranges[r].begin; i < ranges[r].end; i += 8) {
+      const auto remaining = static_cast<int>(ranges[r].end - i);
+      const __m256i load_mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(remaining), lane);
+      const __m256 dx = _mm256_sub_ps(_mm256_maskload_ps(fixed.x + i, load_mask), wx);
+      const __m256 dy = _mm256_sub_ps(_mm256_maskload_ps(fixed.y + i, load_mask), wy);
+      const __m256 dz = _mm256_sub_ps(_mm256_maskload_ps(fixed.z + i, load_mask), wz);
+      __m256 r2 = _mm256_mul_ps(dx, dx);
+      r2 = _mm256_fmadd_ps(dy, dy, r2);
+      r2 = _mm256_fmadd_ps(dz, dz, r2);
+      const __m256 near = _mm256_and_ps(_mm256_cmp_ps(r2, reach, _CMP_LE_OQ), _mm256_castsi256_ps(load_mask));
+      if (_mm256_movemask_ps(near) == 0) continue;
+      __m256 c2 = _mm256_setzero_ps();
+      for (std::size_t c = 0; c < kFeatureDim; ++c) {
+        const __m256 d = _mm256_sub_ps(_mm256_maskload_ps(fixed.f[c] + i, load_mask), fz[c]);
+        c2 = _mm256_fmadd_ps(d, d, c2);
+      }
+      const __m256 term = _mm256_mul_ps(c2, inv_c);
+      auto bits = static_cast<unsigned>(
+          _mm256_movemask_ps(_mm256_and_ps(near, _mm256_cmp_ps(term, max_colour, _CMP_LE_OQ))));
+      if (bits == 0) continue;
+      _mm256_store_ps(terms, term);
+      for (; bits != 0; bits &= bits - 1) {  // the lanes kept, in order
+        if (count == capacity) return capacity + 1;
+        const auto lane_index = static_cast<unsigned>(__builtin_ctz(bits));
+        index[count] = i + lane_index;
+        colour[count++] = terms[lane_index];
+      }
+    }
+  }
+  return count;
+}
+
 }  // namespace cvo::registration::kernel

@@ -23,6 +23,14 @@ PointFunction point_function(Isa isa) {
   return &point_scalar;
 }
 
+CollectFunction collect_function(Isa isa) {
+#if defined(CVO_HAVE_AVX2)
+  if (isa == Isa::kAvx2 && best_isa() == Isa::kAvx2) return &collect_avx2;
+#endif
+  (void)isa;
+  return &collect_scalar;
+}
+
 const char* to_string(Isa isa) {
   switch (isa) {
     case Isa::kAvx2: return "avx2";

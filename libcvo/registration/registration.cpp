@@ -12,6 +12,10 @@ constexpr std::size_t kMinPairs = 12;      // fewer contributing pairs cannot co
 constexpr std::size_t kMinPoints = 3;
 constexpr double kMaxRotationStep = 0.2;   // rad per iteration: a trust region against wild first steps
 constexpr double kShrinkFraction = 0.01;   // shrink ℓ once the step is below this fraction of ℓ
+// Candidate pairs: the slack s as a fraction of r_max. Wider cells cost each collection more;
+// a narrower slack makes points collect again sooner (the first step at each ℓ moves most).
+constexpr double kSlackFraction = 0.25;
+constexpr std::uint16_t kUncollected = 0xFFFF, kTooMany = 0xFFFE;
 
 std::size_t next_power_of_two(std::size_t v) {
   std::size_t p = 1;
@@ -80,6 +84,7 @@ void Registration::Sums::add(const Sums& o) {
   bt += o.bt;
   br += o.br;
   pairs += o.pairs;
+  collections += o.collections;
 }
 
 core::Matrix6d Registration::Sums::hessian() const {
@@ -92,10 +97,13 @@ core::Matrix6d Registration::Sums::hessian() const {
 }
 
 Registration::Registration(const Capacities& capacities, const core::CvoParameters& parameters, kernel::Isa isa)
-    : parameters_(parameters), isa_(isa), point_(kernel::point_function(isa)), capacity_(capacities.max_points),
+    : parameters_(parameters), isa_(isa), point_(kernel::point_function(isa)), collect_(kernel::collect_function(isa)), capacity_(capacities.max_points),
       bucket_mask_(next_power_of_two(std::max<std::size_t>(1024, 2 * capacities.max_points)) - 1),
       slot_key_(bucket_mask_ + 1), bucket_start_(bucket_mask_ + 2), bucket_of_(capacities.max_points), sx_(capacities.max_points),
       sy_(capacities.max_points), sz_(capacities.max_points),
+      slots_(std::min<std::size_t>(capacities.candidates_per_point, kTooMany - 1)),
+      candidate_fixed_(capacities.max_points * slots_), candidate_colour_(capacities.max_points * slots_),
+      candidate_count_(capacities.max_points, kUncollected), collected_at_(4 * capacities.max_points),
       chunk_sums_((capacities.max_points + kChunk - 1) / kChunk + 1),
       pairs_log_(static_cast<std::size_t>(std::max(parameters.max_iterations, 0)) + 1) {
   for (auto& channel : sf_) channel.resize(capacities.max_points);
@@ -114,16 +122,29 @@ RegistrationStatus Registration::check(const PointCloud& fixed, const PointCloud
                                                                   : RegistrationStatus::kOk;
 }
 
-bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell) {
+// The kernel constants at length-scale ℓ, r_max, and the slack s = slack_fraction r_max.
+bool Registration::set_length_scale(double ell, double slack_fraction) {
   const double amplitude = kernel_amplitude(parameters_);
   const double log_ratio = std::log(amplitude / parameters_.sparsification_threshold);
   if (!(log_ratio > 0)) return false;
-  cell_ = ell * std::sqrt(2.0 * log_ratio);  // r_max: no pair farther apart can reach the threshold
-  inv_cell_ = 1.0 / cell_;
+  r_max_ = static_cast<float>(ell * std::sqrt(2.0 * log_ratio));  // no pair farther apart can reach the threshold
+  slack_ = static_cast<float>(slack_fraction) * r_max_;
+  reach_sq_ = (r_max_ + slack_) * (r_max_ + slack_);
   constants_.inv_two_ell_sq = static_cast<float>(1.0 / (2.0 * ell * ell));
   constants_.inv_two_ell_color_sq = static_cast<float>(1.0 / (2.0 * parameters_.ell_color * parameters_.ell_color));
   constants_.log_amplitude = static_cast<float>(std::log(amplitude));
   constants_.log_threshold = static_cast<float>(std::log(parameters_.sparsification_threshold));
+  return true;
+}
+
+// Hashes the fixed cloud into cells as wide as the reach at the present length-scale (r_max + s):
+// the 27 cells around a point hold every fixed point within that reach, and within it at any
+// smaller length-scale. Candidates collected before are forgotten.
+bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell, double slack_fraction) {
+  if (!set_length_scale(ell, slack_fraction)) return false;
+  cell_ = static_cast<double>(r_max_) + static_cast<double>(slack_);
+  inv_cell_ = 1.0 / cell_;
+  std::fill(candidate_count_.begin(), candidate_count_.end(), kUncollected);
 
   // Each occupied cell gets a slot of an open-addressing table (linear probing on the exact
   // key, so distinct cells never share a slot); then a counting sort by slot makes every cell's
@@ -153,7 +174,88 @@ bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell
   return true;
 }
 
-void Registration::accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total) {
+void Registration::find_cells(const Eigen::Vector3f& w, Cells& cells) const {
+  const auto cx = cell_coordinate(w.x(), inv_cell_), cy = cell_coordinate(w.y(), inv_cell_),
+             cz = cell_coordinate(w.z(), inv_cell_);
+  if (cells.valid && cx == cells.cx && cy == cells.cy && cz == cells.cz) return;
+  cells = {};
+  cells.cx = cx;
+  cells.cy = cy;
+  cells.cz = cz;
+  cells.valid = true;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const auto key = cell_key(cx + dx, cy + dy, cz + dz);
+        for (std::size_t slot = slot_hash(key, bucket_mask_); slot_key_[slot] != kEmptySlot;
+             slot = (slot + 1) & bucket_mask_) {
+          if (slot_key_[slot] != key) continue;
+          cells.ranges[cells.count++] = {bucket_start_[slot], bucket_start_[slot + 1]};
+          break;
+        }
+      }
+}
+
+// Moving point j's candidates at w (kernel::CollectFunction), or kTooMany when they outnumber its
+// slots.
+void Registration::collect_candidates(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
+                                      const float* feature, const Cells& cells) {
+  const float wf[3] = {w.x(), w.y(), w.z()};
+  const std::size_t base = j * slots_;
+  const std::size_t count = collect_(view, cells.ranges, cells.count, wf, feature, constants_, reach_sq_,
+                                     &candidate_fixed_[base], &candidate_colour_[base], slots_);
+  candidate_count_[j] = count > slots_ ? kTooMany : static_cast<std::uint16_t>(count);
+  collected_at_[4 * j] = w.x();
+  collected_at_[4 * j + 1] = w.y();
+  collected_at_[4 * j + 2] = w.z();
+  collected_at_[4 * j + 3] = std::sqrt(reach_sq_);
+}
+
+// The kernel over point j's candidates (kernel_scalar.cpp's arithmetic).
+kernel::PointSums Registration::candidate_sums(std::size_t j, const Eigen::Vector3f& w) const {
+  kernel::PointSums p;
+  const std::size_t base = j * slots_, count = candidate_count_[j];
+  for (std::size_t k = base; k < base + count; ++k) {
+    const std::uint32_t i = candidate_fixed_[k];
+    const float dx = sx_[i] - w.x(), dy = sy_[i] - w.y(), dz = sz_[i] - w.z();
+    const float log_a =
+        constants_.log_amplitude - (dx * dx + dy * dy + dz * dz) * constants_.inv_two_ell_sq - candidate_colour_[k];
+    if (log_a < constants_.log_threshold) continue;
+    const float a = std::exp(log_a);
+    p.a += a;
+    p.dx += a * dx;
+    p.dy += a * dy;
+    p.dz += a * dz;
+    ++p.pairs;
+  }
+  return p;
+}
+
+// Σ_i a_ij and Σ_i a_ij (x_i - w) for moving point j at w: from its candidates while they hold
+// (collected again once it moved more than the slack), else by searching the cells.
+kernel::PointSums Registration::point_sums(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
+                                           const float* feature, Cells& cells, bool candidates,
+                                           std::size_t& collections) {
+  if (candidates && slots_ > 0 && candidate_count_[j] != kTooMany) {
+    // Valid while every fixed point now within r_max was within the reach at collection.
+    const float* at = &collected_at_[4 * j];
+    const float mx = w.x() - at[0], my = w.y() - at[1], mz = w.z() - at[2];
+    const float margin = at[3] - r_max_;
+    if (candidate_count_[j] == kUncollected || mx * mx + my * my + mz * mz > margin * margin) {
+      find_cells(w, cells);
+      collect_candidates(view, j, w, feature, cells);
+      ++collections;
+    }
+    if (candidate_count_[j] != kTooMany) return candidate_sums(j, w);
+  }
+  find_cells(w, cells);
+  if (cells.count == 0) return {};
+  const float wf[3] = {w.x(), w.y(), w.z()};
+  return point_(view, cells.ranges, cells.count, wf, feature, constants_);
+}
+
+void Registration::accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total,
+                              std::size_t stride, bool candidates) {
   const Eigen::Matrix3f R = T.rotation_matrix().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const kernel::FixedCloudView view{sx_.data(), sy_.data(), sz_.data(),
@@ -163,40 +265,13 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
 #pragma omp parallel for schedule(static) num_threads(parameters_.threads) if (parameters_.threads > 1)
   for (std::ptrdiff_t chunk = 0; chunk < chunks; ++chunk) {
     Sums sums;
+    Cells cells;
     const std::size_t begin = static_cast<std::size_t>(chunk) * kChunk, end = std::min(n, begin + kChunk);
-    kernel::Range ranges[27];
-    int count = 0;
-    std::int64_t last_cx = std::numeric_limits<std::int64_t>::min(), last_cy = 0, last_cz = 0;
-    for (std::size_t j = begin; j < end; ++j) {
+    for (std::size_t j = begin + (stride - begin % stride) % stride; j < end; j += stride) {
       const Eigen::Vector3f w = R * moving.position(j) + t;
-      const float wf[3] = {w.x(), w.y(), w.z()};
       float feature[kFeatureDim];
       for (std::size_t c = 0; c < kFeatureDim; ++c) feature[c] = moving.feature_channel(c)[j];
-
-      // The occupied cells among the 27 around w (distinct cells have distinct slots). Moving
-      // points come in image order, so consecutive ones often share a cell: reuse its lookup.
-      const auto cx = cell_coordinate(w.x(), inv_cell_), cy = cell_coordinate(w.y(), inv_cell_),
-                 cz = cell_coordinate(w.z(), inv_cell_);
-      if (cx != last_cx || cy != last_cy || cz != last_cz) {
-        last_cx = cx;
-        last_cy = cy;
-        last_cz = cz;
-        count = 0;
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-              const auto key = cell_key(cx + dx, cy + dy, cz + dz);
-              for (std::size_t slot = slot_hash(key, bucket_mask_); slot_key_[slot] != kEmptySlot;
-                   slot = (slot + 1) & bucket_mask_) {
-                if (slot_key_[slot] != key) continue;
-                ranges[count++] = {bucket_start_[slot], bucket_start_[slot + 1]};
-                break;
-              }
-            }
-      }
-      if (count == 0) continue;
-
-      const kernel::PointSums p = point_(view, ranges, count, wf, feature, constants_);
+      const kernel::PointSums p = point_sums(view, j, w, feature, cells, candidates, sums.collections);
       if (p.pairs == 0) continue;
       const Eigen::Vector3d wd = w.cast<double>();
       const Eigen::Vector3d D(p.dx, p.dy, p.dz);
@@ -213,21 +288,24 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
   for (std::ptrdiff_t chunk = 0; chunk < chunks; ++chunk) total.add(chunk_sums_[static_cast<std::size_t>(chunk)]);
 }
 
-double Registration::inner_product(const PointCloud& fixed, const PointCloud& moving, const core::SE3& T, double ell) {
+double Registration::inner_product(const PointCloud& fixed, const PointCloud& moving, const core::SE3& T, double ell,
+                                   std::size_t stride) {
   const auto status = check(fixed, moving);
   if (status != RegistrationStatus::kOk && status != RegistrationStatus::kCapacityExceeded) return 0.0;
   if (!T.is_finite() || !(ell > 0)) return 0.0;
   const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
-  if (!build_grid(fixed, nf, ell)) return 0.0;
+  if (!build_grid(fixed, nf, ell, 0.0)) return 0.0;
   Sums sums;
-  accumulate(moving, nm, T, sums);
+  accumulate(moving, nm, T, sums, std::max<std::size_t>(stride, 1));
   return sums.s0;
 }
 
-RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial) {
+RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial,
+                                       double ell_start) {
   RegistrationResult result;
   result.transform = initial;
   pairs_logged_ = 0;
+  collections_ = 0;
   result.status = check(fixed, moving);
   if (result.status == RegistrationStatus::kOk && !initial.is_finite()) result.status = RegistrationStatus::kNonFinite;
   if (result.status != RegistrationStatus::kOk && result.status != RegistrationStatus::kCapacityExceeded)
@@ -235,14 +313,15 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
   const RegistrationStatus input_status = result.status;
   const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
 
-  double ell = parameters_.ell_init;
   const double ell_min = std::min(parameters_.ell_min, parameters_.ell_init);
-  build_grid(fixed, nf, ell);
+  double ell = ell_start > 0 ? std::clamp(ell_start, ell_min, parameters_.ell_init) : parameters_.ell_init;
+  build_grid(fixed, nf, ell, slots_ > 0 ? kSlackFraction : 0.0);
   core::SE3 T = initial;
   Sums sums;
   result.status = RegistrationStatus::kNotConverged;
   for (int it = 0; it < parameters_.max_iterations; ++it) {
-    accumulate(moving, nm, T, sums);
+    accumulate(moving, nm, T, sums, 1, true);
+    collections_ += sums.collections;
     result.iterations = it + 1;
     result.pairs = sums.pairs;
     result.inner_product = sums.s0;
@@ -275,7 +354,9 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
     }
     if (ell > ell_min && step < kShrinkFraction * ell) {
       ell = std::max(ell * parameters_.ell_decay, ell_min);
-      build_grid(fixed, nf, ell);
+      // The grid and the candidates of the wider kernel serve the narrower one (a superset).
+      if (slots_ > 0) set_length_scale(ell, kSlackFraction);
+      else build_grid(fixed, nf, ell, 0.0);
     }
   }
   result.transform = T;

@@ -20,7 +20,16 @@
 // the information of the estimate (pose-graph edges).
 //
 // Neighbour search: X is hashed once per length-scale into cells of side r_max (see kernel.hpp);
-// each moving point visits the 27 cells around it. Fixed memory: every buffer is sized at
+// each moving point visits the 27 cells around it.
+//
+// Candidate pairs (align() only). A pair's colour term does not depend on T, and a pair counts
+// only where k_c alone reaches the threshold; so once per length-scale each moving point keeps
+// the fixed points whose colour lets them count and that lie within the reach r_max + s of it
+// (the cells are then that wide), with their colour terms. While the point has moved less than
+// reach - r_max since, no other fixed point can reach the threshold: the iteration sums its
+// candidates alone, which is exact and far cheaper than searching 27 cells again. A point that
+// moved farther collects again. When ℓ shrinks, r_max does: the grid and candidates stay, and
+// last longer. A point with more candidates than its slots is searched in full each iteration. Fixed memory: every buffer is sized at
 // construction from the capacities; after construction align() and inner_product() do not
 // allocate. Threads (optional) split the moving cloud into fixed chunks reduced in a fixed order,
 // so the result does not depend on the thread count.
@@ -61,6 +70,9 @@ struct RegistrationResult {
 
 struct Capacities {
   std::size_t max_points = 8192;  // per cloud
+  // Candidate pairs kept per moving point on average (align(); see above); 0: none, every
+  // iteration searches the cells in full.
+  std::size_t candidates_per_point = 32;
 };
 
 class Registration {
@@ -68,11 +80,17 @@ class Registration {
   Registration(const Capacities& capacities, const core::CvoParameters& parameters,
                kernel::Isa isa = kernel::best_isa());
 
-  /// Maximises <f_X, T.f_Z> from `initial`.
-  RegistrationResult align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial);
+  /// Maximises <f_X, T.f_Z> from `initial`, the length-scale going from `ell_start` (0: ℓ_init)
+  /// to ℓ_min. A guess already within a few millimetres (another registration's result) needs no
+  /// wide basin: starting at ℓ_min saves the coarse iterations.
+  RegistrationResult align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial,
+                           double ell_start = 0);
 
-  /// <f_X, T.f_Z> at length-scale `ell` (the keyframe test γ and the loop test α use it).
-  double inner_product(const PointCloud& fixed, const PointCloud& moving, const core::SE3& T, double ell);
+  /// <f_X, T.f_Z> at length-scale `ell` (the keyframe test γ and the loop test α use it). With
+  /// `stride` > 1 only every stride-th moving point is summed: about 1/stride of the whole, for a
+  /// ratio of two sums over the same moving cloud at a fraction of the cost.
+  double inner_product(const PointCloud& fixed, const PointCloud& moving, const core::SE3& T, double ell,
+                       std::size_t stride = 1);
   /// ... at ℓ_min, the length-scale align() finishes at.
   double inner_product(const PointCloud& fixed, const PointCloud& moving, const core::SE3& T) {
     return inner_product(fixed, moving, T, parameters_.ell_min);
@@ -83,6 +101,9 @@ class Registration {
   /// Contributing pairs of each iteration of the last align() (diagnostics, no allocation).
   [[nodiscard]] const std::vector<std::size_t>& pairs_per_iteration() const { return pairs_log_; }
   [[nodiscard]] std::size_t pairs_logged() const { return pairs_logged_; }
+  /// How often the last align() collected a moving point's candidates (diagnostics): once per
+  /// point, and again for those that moved beyond their reach.
+  [[nodiscard]] std::size_t collections() const { return collections_; }
 
  private:
   // Σ over moving points of what the step needs:
@@ -94,16 +115,34 @@ class Registration {
     Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
     Eigen::Vector3d bt = Eigen::Vector3d::Zero(), br = Eigen::Vector3d::Zero();
     std::size_t pairs = 0;
+    std::size_t collections = 0;  // candidate collections
     void add(const Sums& o);
     [[nodiscard]] core::Matrix6d hessian() const;
   };
-  bool build_grid(const PointCloud& fixed, std::size_t n, double ell);
-  void accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total);
+  // The occupied cells among the 27 around a point; the last lookup is kept, since consecutive
+  // moving points (image order) often share a cell.
+  struct Cells {
+    kernel::Range ranges[27];
+    int count = 0;
+    std::int64_t cx = 0, cy = 0, cz = 0;
+    bool valid = false;
+  };
+  bool set_length_scale(double ell, double slack_fraction);
+  bool build_grid(const PointCloud& fixed, std::size_t n, double ell, double slack_fraction);
+  void find_cells(const Eigen::Vector3f& w, Cells& cells) const;
+  void accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total, std::size_t stride = 1,
+                  bool candidates = false);
+  kernel::PointSums point_sums(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
+                               const float* feature, Cells& cells, bool candidates, std::size_t& collections);
+  void collect_candidates(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
+                          const float* feature, const Cells& cells);
+  [[nodiscard]] kernel::PointSums candidate_sums(std::size_t j, const Eigen::Vector3f& w) const;
   RegistrationStatus check(const PointCloud& fixed, const PointCloud& moving) const;
 
   core::CvoParameters parameters_;
   kernel::Isa isa_;
   kernel::PointFunction point_;
+  kernel::CollectFunction collect_;
   std::size_t capacity_;
   // Hash grid over the fixed cloud, SoA in bucket order.
   std::size_t bucket_mask_;  // slots - 1; slots = power of two ≥ 2 × max_points, so probing stays short
@@ -114,9 +153,17 @@ class Registration {
   std::vector<float> sx_, sy_, sz_;
   std::array<std::vector<float>, kFeatureDim> sf_;
   kernel::Constants constants_;
+  // Candidate pairs per moving point (see the header): slots [j * slots_, +count).
+  std::size_t slots_;
+  float r_max_ = 0, slack_ = 0, reach_sq_ = 0;  // at the present ℓ: r_max, s, and (r_max + s)²
+  std::vector<std::uint32_t> candidate_fixed_;  // the fixed point (bucket order)
+  std::vector<float> candidate_colour_;         // its colour term |Δf|² / 2ℓ_c²
+  std::vector<std::uint16_t> candidate_count_;  // or kUncollected / kTooMany
+  std::vector<float> collected_at_;             // 4 per moving point: where it was when collected, the reach then
   std::vector<Sums> chunk_sums_;
   std::vector<std::size_t> pairs_log_;
   std::size_t pairs_logged_ = 0;
+  std::size_t collections_ = 0;
 };
 
 }  // namespace cvo::registration

@@ -35,6 +35,7 @@ TEST(PgoBenchCli, BothSolversReachTheSameCostOnTinyGrid) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* solver : {"cvo", "ceres"}) {
     EXPECT_GT(number_after(r.out, solver, "iterations"), 0) << solver << "\n" << r.out;
+    EXPECT_GT(number_after(r.out, solver, "factorizations"), 0) << solver << "\n" << r.out;
     EXPECT_GE(number_after(r.out, solver, "seconds"), 0) << solver;
   }
   const double ours = number_after(r.out, "cvo", "final_cost"), ceres = number_after(r.out, "ceres", "final_cost");
@@ -90,7 +91,8 @@ TEST(PgoBenchCli, BadInputAndArguments) {
 
 TEST(PgoBenchCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   const test::TempDir dir("pgo_bench");
-  cvo::testing::expect_cli_contract("pgo-bench", "", {"FILE.g2o", "--json", "--max-iterations", "--robust"}, dir.path());
+  cvo::testing::expect_cli_contract("pgo-bench", "", {"FILE.g2o", "--json", "--max-iterations", "--robust", "--repeat"},
+                                    dir.path());
 }
 
 // An iteration cap is a count in decimal: not negative, hexadecimal or fractional, nor 0.
@@ -108,6 +110,27 @@ TEST(PgoBenchCli, MaxIterationsTakesOnlyAPositiveDecimalCount) {
   EXPECT_EQ(json_value(r.out, "robust"), "false");
   EXPECT_EQ(json_value(r.out, "nodes"), "4") << "an integer, not 4.0\n" << r.out;
   EXPECT_EQ(json_value(r.out, "edges"), std::to_string(test_graphs::kEdges)) << r.out;
+}
+
+// --repeat N solves N times and reports the median time; like --max-iterations, a decimal count.
+TEST(PgoBenchCli, RepeatTakesAPositiveCountAndKeepsTheResult) {
+  const test::TempDir dir("pgo_bench");
+  const fs::path file = dir.write("indefinite.g2o", test_graphs::kIndefiniteGraph);
+  for (const char* value : {"0", "-2", "x", "1001"}) {
+    const auto r = run_tool("pgo-bench", quoted(file) + " --repeat " + value, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << value << ": " << r.err;
+    EXPECT_NE(r.err.find("--repeat"), std::string::npos) << value << ": " << r.err;
+  }
+  const auto once = run_tool("pgo-bench", quoted(file) + " --json", dir.path());
+  const auto thrice = run_tool("pgo-bench", quoted(file) + " --json --repeat 3", dir.path());
+  ASSERT_EQ(thrice.exit_code, 0) << thrice.err;
+  EXPECT_TRUE(JsonSyntax::valid(thrice.out)) << thrice.out;
+  EXPECT_EQ(json_value(thrice.out, "repeat"), "3") << thrice.out;
+  EXPECT_EQ(json_value(once.out, "repeat"), "1") << once.out;
+  for (const char* solver : {"cvo", "ceres"}) {
+    EXPECT_EQ(number_after(thrice.out, solver, "final_cost"), number_after(once.out, solver, "final_cost")) << solver;
+    EXPECT_EQ(number_after(thrice.out, solver, "iterations"), number_after(once.out, solver, "iterations")) << solver;
+  }
 }
 
 }  // namespace

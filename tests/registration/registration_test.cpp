@@ -99,6 +99,38 @@ TEST(Registration, SimdEqualsScalar) {
   EXPECT_LT(deg((rs.transform.inverse() * rc.transform).angle()), 0.01);
 }
 
+// Candidate pairs are an exact shortcut: the same pairs count as when every iteration searches the
+// cells, so the same steps are taken (to float rounding: another summation order and exp). With one
+// slot per point nearly every point has too many candidates and is searched in full: the same again.
+// The schedule starts wide (ℓ_init 0.3, from the identity) so that points move beyond their slack
+// and collect again, and the candidates of the wide kernel serve the narrower ones.
+TEST(Registration, CandidatePairsGiveTheResultOfASearchEveryIteration) {
+  const auto M = motion({0.2, 1, 0.1}, 4.0, {0.03, 0.01, -0.02});
+  const auto pair = testing::render_pair(sim::SceneKind::textured_room, testing::camera_looking_north(), M);
+  core::CvoParameters parameters;
+  parameters.ell_init = 0.3;
+  Registration searched(Capacities{8192, 0}, parameters), candidates(Capacities{8192, 32}, parameters),
+      one_slot(Capacities{8192, 1}, parameters);
+  const auto a = searched.align(pair.first, pair.second, core::SE3());
+  EXPECT_EQ(searched.collections(), 0u);
+  for (auto* r : {&candidates, &one_slot}) {
+    const auto b = r->align(pair.first, pair.second, core::SE3());
+    ASSERT_TRUE(a.converged && b.converged);
+    EXPECT_EQ(a.iterations, b.iterations);
+    EXPECT_LT((a.transform.inverse() * b.transform).translation().norm(), 1e-5);
+    EXPECT_LT(deg((a.transform.inverse() * b.transform).angle()), 1e-3);
+    EXPECT_NEAR(a.inner_product, b.inner_product, 1e-4 * a.inner_product);
+    for (std::size_t i = 0; i < searched.pairs_logged(); ++i)
+      EXPECT_EQ(searched.pairs_per_iteration()[i], r->pairs_per_iteration()[i]) << "iteration " << i;
+  }
+  EXPECT_LT((a.transform.inverse() * M).translation().norm(), 5e-3);
+  // Every point collected once, some again after the wide first steps; far fewer than a search
+  // per point and iteration.
+  const auto points = pair.second.size();
+  EXPECT_GT(candidates.collections(), points);
+  EXPECT_LT(candidates.collections(), points * static_cast<std::size_t>(a.iterations) / 3);
+}
+
 TEST(Registration, ResultDoesNotDependOnThreadCount) {
   const auto M = motion({0.2, 1, 0}, 3.0, {0.02, 0.01, -0.01});
   const auto pair = testing::render_pair(sim::SceneKind::textured_room, testing::camera_looking_north(), M);
