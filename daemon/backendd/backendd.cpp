@@ -20,6 +20,7 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
+#include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -110,7 +111,7 @@ std::filesystem::path resolve_vocabulary(const std::string& setting) {
 // Everything the cvo-backend thread owns.
 struct Backendd::Work {
   Work(loop_closure::Vocabulary vocabulary, const config::Config& config)
-      : mapper(std::move(vocabulary), slam::mapper_parameters(config)), lcm(publish_url(config.backendd)) {}
+      : mapper(std::move(vocabulary), config::mapper_parameters(config)), lcm(publish_url(config.backendd)) {}
 
   slam::Mapper mapper;
   ::lcm::LCM lcm;  // CVO_MAP and CVO_STATUS

@@ -26,6 +26,7 @@
 #include "daemon/common/signals.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "drivers/reconnecting_source.hpp"
+#include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -380,7 +381,7 @@ void Trackerd::track_loop() {
 // The pipeline for frames of this one's camera, or nullptr (counted) when it cannot be tracked.
 Trackerd::Pipeline* Trackerd::start_pipeline(const core::RgbdFrame& first) {
   if (!usable(first)) return nullptr;
-  pipeline_ = std::make_unique<Pipeline>(first.intrinsics, odometry::keyframe_odometry_parameters(config_),
+  pipeline_ = std::make_unique<Pipeline>(first.intrinsics, config::keyframe_odometry_parameters(config_),
                                          config_.trackerd.keyframe_history);
   camera_size_ = packed_size(first.intrinsics.width, first.intrinsics.height);
   pipeline_ready_ = true;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstdint>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -47,6 +48,11 @@ constexpr Range kUnit{0, 1};                   // [0, 1]
 constexpr Range kUnitNonZero{0, 1, true, false};  // (0, 1]
 constexpr Range kHalfTurnDeg{0, 180, true, false};
 constexpr Range kThreads{1, 1024};
+constexpr Range kAtLeastTwo{2, kInf};
+constexpr Range kAtLeastThree{3, kInf};
+constexpr Range kAboveOne{1, kInf, true, false};
+constexpr Range kHalfTurnDegOrZero{0, 180};
+constexpr Range kUint32{0, 4294967295.0};
 
 template <class T>
 using Get = std::function<T&(Config&)>;
@@ -54,7 +60,7 @@ using Get = std::function<T&(Config&)>;
 // One row of the table: everything the loader, the overrides and the dump know about a key.
 struct Field {
   std::string key;  // "section.member", or "member" at the top level
-  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<bool>, Get<std::string>> member;
+  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<std::uint32_t>, Get<bool>, Get<std::string>> member;
   Range range;           // numeric keys only
   std::string_view doc;  // the dump's comment: paper symbol and meaning
 };
@@ -65,7 +71,8 @@ Field row(std::string key, S Config::*section, T S::*member, Range range, std::s
 }
 
 using core::CvoParameters, core::SelectionParameters, core::KeyframeParameters, core::LoopClosureParameters,
-    core::PoseGraphParameters, core::DatasetParameters;
+    core::PoseGraphParameters, core::DatasetParameters, core::OdometryParameters, core::KeyframeTrackingParameters,
+    core::LoopVerificationParameters;
 
 constexpr Range kRealtimePriority{0, 99};  // SCHED_FIFO priorities; 0 = do not ask for one
 constexpr Range kCpu{-1, 4095};            // -1 = no affinity
@@ -100,20 +107,66 @@ const std::vector<Field>& table() {
       row("cvo.min_step", &Config::cvo, &CvoParameters::min_step, kPositive,
           "converged when |Δρ| + |Δφ| (m + rad) is below this at ℓ_min"),
       row("cvo.threads", &Config::cvo, &CvoParameters::threads, kThreads, "tracker threads"),
+      row("odometry.max_points", &Config::odometry, &OdometryParameters::max_points, kAtLeastOne,
+          "capacity of each point cloud (trackers, loop detector); a larger selection is clamped"),
+      row("odometry.restart_after_failures", &Config::odometry, &OdometryParameters::restart_after_failures,
+          kAtLeastOne, "cvo, opencv-*: failed frames in a row after which the failed frame becomes the reference"),
       row("keyframe.inner_product_ratio_threshold", &Config::keyframe,
           &KeyframeParameters::inner_product_ratio_threshold, kUnit, "γ_thres, new keyframe below this ratio (eq. 10)"),
       row("keyframe.translation_threshold_m", &Config::keyframe, &KeyframeParameters::translation_threshold_m,
           kPositive, "t_thres, new keyframe beyond this translation (m)"),
       row("keyframe.rotation_threshold_deg", &Config::keyframe, &KeyframeParameters::rotation_threshold_deg,
           kHalfTurnDeg, "θ_thres, new keyframe beyond this rotation (degrees)"),
+      row("keyframe.local_graph_capacity", &Config::keyframe_tracking, &KeyframeTrackingParameters::local_graph_capacity,
+          kAtLeastTwo, "frames per keyframe (its local graph) before a new keyframe is forced"),
+      row("keyframe.gamma_ell", &Config::keyframe_tracking, &KeyframeTrackingParameters::gamma_ell, kPositive,
+          "spatial length-scale of γ's inner products (m)"),
+      row("keyframe.gamma_sigma", &Config::keyframe_tracking, &KeyframeTrackingParameters::gamma_sigma, kPositive,
+          "spatial signal of γ's inner products (std. dev.), looser than cvo.sigma so γ is smooth"),
+      row("keyframe.gamma_stride", &Config::keyframe_tracking, &KeyframeTrackingParameters::gamma_stride, kAtLeastOne,
+          "γ's inner products sum every stride-th point of the frame (1: all)"),
+      row("keyframe.chain_weight", &Config::keyframe_tracking, &KeyframeTrackingParameters::chain_weight,
+          kNonNegative, "scale of the chain edge's information in the fused pose (0: keyframe registration alone)"),
+      row("keyframe.chain_full_weight_deg", &Config::keyframe_tracking,
+          &KeyframeTrackingParameters::chain_full_weight_deg, kHalfTurnDegOrZero,
+          "rotation from the keyframe (degrees) at which the chain weight, ramped as θ², is full (0: always full)"),
       row("loop_closure.similarity_threshold", &Config::loop_closure, &LoopClosureParameters::similarity_threshold,
           kUnit, "η_thres, normalised bag-of-words score"),
       row("loop_closure.match_ratio", &Config::loop_closure, &LoopClosureParameters::match_ratio, kUnitNonZero,
           "best / second-best descriptor distance"),
       row("loop_closure.min_matches", &Config::loop_closure, &LoopClosureParameters::min_matches, kAtLeastOne,
           "descriptor matches needed for a loop candidate"),
+      row("loop_closure.max_refinements", &Config::loop_verification, &LoopVerificationParameters::max_refinements,
+          kNonNegative, "CVO refinements per new keyframe, best η first (0: no limit)"),
+      row("loop_closure.ransac_iterations", &Config::loop_verification,
+          &LoopVerificationParameters::ransac_iterations, kAtLeastOne, "RANSAC minimal sets tried for the initial pose"),
+      row("loop_closure.ransac_inlier_m", &Config::loop_verification, &LoopVerificationParameters::ransac_inlier_m,
+          kPositive, "3-D distance within which a match is a RANSAC inlier (m)"),
+      row("loop_closure.min_inliers", &Config::loop_verification, &LoopVerificationParameters::min_inliers,
+          kAtLeastThree, "RANSAC inliers needed for an initial pose"),
+      row("loop_closure.min_inlier_retention", &Config::loop_verification,
+          &LoopVerificationParameters::min_inlier_retention, kUnit,
+          "share of RANSAC's inliers the CVO pose must keep within ransac_inlier_m"),
+      row("loop_closure.ransac_seed", &Config::loop_verification, &LoopVerificationParameters::ransac_seed, kUint32,
+          "seed of RANSAC's random generator: the same loops on every run"),
+      row("loop_closure.orb_features", &Config::loop_verification, &LoopVerificationParameters::orb_features,
+          kAtLeastOne, "ORB keypoints per keyframe at most, the strongest first (the default vocabulary was "
+          "trained with the orb_* defaults)"),
+      row("loop_closure.orb_scale_factor", &Config::loop_verification, &LoopVerificationParameters::orb_scale_factor,
+          kAboveOne, "ORB pyramid scale between levels"),
+      row("loop_closure.orb_levels", &Config::loop_verification, &LoopVerificationParameters::orb_levels, kAtLeastOne,
+          "ORB pyramid levels"),
+      row("loop_closure.orb_edge_threshold", &Config::loop_verification,
+          &LoopVerificationParameters::orb_edge_threshold, kNonNegative,
+          "ORB border without features (pixels; at least the patch size, 31, so descriptors fit)"),
+      row("loop_closure.orb_fast_threshold", &Config::loop_verification,
+          &LoopVerificationParameters::orb_fast_threshold, kAtLeastOne, "ORB's FAST intensity threshold"),
       row("pose_graph.cauchy_delta", &Config::pose_graph, &PoseGraphParameters::cauchy_delta, kPositive,
           "δ of the Cauchy loss ρ(x) = δ² log(1 + x/δ²)"),
+      row("pose_graph.bridge_information", &Config::pose_graph, &PoseGraphParameters::bridge_information, kPositive,
+          "information (times I) of the edge bridging a tracking restart, per unit (σ ~ 1 m, 1 rad)"),
+      row("pose_graph.max_iterations", &Config::pose_graph, &PoseGraphParameters::max_iterations, kAtLeastOne,
+          "Levenberg-Marquardt iterations per optimisation"),
       row("dataset.max_association_dt", &Config::dataset, &DatasetParameters::max_association_dt, kPositive,
           "colour-depth timestamp association window (s)"),
       row("trackerd.source", &Config::trackerd, &TrackerdParameters::source, kAny,

@@ -5,10 +5,14 @@
 //     cvo:
 //       ell_init: 0.1
 //     camera: tum_fr1
-// A file may give any subset; the rest keep their defaults (the paper's Table 1, see
-// libcvo/core/parameters.hpp). libcvo/config/default.yaml is dump_config(Config{}), every key
+// A file may give any subset; the rest keep their defaults (the paper's Table 1 and the tuned
+// values, see libcvo/core/parameters.hpp). Two structs share a section where the paper's values
+// and a module's own settings belong together: keyframe (KeyframeParameters, then KF-CVO's
+// KeyframeTrackingParameters) and loop_closure (LoopClosureParameters, then
+// LoopVerificationParameters). libcvo/config/default.yaml is dump_config(Config{}), every key
 // with a comment. One table in config.cpp lists every key with its member and its valid range;
-// loading, overrides, dumping and comparing all walk it, so a new parameter is one new row.
+// loading, overrides, dumping and comparing all walk it, so a new parameter is one new row (and
+// one line in module_parameters.cpp, which hands every section to the modules).
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -65,8 +69,11 @@ struct BackenddParameters {
 struct Config {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
+  core::OdometryParameters odometry;
   core::KeyframeParameters keyframe;
+  core::KeyframeTrackingParameters keyframe_tracking;  // YAML section keyframe
   core::LoopClosureParameters loop_closure;
+  core::LoopVerificationParameters loop_verification;  // YAML section loop_closure
   core::PoseGraphParameters pose_graph;
   core::DatasetParameters dataset;
   TrackerdParameters trackerd;

@@ -1,8 +1,13 @@
 #pragma once
 // Every tunable of the method, grouped as the paper groups them. Defaults are the paper's
 // Table 1 (tab:parameters) where it gives a value; the others are marked with where they come from.
-// These are plain values: libcvo/config reads them from YAML, each library takes the group it needs.
+// These are plain values: libcvo/config reads them from YAML (one section per struct, or two
+// structs sharing one section where noted) and libcvo/config/module_parameters.hpp maps them onto
+// each module's parameters. The defaults here are the only ones: a module's own parameter struct
+// takes its defaults from these. How the tuned values were chosen, with the measurements:
+// bench/odometry-tuning.md.
 #include <cstddef>
+#include <cstdint>
 
 namespace cvo::core {
 
@@ -11,17 +16,14 @@ struct SelectionParameters {
   std::size_t target_points = 3000;  // per 640x480 frame (paper section 6)
   double min_depth_m = 0.1;          // valid depth range
   double max_depth_m = 5.0;
-  // Scale of the gradient part of each point's label (0: RGB only). 0.5: the gradients of edge
-  // points change with viewpoint and blur far more than their colour; at 1.0 they dominate the
-  // colour kernel and KF-CVO's keyframe-to-frame registrations keep a few dozen pairs (fr1/rpy,
-  // KF-CVO RPE 0.0350 m/s at 0.5 against 0.0372 at 1.0 with an unramped chain weight and no
-  // depth-time compensation; 0.0309 against 0.0337 with it).
+  // Scale of the gradient part of each point's label (0: RGB only). Below 1 because the gradients
+  // of edge points change with viewpoint and blur far more than their colour: at full scale they
+  // dominate the colour kernel and keyframe-to-frame registrations keep too few pairs.
   double gradient_weight = 0.5;
   // Depth-time compensation (KF-CVO). A point's depth is read where its colour pixel's ray was when
   // the depth image was taken, at the last measured velocity, and moved back to the colour image's
   // time. The depth image is taken at its stamp plus this offset, relative to the colour stamps:
-  // -10 ms for the Kinect v1 / OpenNI recordings of TUM (measured on fr1/rpy: -7 to -15 ms are
-  // equally good; 0, the stamps alone, is worse than no compensation; +7 ms loses tracking).
+  // -10 ms fits the Kinect v1 / OpenNI recordings of TUM, whose depth stamps are late.
   // Frames whose two stamps are equal (rendered frames, synchronised sensors) are taken as
   // simultaneous and left as they are.
   double depth_time_offset_s = -0.010;
@@ -29,21 +31,19 @@ struct SelectionParameters {
 
 /// The RKHS inner product and the CVO solver (paper section 3, eq. 5-6; Table 1).
 ///
-/// Reading of Table 1, measured (libcvo/registration/README.md has the numbers): σ and σ_c are
-/// taken literally as the kernels' standard deviations, so a pair's weight is
+/// Reading of Table 1: σ and σ_c are taken literally as the kernels' standard deviations, so a
+/// pair's weight is
 ///   a_ij = σ² σ_c² exp(-|x_i - T z_j|² / 2ℓ²) exp(-|ℓ_X(x_i) - ℓ_Z(z_j)|² / 2ℓ_c²)
 /// and it counts when a_ij ≥ the sparsification threshold, i.e. when the two normalised kernels'
-/// product exceeds 0.83. That leaves only ~200-4000 contributing pairs per iteration on fr1/rpy,
-/// yet with the Gauss-Newton step it registers as accurately as the looser "σ is a variance"
-/// reading (50k-230k pairs) at a third of the cost. Colour labels are RGB in [0, 1] plus the
-/// grey gradient in [-1, 1] (registration/feature.hpp).
+/// product exceeds 0.83. Few pairs contribute, yet with the Gauss-Newton step this registers as
+/// accurately as the looser "σ is a variance" reading at a fraction of the cost (measured:
+/// libcvo/registration/README.md). Colour labels are RGB in [0, 1] plus the grey gradient in
+/// [-1, 1] (registration/feature.hpp).
 struct CvoParameters {
   double ell_init = 0.1;                       // ℓ_init: spatial kernel initial length-scale (m)
-  // Smallest length-scale of the schedule (m); not in Table 1. 0.07 stops the schedule one step
-  // earlier than 0.05 (0.1 -> 0.07 instead of 0.1 -> 0.07 -> 0.05): on fr1/rpy KF-CVO, one run each,
-  // 24.6 / 47.8 ms median / p99 per frame against 29.3 / 54.3 ms, for RPE 0.0327 against 0.0309 m/s
-  // (2.31 against 2.19 deg/s) and SLAM ATE 0.0194 against 0.0199 m: realtime at 30 Hz on one core
-  // of this 2-core machine is the requirement, and 0.0327 still beats OpenCV's RGB-D odometry.
+  // Smallest length-scale of the schedule (m); not in Table 1. 0.07 ends the schedule one step
+  // earlier than 0.05 (0.1 -> 0.07, not 0.1 -> 0.07 -> 0.05): a little accuracy traded for
+  // realtime at 30 Hz on one core.
   double ell_min = 0.07;
   double ell_decay = 0.7;                      // ℓ <- ℓ · decay each time the step has converged
   double sigma = 0.1;                          // σ: spatial kernel signal (standard deviation)
@@ -55,11 +55,41 @@ struct CvoParameters {
   int threads = 1;                             // the tracker runs single-threaded by default
 };
 
+/// What every tracker keeps besides the paper's values (libcvo/odometry); YAML section `odometry`.
+struct OdometryParameters {
+  // Capacity of each point cloud (the trackers', and the loop detector's stored keyframe clouds):
+  // fixed memory. Selection keeps about target_points; more than this is clamped.
+  std::size_t max_points = 8192;
+  // Frame-to-frame trackers (cvo, opencv-*): failed registrations in a row against one reference
+  // after which the failed frame becomes the reference (frame_to_frame.hpp). Not from the paper.
+  int restart_after_failures = 3;
+};
+
 /// Keyframe selection (paper section 4, eq. 9-10; Table 1).
 struct KeyframeParameters {
   double inner_product_ratio_threshold = 0.7;  // γ_thres
   double translation_threshold_m = 0.15;       // t_thres
   double rotation_threshold_deg = 30.0;        // θ_thres
+};
+
+/// KF-CVO's own settings beyond Table 1 (libcvo/odometry/keyframe_odometry.hpp has the maths);
+/// YAML section `keyframe`, after the paper's thresholds.
+struct KeyframeTrackingParameters {
+  std::size_t local_graph_capacity = 300;  // frames per keyframe before one is forced (10 s at 30 Hz)
+  // The inner products of γ (eq. 9) use their own, looser spatial kernel: with the tracker's tight
+  // one (σ = 0.1) γ rests on a few hundred pairs and jumps from frame to frame. σ = 0.316 (σ² ≈ 0.1)
+  // lets pairs count from a normalised kernel product of about 0.083: γ sums many more and is smooth.
+  double gamma_ell = 0.1;      // length-scale of γ's inner products (m)
+  double gamma_sigma = 0.316;  // spatial signal of γ's inner products (std. dev.)
+  // γ is a ratio of two such sums over the same kind of cloud: every stride-th point of the frame
+  // estimates it as well as all of them (~10^5 pairs in all), at 1/stride of the cost.
+  std::size_t gamma_stride = 4;
+  // Fusion of the keyframe result with the chain: the chain edge's information is scaled by
+  // chain_weight, ramped as (θ / chain_full_weight_deg)² up to it (θ: rotation from the keyframe).
+  // Keyframe-to-frame registrations of only a few dozen kernel pairs jitter on real sensors, so the
+  // ramp reaches full weight early; exact rendered data would rather have it later.
+  double chain_weight = 2.0;           // 0: the keyframe edge alone
+  double chain_full_weight_deg = 3.0;  // 0: full weight at every rotation
 };
 
 /// Loop closure (paper section 5; Table 1).
@@ -69,9 +99,33 @@ struct LoopClosureParameters {
   int min_matches = 5;
 };
 
-/// Robust pose graph (paper section 5; Table 1).
+/// Loop verification beyond Table 1 (libcvo/loop_closure/loop_verification.hpp has the steps);
+/// YAML section `loop_closure`, after the paper's values.
+struct LoopVerificationParameters {
+  // CVO refinements per new keyframe, best η first (0: no limit): CVO is the back end's main cost,
+  // and verifying only the best few kept the map as good.
+  int max_refinements = 3;
+  int ransac_iterations = 300;         // minimal sets tried for the initial pose
+  double ransac_inlier_m = 0.03;       // 3-D distance for a match to count as an inlier (m)
+  int min_inliers = 12;                // fewer after RANSAC: no initial pose, no loop
+  double min_inlier_retention = 0.5;   // share of RANSAC's inliers the CVO pose must keep (step 3b)
+  std::uint32_t ransac_seed = 0;       // RANSAC's std::mt19937: the same loops every run
+  // ORB keypoints (cv::ORB; loop_closure/orb_features.hpp): ORB-SLAM2's feature count, OpenCV's
+  // other defaults. The installed vocabulary was trained with these (cvo-vocabulary).
+  int orb_features = 1000;             // at most this many keypoints, the strongest first
+  double orb_scale_factor = 1.2;       // pyramid scale between levels
+  int orb_levels = 8;                  // pyramid levels
+  int orb_edge_threshold = 31;         // border without features, pixels (>= patch size: descriptors fit)
+  int orb_fast_threshold = 20;         // FAST intensity threshold
+};
+
+/// Robust pose graph (paper section 5; Table 1) and the back end's optimisation (libcvo/slam/backend.hpp).
 struct PoseGraphParameters {
   double cauchy_delta = 2.0;  // δ of ρ(x) = δ² log(1 + x/δ²)
+  // Information (times I) of the bridge edge joining a tracking restart's keyframe to the previous
+  // local graph, per unit (σ ~ 1 m, 1 rad): a guess, weak so that any loop overrides it.
+  double bridge_information = 1.0;
+  int max_iterations = 100;  // of each Levenberg-Marquardt run
 };
 
 /// Reading TUM-layout recordings.

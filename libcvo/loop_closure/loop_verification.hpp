@@ -54,14 +54,15 @@ struct LoopDetectorParameters {
   core::LoopClosureParameters loop;  // η_thres, ratio, min_matches (Table 1)
   core::CvoParameters cvo;           // of the refinement
   OrbParameters orb;
-  int ransac_iterations = 300;
-  double ransac_inlier_m = 0.03;     // 3-D distance for a match to count as an inlier
-  int min_inliers = 12;              // fewer after RANSAC: no initial pose, no loop
-  double min_inlier_retention = 0.5; // share of RANSAC's inliers the CVO pose must keep (step 3b)
-  int max_refinements = 3;           // CVO refinements per new keyframe (best η first); 0: no limit
-  std::size_t max_points = 8192;     // capacity of the stored clouds
+  // The rest as core::LoopVerificationParameters (whose defaults these are) says.
+  int ransac_iterations = core::LoopVerificationParameters{}.ransac_iterations;
+  double ransac_inlier_m = core::LoopVerificationParameters{}.ransac_inlier_m;  // 3-D inlier distance (m)
+  int min_inliers = core::LoopVerificationParameters{}.min_inliers;  // fewer after RANSAC: no loop
+  double min_inlier_retention = core::LoopVerificationParameters{}.min_inlier_retention;  // step 3b
+  int max_refinements = core::LoopVerificationParameters{}.max_refinements;  // per new keyframe; 0: no limit
+  std::size_t max_points = core::OdometryParameters{}.max_points;  // capacity of the stored clouds
   core::SelectionParameters selection;  // min_depth_m / max_depth_m: the keypoints' depth range
-  std::uint32_t ransac_seed = 0;        // RANSAC's std::mt19937
+  std::uint32_t ransac_seed = core::LoopVerificationParameters{}.ransac_seed;  // RANSAC's std::mt19937
 };
 
 /// An accepted loop: an edge of the keyframe pose graph, in posegraph::Edge's convention.

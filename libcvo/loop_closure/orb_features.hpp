@@ -8,15 +8,18 @@
 #include <opencv2/core/mat.hpp>
 #include <opencv2/core/types.hpp>
 
+#include "libcvo/core/parameters.hpp"
+
 namespace cvo::loop_closure {
 
-/// cv::ORB's settings; the defaults are ORB-SLAM2's feature count with OpenCV's other defaults.
+/// cv::ORB's settings; the defaults (core::LoopVerificationParameters' orb_*) are ORB-SLAM2's
+/// feature count with OpenCV's other defaults.
 struct OrbParameters {
-  int features = 1000;        // at most this many keypoints, the strongest first
-  float scale_factor = 1.2f;  // pyramid scale between levels
-  int levels = 8;             // pyramid levels
-  int edge_threshold = 31;    // border without features, pixels (>= patch size: descriptors fit)
-  int fast_threshold = 20;    // FAST intensity threshold
+  int features = core::LoopVerificationParameters{}.orb_features;  // at most this many, strongest first
+  float scale_factor = static_cast<float>(core::LoopVerificationParameters{}.orb_scale_factor);  // between levels
+  int levels = core::LoopVerificationParameters{}.orb_levels;                  // pyramid levels
+  int edge_threshold = core::LoopVerificationParameters{}.orb_edge_threshold;  // border without features, pixels
+  int fast_threshold = core::LoopVerificationParameters{}.orb_fast_threshold;  // FAST intensity threshold
 };
 
 /// Keypoints with one descriptor row each: descriptors is CV_8UC1, keypoints.size() x 32 (256

@@ -40,8 +40,8 @@ struct FrameToFrameParameters {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
   core::SE3 initial_pose;         // P of the first usable frame
-  std::size_t max_points = 8192;  // capacity of each cloud (selection keeps ~target_points)
-  int restart_after_failures = 3;  // see above; not from the paper
+  std::size_t max_points = core::OdometryParameters{}.max_points;  // capacity of each cloud
+  int restart_after_failures = core::OdometryParameters{}.restart_after_failures;  // see above
 };
 
 class FrameToFrameOdometry {

@@ -45,19 +45,11 @@ const char* to_string(KeyframeReason reason) {
   return "unknown";
 }
 
-KeyframeOdometryParameters keyframe_odometry_parameters(const config::Config& config) {
-  KeyframeOdometryParameters p;
-  p.selection = config.selection;
-  p.cvo = config.cvo;
-  p.keyframe = config.keyframe;
-  return p;
-}
-
 KeyframeOdometry::KeyframeOdometry(int width, int height, const KeyframeOdometryParameters& parameters)
     : parameters_(parameters),
       selector_(width, height, parameters.selection),
       registration_(registration::Capacities{parameters.max_points}, parameters.cvo),
-      gamma_registration_(registration::Capacities{parameters.max_points}, gamma_parameters(parameters)),
+      gamma_registration_(registration::Capacities{parameters.max_points, 0}, gamma_parameters(parameters)),
       clouds_{registration::PointCloud(parameters.max_points), registration::PointCloud(parameters.max_points),
               registration::PointCloud(parameters.max_points)},
       graphs_{LocalGraph(parameters.local_graph_capacity), LocalGraph(parameters.local_graph_capacity)} {}
@@ -93,7 +85,8 @@ void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double tim
 }
 
 double KeyframeOdometry::gamma_inner_product(const registration::PointCloud& keyframe, const core::SE3& T_mn) {
-  return gamma_registration_.inner_product(keyframe, clouds_[current_], T_mn, parameters_.gamma_ell);
+  return gamma_registration_.inner_product(keyframe, clouds_[current_], T_mn, parameters_.gamma_ell,
+                                           parameters_.gamma_stride);
 }
 
 // The one-node local graph: minimise |log(T T_kf^-1)|²_{H_kf} + w |log(T C^-1)|²_{H_c} over T, with
@@ -182,10 +175,17 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
   } else {
     const auto registration_start = Clock::now();
     const auto f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_);
+    result.frame_registration_ms = ms_since(registration_start);
     const bool f2f_ok = f2f.converged;
     registration::RegistrationResult kf = f2f;  // the keyframe is the previous frame: one registration
     const core::SE3 chain = T_m_previous_ * (f2f_ok ? f2f.transform : velocity_);
-    if (keyframe_ != previous_) kf = registration_.align(clouds_[keyframe_], clouds_[current_], chain);
+    if (keyframe_ != previous_) {
+      const auto keyframe_start = Clock::now();
+      // From a converged frame-to-frame result the chain is within millimetres of the answer: no
+      // wide basin is needed, so the keyframe registration starts at ℓ_min.
+      kf = registration_.align(clouds_[keyframe_], clouds_[current_], chain, f2f_ok ? parameters_.cvo.ell_min : 0.0);
+      result.keyframe_registration_ms = ms_since(keyframe_start);
+    }
     const bool kf_ok = kf.converged;
     // T̄_m^n: the keyframe result fused with the chain (see the header); the raw one goes to the graph.
     const core::SE3 T_mn = kf_ok && f2f_ok && keyframe_ != previous_ ? fuse_with_chain(kf, f2f, chain) : kf.transform;
@@ -194,12 +194,14 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.registration_status = kf_ok ? f2f.status : kf.status;
 
     bool trip = false;
+    const auto gamma_start = Clock::now();
     if (kf_ok) {
       const double ip = gamma_inner_product(clouds_[keyframe_], T_mn);
       if (gamma_reference_ <= 0) gamma_reference_ = ip;  // this is frame m+1
       gamma_ = ip / gamma_reference_;
       trip = trips_threshold(T_mn, gamma_);
     }
+    result.gamma_ms = ms_since(gamma_start);
     // A trip at frame m+1 cannot move the keyframe to n-1 = m: track it against m all the same.
     if (trip && keyframe_ == previous_) {
       trip = false;
@@ -220,7 +222,9 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
       start_keyframe(previous_, previous_frame_, previous_timestamp_, previous_pose_,
                      kf_ok ? reason_ : KeyframeReason::kKeyframeLost);
       pose = previous_pose_ * f2f.transform;
+      const auto reference_start = Clock::now();
       gamma_reference_ = gamma_inner_product(clouds_[keyframe_], f2f.transform);
+      result.gamma_ms += ms_since(reference_start);
       gamma_ = 1.0;
       result.status = TrackStatus::kOk;
       result.keyframe = true;

@@ -19,19 +19,15 @@
 // chain_weight, or, with chain_full_weight_deg > 0, ramps as (θ / chain_full_weight_deg)² up to
 // it, θ the rotation from the keyframe: keyframe-to-frame registrations across large rotations
 // err by more than their Hessians show, while on rendered data the keyframe edge alone is the more
-// accurate near the keyframe. The ramp was 10°; that left single registrations of a few dozen
-// kernel pairs alone, which on TUM fr1/rpy jitter by several centimetres (frames 244-255). 3°
-// (full weight past it) gives fr1/rpy RPE 0.0309 m/s against 0.0318 at 5° and 0.0389 at 10° (with
-// gradient_weight 0.5 and depth-time compensation, ℓ_min 0.05). The price is on exact rendered
-// data, where the chain's drift now enters sooner: bench/odometry's texture-less sweep has KF-CVO
-// ATE 0.028 m at 3°, 0.021 at 5° and 0.0088 at 10° (ℓ_min 0.07); real sensors are what it serves. Local
+// accurate near the keyframe. A short ramp serves real sensors, where a keyframe registration of a
+// few dozen kernel pairs left alone jitters by centimetres; the chain's drift then enters sooner
+// on exact rendered data (the values tried and their figures: bench/odometry-tuning.md). Local
 // graph edges keep the raw measurements; γ and the thresholds use the fused T̄_m^n.
 //
 // Depth-time compensation: the colour and depth images of a Kinect are not taken together (TUM
 // stamps differ by up to ±17 ms, plus SelectionParameters::depth_time_offset_s). Each frame's
 // points are selected with colour_T_depth, the last velocity scaled to that interval
-// (PointSelector::select explains the rest); on fr1/rpy the per-frame translation error drops
-// from 10.2 to 7.4 mm rms and RPE from 0.0350 to 0.0309 m/s.
+// (PointSelector::select explains the rest); what it gains on fr1/rpy: bench/odometry-tuning.md.
 //
 // Failures never crash and never jump: a frame whose points cannot be selected, or whose two
 // registrations both fail, keeps the constant-velocity prediction, is marked, and the next usable
@@ -44,7 +40,6 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "libcvo/config/config.hpp"
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
@@ -56,22 +51,24 @@
 
 namespace cvo::odometry {
 
+/// Defaults and the why of each value: core::OdometryParameters and core::KeyframeTrackingParameters
+/// (libcvo/core/parameters.hpp). From the configuration: config::keyframe_odometry_parameters
+/// (libcvo/config/module_parameters.hpp).
 struct KeyframeOdometryParameters {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
   core::KeyframeParameters keyframe;
-  core::SE3 initial_pose;                  // P of the first usable frame
-  std::size_t max_points = 8192;           // capacity of each cloud
-  std::size_t local_graph_capacity = 300;  // frames per keyframe before one is forced (10 s at 30 Hz)
-  double gamma_ell = 0.1;                  // length-scale of the inner products of γ (see .cpp)
-  double gamma_sigma = 0.316;              // spatial signal of the inner products of γ (see .cpp)
-  double chain_weight = 2.0;               // scale of the chain edge's information; 0: keyframe edge alone
-  double chain_full_weight_deg = 3.0;      // rotation from the keyframe at which the chain weight is full (0: always)
+  core::SE3 initial_pose;  // P of the first usable frame
+  std::size_t max_points = core::OdometryParameters{}.max_points;  // capacity of each cloud
+  // Frames per keyframe before one is forced.
+  std::size_t local_graph_capacity = core::KeyframeTrackingParameters{}.local_graph_capacity;
+  double gamma_ell = core::KeyframeTrackingParameters{}.gamma_ell;      // length-scale of γ's inner products
+  double gamma_sigma = core::KeyframeTrackingParameters{}.gamma_sigma;  // spatial signal of γ's inner products
+  std::size_t gamma_stride = core::KeyframeTrackingParameters{}.gamma_stride;  // γ sums every stride-th point
+  double chain_weight = core::KeyframeTrackingParameters{}.chain_weight;  // chain edge's scale; 0: keyframe edge alone
+  // Rotation from the keyframe at which the chain weight is full (0: always full).
+  double chain_full_weight_deg = core::KeyframeTrackingParameters{}.chain_full_weight_deg;
 };
-
-/// The tracker's parameters from the configuration (its selection, cvo and keyframe sections):
-/// one mapping for cvo-trackerd and cvo-run.
-KeyframeOdometryParameters keyframe_odometry_parameters(const config::Config& config);
 
 /// Why the last frame made a new keyframe.
 enum class KeyframeReason { kNone, kFirst, kGamma, kTranslation, kRotation, kKeyframeLost, kRestart, kGraphFull };

@@ -26,6 +26,7 @@
 #include <memory>
 
 #include "libcvo/core/camera.hpp"
+#include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
 #include "libcvo/odometry/track_result.hpp"
@@ -37,10 +38,11 @@ const char* to_string(OpenCvVariant variant);
 
 struct OpenCvOdometryParameters {
   OpenCvVariant variant = OpenCvVariant::rgbd;
-  double min_depth_m = 0.1;  // valid depth range, as core::SelectionParameters (OpenCV: 0 and 4)
-  double max_depth_m = 5.0;
-  core::SE3 initial_pose;          // P of the first usable frame
-  int restart_after_failures = 3;  // as FrameToFrameParameters
+  // Valid depth range, as core::SelectionParameters (OpenCV's own defaults: 0 and 4).
+  double min_depth_m = core::SelectionParameters{}.min_depth_m;
+  double max_depth_m = core::SelectionParameters{}.max_depth_m;
+  core::SE3 initial_pose;  // P of the first usable frame
+  int restart_after_failures = core::OdometryParameters{}.restart_after_failures;  // as FrameToFrameParameters
   // Everything else is OpenCV's default: 4 pyramid levels with 7/7/7/10 iterations, gradient
   // magnitude >= 10, max depth difference 0.07 m, 7% of the pixels, max step 0.15 m and 15 deg.
 };

@@ -32,7 +32,11 @@ struct TrackResult {
   int iterations = 0;          // solver iterations (0 when no registration ran)
   double inner_product = 0;    // F(T) of the registration at ℓ_min (0 when none ran)
   double selection_ms = 0;     // wall time of point selection
-  double registration_ms = 0;  // wall time of registration
+  double registration_ms = 0;  // wall time of registration (every align() of the frame, and fusion)
+  // KF-CVO's stages (0 where a mode has none; bench/odometry_stages tabulates them):
+  double frame_registration_ms = 0;     // the frame-to-frame align() (eq. 7)
+  double keyframe_registration_ms = 0;  // the keyframe-to-frame align() (eq. 8)
+  double gamma_ms = 0;                  // the inner products of γ (eq. 9)
 
   /// The pose was measured (or is the first frame's), not predicted.
   [[nodiscard]] bool tracked() const { return status == TrackStatus::kOk || status == TrackStatus::kFirstFrame; }

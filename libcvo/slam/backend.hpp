@@ -70,8 +70,9 @@ namespace cvo::slam {
 
 struct BackendParameters {
   double cauchy_delta = core::PoseGraphParameters{}.cauchy_delta;  // δ of the loop edges' kernel
-  double bridge_information = 1.0;  // of a restart's bridge edge, per unit (σ ~ 1 m, 1 rad): a guess
-  int max_iterations = 100;         // of each Levenberg-Marquardt run
+  // Of a restart's bridge edge, per unit (σ ~ 1 m, 1 rad): a guess.
+  double bridge_information = core::PoseGraphParameters{}.bridge_information;
+  int max_iterations = core::PoseGraphParameters{}.max_iterations;  // of each Levenberg-Marquardt run
 };
 
 /// A loop edge at the current poses: its χ² s = eᵀΩe and its Cauchy weight ρ'(s) = 1/(1 + s/δ²).

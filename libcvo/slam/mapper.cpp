@@ -43,15 +43,6 @@ std::string session_name(SessionId session) {
   return text;
 }
 
-MapperParameters mapper_parameters(const config::Config& config) {
-  MapperParameters p;
-  p.detector.loop = config.loop_closure;
-  p.detector.cvo = config.cvo;
-  p.detector.selection = config.selection;
-  p.backend.cauchy_delta = config.pose_graph.cauchy_delta;
-  return p;
-}
-
 Mapper::Mapper(loop_closure::Vocabulary vocabulary, const MapperParameters& parameters)
     : detector_(std::move(vocabulary), parameters.detector), backend_(parameters.backend) {}
 

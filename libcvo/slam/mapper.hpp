@@ -36,7 +36,6 @@
 #include <string>
 #include <vector>
 
-#include "libcvo/config/config.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
 #include "libcvo/core/trajectory.hpp"
@@ -53,6 +52,7 @@ class MapperError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// From the configuration: config::mapper_parameters (libcvo/config/module_parameters.hpp).
 struct MapperParameters {
   loop_closure::LoopDetectorParameters detector;
   BackendParameters backend;
@@ -60,9 +60,6 @@ struct MapperParameters {
 
 /// How logs and messages name a session: its 64 bits in hex, "0x0123456789abcdef".
 std::string session_name(SessionId session);
-
-/// The one place the configuration becomes the back end's parameters.
-MapperParameters mapper_parameters(const config::Config& config);
 
 /// A keyframe as the tracker sends it (CVO_KEYFRAME): frame.index is its frame in the session.
 struct SessionKeyframe {

@@ -1,8 +1,12 @@
 #include "libcvo/config/config.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -174,13 +178,104 @@ TEST(Config, DumpRoundTripsEveryKey) {
   c.trackerd.deterministic = true;
   c.trackerd.lock_memory = false;
   c.trackerd.cpu = 1;
+  c.keyframe_tracking.gamma_sigma = 0.123456789;
+  c.loop_verification.ransac_seed = 4294967295u;
+  c.loop_verification.orb_scale_factor = 1.25;
+  c.odometry.max_points = 100000;
+  c.pose_graph.bridge_information = 1e-3;
   const auto text = dump_config(c);
   EXPECT_TRUE(parse_config(text) == c) << text;
   for (const auto& key : config_keys()) {
     const auto member = key.substr(key.find('.') + 1);
     EXPECT_NE(text.find(member + ": "), std::string::npos) << key << " missing from\n" << text;
   }
-  EXPECT_EQ(config_keys().size(), 49u) << "a new parameter? add a row to the table and regenerate default.yaml";
+  EXPECT_EQ(config_keys().size(), 70u) << "a new parameter? add a row to the table and regenerate default.yaml";
+}
+
+// The values the code was tuned with are keys too (issue 15): the trackers' capacities, KF-CVO's
+// γ kernel and chain fusion, loop verification (RANSAC, ORB, refinements), the back end's bridge
+// and iterations. Their defaults are the tuned values; module_parameters_test checks they reach
+// the modules.
+TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
+  const std::vector<std::string> tuned{
+      "odometry.max_points",          "odometry.restart_after_failures",  "keyframe.local_graph_capacity",
+      "keyframe.gamma_ell",           "keyframe.gamma_sigma",             "keyframe.gamma_stride",
+      "keyframe.chain_weight",
+      "keyframe.chain_full_weight_deg", "loop_closure.max_refinements",   "loop_closure.ransac_iterations",
+      "loop_closure.ransac_inlier_m", "loop_closure.min_inliers",         "loop_closure.min_inlier_retention",
+      "loop_closure.ransac_seed",     "loop_closure.orb_features",        "loop_closure.orb_scale_factor",
+      "loop_closure.orb_levels",      "loop_closure.orb_edge_threshold",  "loop_closure.orb_fast_threshold",
+      "pose_graph.bridge_information", "pose_graph.max_iterations"};
+  const auto keys = config_keys();
+  for (const auto& key : tuned) EXPECT_NE(std::find(keys.begin(), keys.end(), key), keys.end()) << key;
+
+  const Config c;
+  EXPECT_EQ(c.odometry.max_points, 8192u);
+  EXPECT_EQ(c.odometry.restart_after_failures, 3);
+  EXPECT_EQ(c.keyframe_tracking.local_graph_capacity, 300u);
+  EXPECT_EQ(c.keyframe_tracking.gamma_ell, 0.1);
+  EXPECT_EQ(c.keyframe_tracking.gamma_sigma, 0.316);
+  EXPECT_EQ(c.keyframe_tracking.gamma_stride, 4u);
+  EXPECT_EQ(c.keyframe_tracking.chain_weight, 2.0);
+  EXPECT_EQ(c.keyframe_tracking.chain_full_weight_deg, 3.0);
+  EXPECT_EQ(c.loop_verification.max_refinements, 3);
+  EXPECT_EQ(c.loop_verification.ransac_iterations, 300);
+  EXPECT_EQ(c.loop_verification.ransac_inlier_m, 0.03);
+  EXPECT_EQ(c.loop_verification.min_inliers, 12);
+  EXPECT_EQ(c.loop_verification.min_inlier_retention, 0.5);
+  EXPECT_EQ(c.loop_verification.ransac_seed, 0u);
+  EXPECT_EQ(c.loop_verification.orb_features, 1000);
+  EXPECT_EQ(c.loop_verification.orb_scale_factor, 1.2);
+  EXPECT_EQ(c.loop_verification.orb_levels, 8);
+  EXPECT_EQ(c.loop_verification.orb_edge_threshold, 31);
+  EXPECT_EQ(c.loop_verification.orb_fast_threshold, 20);
+  EXPECT_EQ(c.pose_graph.bridge_information, 1.0);
+  EXPECT_EQ(c.pose_graph.max_iterations, 100);
+
+  // A file and --set set the same member; the paper's keys of a shared section keep working.
+  const auto loaded = parse_config(
+      "keyframe:\n  rotation_threshold_deg: 20\n  chain_weight: 0\n  local_graph_capacity: 2\n"
+      "loop_closure: {match_ratio: 0.8, ransac_seed: 7, orb_scale_factor: 1.5}\n"
+      "odometry: {max_points: 4096}\npose_graph: {bridge_information: 0.5}\n");
+  Config expected;
+  expected.keyframe.rotation_threshold_deg = 20;
+  expected.keyframe_tracking.chain_weight = 0;
+  expected.keyframe_tracking.local_graph_capacity = 2;
+  expected.loop_closure.match_ratio = 0.8;
+  expected.loop_verification.ransac_seed = 7;
+  expected.loop_verification.orb_scale_factor = 1.5;
+  expected.odometry.max_points = 4096;
+  expected.pose_graph.bridge_information = 0.5;
+  EXPECT_TRUE(loaded == expected) << dump_config(loaded);
+  Config overridden;
+  for (const char* a : {"keyframe.rotation_threshold_deg=20", "keyframe.chain_weight=0",
+                        "keyframe.local_graph_capacity=2", "loop_closure.match_ratio=0.8", "loop_closure.ransac_seed=7",
+                        "loop_closure.orb_scale_factor=1.5", "odometry.max_points=4096",
+                        "pose_graph.bridge_information=0.5"})
+    apply_override(overridden, a);
+  EXPECT_TRUE(overridden == expected) << dump_config(overridden);
+
+  // Their ranges: what the modules cannot use is refused, naming the key.
+  for (const char* bad : {"odometry.max_points=0", "odometry.restart_after_failures=0",
+                          "keyframe.local_graph_capacity=1", "keyframe.gamma_ell=0", "keyframe.gamma_sigma=-1",
+                          "keyframe.chain_weight=-0.5", "keyframe.chain_full_weight_deg=181",
+                          "loop_closure.max_refinements=-1", "loop_closure.ransac_iterations=0",
+                          "loop_closure.ransac_inlier_m=0", "loop_closure.min_inliers=2",
+                          "loop_closure.min_inlier_retention=1.5", "loop_closure.ransac_seed=4294967296",
+                          "loop_closure.ransac_seed=-1", "loop_closure.orb_features=0",
+                          "loop_closure.orb_scale_factor=1", "loop_closure.orb_levels=0",
+                          "loop_closure.orb_edge_threshold=-1", "loop_closure.orb_fast_threshold=0",
+                          "pose_graph.bridge_information=0", "pose_graph.max_iterations=0"}) {
+    Config untouched;
+    try {
+      apply_override(untouched, bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const ConfigError& e) {
+      const std::string key(bad, std::string_view(bad).find('='));
+      EXPECT_TRUE(contains(e, key)) << e.what();
+    }
+    EXPECT_TRUE(untouched == Config{}) << bad;
+  }
 }
 
 TEST(Config, DefaultYamlIsInSync) {

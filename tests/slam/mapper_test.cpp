@@ -36,7 +36,7 @@ std::string refusal(Mapper& mapper, const SessionKeyframe& k) {
 }
 
 TEST(Mapper, AKeyframeRepeatedWithOtherContentIsRefusedAndTheMapperGoesOn) {
-  Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), mapper_parameters(config::Config{}));
+  Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), MapperParameters{});
   const RealKeyframe a = real_keyframe(0), b = real_keyframe(10);
   constexpr SessionId kSession = 0x5e55;
   EXPECT_FALSE(mapper.add_keyframe({kSession, 0, a.frame, core::SE3(), a.cloud}).duplicate);
@@ -67,7 +67,7 @@ TEST(Mapper, AKeyframeRepeatedWithOtherContentIsRefusedAndTheMapperGoesOn) {
 }
 
 TEST(Mapper, ALocalGraphThatDoesNotStartAtItsKeyframeIsRefused) {
-  Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), mapper_parameters(config::Config{}));
+  Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), MapperParameters{});
   const RealKeyframe a = real_keyframe(0);
   mapper.add_keyframe({7, 0, a.frame, core::SE3(), a.cloud});
   odometry::LocalGraph graph(2);

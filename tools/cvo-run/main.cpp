@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "libcvo/config/config.hpp"
+#include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/eval/ate.hpp"
@@ -151,20 +152,14 @@ using Tracker = std::variant<odometry::FrameToFrameOdometry, odometry::KeyframeO
 Tracker make_tracker(const Arguments& args, const config::Config& config, const core::Intrinsics& camera) {
   const std::string_view mode = args.mode;
   if (mode == "cvo") {
-    odometry::FrameToFrameParameters parameters;
-    parameters.selection = config.selection;
-    parameters.cvo = config.cvo;
-    return odometry::FrameToFrameOdometry(camera.width, camera.height, parameters);
+    return odometry::FrameToFrameOdometry(camera.width, camera.height, config::frame_to_frame_parameters(config));
   }
   if (mode == "kf-cvo") {
-    return odometry::KeyframeOdometry(camera.width, camera.height, odometry::keyframe_odometry_parameters(config));
+    return odometry::KeyframeOdometry(camera.width, camera.height, config::keyframe_odometry_parameters(config));
   }
   if (mode == "opencv-rgbd" || mode == "opencv-rgbd-icp") {
-    odometry::OpenCvOdometryParameters parameters;
-    parameters.variant = mode == "opencv-rgbd" ? odometry::OpenCvVariant::rgbd : odometry::OpenCvVariant::rgbd_icp;
-    parameters.min_depth_m = config.selection.min_depth_m;
-    parameters.max_depth_m = config.selection.max_depth_m;
-    return odometry::OpenCvOdometry(camera, parameters);
+    const auto variant = mode == "opencv-rgbd" ? odometry::OpenCvVariant::rgbd : odometry::OpenCvVariant::rgbd_icp;
+    return odometry::OpenCvOdometry(camera, config::opencv_odometry_parameters(config, variant));
   }
   throw std::logic_error("make_tracker: no tracker for mode '" + std::string(mode) + "'");
 }
@@ -184,9 +179,9 @@ std::vector<io::TumSequence> open_sequences(const Arguments& args, const config:
   std::vector<io::TumSequence> sequences;
   for (const auto& folder : args.sequences) {
     if (!fs::is_directory(folder)) throw io::InputError(folder, "no such folder");
-    io::TumOptions options{.max_association_dt = config.dataset.max_association_dt,
-                           .intrinsics = choose_camera(args, config),
-                           .max_frames = args.max_frames};
+    io::TumOptions options = config::tum_options(config);
+    options.intrinsics = choose_camera(args, config);
+    options.max_frames = args.max_frames;
     sequences.push_back(io::TumSequence::open(folder, options));
   }
   return sequences;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <utility>
 
+#include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/units.hpp"
 
 namespace cvo::tools {
@@ -15,14 +16,14 @@ using core::ms_since;
 
 struct SlamPipeline::Session {
   Session(slam::SessionId session, int width, int height, const config::Config& config)
-      : id(session), tracker(width, height, odometry::keyframe_odometry_parameters(config)), output(width, height) {}
+      : id(session), tracker(width, height, config::keyframe_odometry_parameters(config)), output(width, height) {}
   slam::SessionId id;
   odometry::KeyframeOdometry tracker;
   odometry::KeyframeOutput output;
 };
 
 SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary)
-    : config_(config), mapper_(std::move(vocabulary), slam::mapper_parameters(config)) {}
+    : config_(config), mapper_(std::move(vocabulary), config::mapper_parameters(config)) {}
 
 SlamPipeline::~SlamPipeline() = default;
 

@@ -97,8 +97,10 @@ TrackerdRun run_trackerd(const fs::path& dir, const std::string& name, const std
   return run;
 }
 
-// Poses equal to float precision: position within 1e-5 m, quaternion components within 1e-5.
-void expect_same_poses(const std::vector<cvo_lcm::pose_t>& a, const std::vector<cvo_lcm::pose_t>& b, const char* what) {
+// The same poses: position within `metres`, quaternion components within `metres` too (radians
+// over two).
+void expect_same_poses(const std::vector<cvo_lcm::pose_t>& a, const std::vector<cvo_lcm::pose_t>& b, const char* what,
+                       double metres = 1e-5) {
   ASSERT_EQ(a.size(), b.size());
   double worst_position = 0, worst_orientation = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
@@ -113,9 +115,9 @@ void expect_same_poses(const std::vector<cvo_lcm::pose_t>& a, const std::vector<
     EXPECT_EQ(a[i].frame_index, b[i].frame_index);
     EXPECT_EQ(a[i].status, b[i].status) << "frame " << i;
     for (int c = 0; c < 3; ++c)
-      EXPECT_NEAR(a[i].odom_pose.position[c], b[i].odom_pose.position[c], 1e-5) << "frame " << i;
+      EXPECT_NEAR(a[i].odom_pose.position[c], b[i].odom_pose.position[c], metres) << "frame " << i;
     for (int c = 0; c < 4; ++c)
-      EXPECT_NEAR(a[i].odom_pose.orientation[c], b[i].odom_pose.orientation[c], 1e-5) << "frame " << i;
+      EXPECT_NEAR(a[i].odom_pose.orientation[c], b[i].odom_pose.orientation[c], metres) << "frame " << i;
   }
 }
 
@@ -236,7 +238,11 @@ TEST(VirtualDevice, TrackerdThroughOpenNI2GivesTheFoldersPoses) {
   ASSERT_EQ(virt.exit_code, 0) << virt.err;
   EXPECT_NE(virt.err.find("end of openni2:cvo-virtual:"), std::string::npos) << virt.err;
   ASSERT_EQ(virt.log.poses.size(), 50u) << "every frame tracked\n" << virt.err;
-  expect_same_poses(tum.log.poses, virt.log.poses, "tum vs virtual device");
+  // The device gives its intrinsics as fields of view in float: focal lengths differ from the
+  // folder's by ~1e-6 relative, enough to move a kernel pair across the sparsification threshold
+  // somewhere in 50 frames and the poses by a fraction of a millimetre. A wrong or shifted frame
+  // would move them by centimetres.
+  expect_same_poses(tum.log.poses, virt.log.poses, "tum vs virtual device", 1e-3);
   ASSERT_FALSE(virt.log.statuses.empty());
   EXPECT_EQ(virt.log.statuses.back().source_gaps, 0);
 }

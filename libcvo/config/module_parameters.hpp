@@ -1,0 +1,54 @@
+#pragma once
+// The one place the configuration becomes each module's parameters. cvo-run, cvo-trackerd,
+// cvo-backendd and the benchmarks build their trackers, loop detector and back end from these
+// functions and nowhere else, so a key of the table (config.cpp) reaches every program the same
+// way. A new tunable: a field in libcvo/core/parameters.hpp (its default), a row in config.cpp's
+// table (its key, range and doc), the line below that hands it to its module, and default.yaml
+// regenerated.
+//
+// Which keys go where:
+//   selection.*, cvo.*                   every CVO tracker and the loop detector's refinement
+//   odometry.max_points                  every point cloud's capacity (trackers, loop detector)
+//   odometry.restart_after_failures      the frame-to-frame trackers (cvo, opencv-*)
+//   keyframe.*                           KF-CVO
+//   selection.min/max_depth_m            also OpenCV's odometry and the loop keypoints' depth range
+//   loop_closure.*                       the loop detector (detection, RANSAC, ORB, refinement)
+//   pose_graph.*                         the back end's optimisations
+//   dataset.*                            reading TUM-layout folders
+// The daemons' own sections (trackerd, backendd) and camera are read by the daemons themselves.
+//
+// Kept apart from cvo::config (the file format) so that reading a configuration does not link the
+// modules: this is target cvo::module_parameters.
+#include "libcvo/config/config.hpp"
+#include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/loop_closure/loop_verification.hpp"
+#include "libcvo/loop_closure/orb_features.hpp"
+#include "libcvo/odometry/frame_to_frame.hpp"
+#include "libcvo/odometry/keyframe_odometry.hpp"
+#include "libcvo/odometry/opencv_odometry.hpp"
+#include "libcvo/slam/backend.hpp"
+#include "libcvo/slam/mapper.hpp"
+
+namespace cvo::config {
+
+/// cvo-run --mode cvo: the paper's frame-to-frame baseline.
+odometry::FrameToFrameParameters frame_to_frame_parameters(const Config& config);
+/// KF-CVO: cvo-run --mode kf-cvo and slam, cvo-trackerd, bench/odometry_stages.
+odometry::KeyframeOdometryParameters keyframe_odometry_parameters(const Config& config);
+/// OpenCV's RGB-D odometry (cvo-run --mode opencv-rgbd, opencv-rgbd-icp): the depth range and the
+/// failure policy; everything else is OpenCV's own.
+odometry::OpenCvOdometryParameters opencv_odometry_parameters(const Config& config, odometry::OpenCvVariant variant);
+
+/// The loop detector's ORB keypoints.
+loop_closure::OrbParameters orb_parameters(const Config& config);
+/// The loop detector: detection, matching, RANSAC, CVO refinement.
+loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& config);
+/// The back end's pose-graph optimisations.
+slam::BackendParameters backend_parameters(const Config& config);
+/// The SLAM back end (cvo-run --mode slam, cvo-backendd): the two above.
+slam::MapperParameters mapper_parameters(const Config& config);
+
+/// Reading TUM-layout folders: the association window (the caller adds intrinsics and max_frames).
+io::TumOptions tum_options(const Config& config);
+
+}  // namespace cvo::config
