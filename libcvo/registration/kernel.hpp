@@ -13,6 +13,7 @@
 //   Σ_i a_ij,  Σ_i a_ij (x_i - w)  and the number of contributing pairs,
 // which is all the solver needs (see registration.cpp). Scalar, AVX2+FMA (x86-64) and NEON (AArch64)
 // versions exist; they agree to float rounding (the SIMD exp is a polynomial with ~2 ulp error).
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 
@@ -45,6 +46,18 @@ struct PointSums {
   float dx = 0, dy = 0, dz = 0;   // Σ a_ij (x_i - w)
   std::uint32_t pairs = 0;
 };
+
+/// One pair, a = exp(log_a) at offset (dx, dy, dz) = x_i - w, into `sums` when it reaches the
+/// threshold: the scalar kernels' arithmetic.
+inline void add_pair(PointSums& sums, float log_a, float dx, float dy, float dz, const Constants& k) {
+  if (log_a < k.log_threshold) return;
+  const float a = std::exp(log_a);
+  sums.a += a;
+  sums.dx += a * dx;
+  sums.dy += a * dy;
+  sums.dz += a * dz;
+  ++sums.pairs;
+}
 
 using PointFunction = PointSums (*)(const FixedCloudView& fixed, const Range* ranges, int range_count,
                                     const float w[3], const float feature[kFeatureDim], const Constants& k);

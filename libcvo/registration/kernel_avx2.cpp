@@ -31,45 +31,67 @@ inline float horizontal_sum(__m256 v) {
   return _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)));
 }
 
+// Eight fixed points against one moving point w: their offsets x_i - w, squared distances and
+// squared colour distances, and which lanes hold points (the tail of a run is masked: lanes past
+// its end read nothing).
+struct Lanes {
+  __m256i mask;
+  __m256 dx, dy, dz, r2;
+};
+
+struct Point {
+  __m256 wx, wy, wz;
+  __m256 f[kFeatureDim];
+  Point(const float w[3], const float feature[kFeatureDim])
+      : wx(_mm256_set1_ps(w[0])), wy(_mm256_set1_ps(w[1])), wz(_mm256_set1_ps(w[2])) {
+    for (std::size_t c = 0; c < kFeatureDim; ++c) f[c] = _mm256_set1_ps(feature[c]);
+  }
+};
+
+inline Lanes offsets(const FixedCloudView& fixed, std::uint32_t i, std::uint32_t end, const Point& p) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  Lanes l;
+  l.mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(end - i)), lane);
+  l.dx = _mm256_sub_ps(_mm256_maskload_ps(fixed.x + i, l.mask), p.wx);
+  l.dy = _mm256_sub_ps(_mm256_maskload_ps(fixed.y + i, l.mask), p.wy);
+  l.dz = _mm256_sub_ps(_mm256_maskload_ps(fixed.z + i, l.mask), p.wz);
+  l.r2 = _mm256_fmadd_ps(l.dz, l.dz, _mm256_fmadd_ps(l.dy, l.dy, _mm256_mul_ps(l.dx, l.dx)));
+  return l;
+}
+
+inline __m256 colour_distance_sq(const FixedCloudView& fixed, std::uint32_t i, const Lanes& l, const Point& p) {
+  __m256 c2 = _mm256_setzero_ps();
+  for (std::size_t c = 0; c < kFeatureDim; ++c) {
+    const __m256 d = _mm256_sub_ps(_mm256_maskload_ps(fixed.f[c] + i, l.mask), p.f[c]);
+    c2 = _mm256_fmadd_ps(d, d, c2);
+  }
+  return c2;
+}
+
 }  // namespace
 
 PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
                      const float feature[kFeatureDim], const Constants& k) {
-  const __m256 wx = _mm256_set1_ps(w[0]), wy = _mm256_set1_ps(w[1]), wz = _mm256_set1_ps(w[2]);
-  __m256 fz[kFeatureDim];
-  for (std::size_t c = 0; c < kFeatureDim; ++c) fz[c] = _mm256_set1_ps(feature[c]);
+  const Point p(w, feature);
   const __m256 inv_s = _mm256_set1_ps(k.inv_two_ell_sq), inv_c = _mm256_set1_ps(k.inv_two_ell_color_sq);
   const __m256 log_amp = _mm256_set1_ps(k.log_amplitude), log_thr = _mm256_set1_ps(k.log_threshold);
-  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   __m256 sa = _mm256_setzero_ps(), sx = _mm256_setzero_ps(), sy = _mm256_setzero_ps(), sz = _mm256_setzero_ps();
   std::uint32_t pairs = 0;
 
   for (int r = 0; r < range_count; ++r) {
     for (std::uint32_t i = ranges[r].begin; i < ranges[r].end; i += 8) {
-      // Masked loads for the tail of a run: lanes past its end read nothing and count nothing.
-      const auto remaining = static_cast<int>(ranges[r].end - i);
-      const __m256i load_mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(remaining), lane);
-      const __m256 dx = _mm256_sub_ps(_mm256_maskload_ps(fixed.x + i, load_mask), wx);
-      const __m256 dy = _mm256_sub_ps(_mm256_maskload_ps(fixed.y + i, load_mask), wy);
-      const __m256 dz = _mm256_sub_ps(_mm256_maskload_ps(fixed.z + i, load_mask), wz);
-      __m256 r2 = _mm256_mul_ps(dx, dx);
-      r2 = _mm256_fmadd_ps(dy, dy, r2);
-      r2 = _mm256_fmadd_ps(dz, dz, r2);
-      __m256 c2 = _mm256_setzero_ps();
-      for (std::size_t c = 0; c < kFeatureDim; ++c) {
-        const __m256 d = _mm256_sub_ps(_mm256_maskload_ps(fixed.f[c] + i, load_mask), fz[c]);
-        c2 = _mm256_fmadd_ps(d, d, c2);
-      }
-      const __m256 log_a = _mm256_fnmadd_ps(c2, inv_c, _mm256_fnmadd_ps(r2, inv_s, log_amp));
-      const __m256 keep = _mm256_and_ps(_mm256_cmp_ps(log_a, log_thr, _CMP_GE_OQ), _mm256_castsi256_ps(load_mask));
+      const Lanes l = offsets(fixed, i, ranges[r].end, p);
+      const __m256 c2 = colour_distance_sq(fixed, i, l, p);
+      const __m256 log_a = _mm256_fnmadd_ps(c2, inv_c, _mm256_fnmadd_ps(l.r2, inv_s, log_amp));
+      const __m256 keep = _mm256_and_ps(_mm256_cmp_ps(log_a, log_thr, _CMP_GE_OQ), _mm256_castsi256_ps(l.mask));
       const int bits = _mm256_movemask_ps(keep);
       if (bits == 0) continue;
       pairs += static_cast<std::uint32_t>(__builtin_popcount(static_cast<unsigned>(bits)));
       const __m256 a = _mm256_and_ps(exp256(log_a), keep);
       sa = _mm256_add_ps(sa, a);
-      sx = _mm256_fmadd_ps(a, dx, sx);
-      sy = _mm256_fmadd_ps(a, dy, sy);
-      sz = _mm256_fmadd_ps(a, dz, sz);
+      sx = _mm256_fmadd_ps(a, l.dx, sx);
+      sy = _mm256_fmadd_ps(a, l.dy, sy);
+      sz = _mm256_fmadd_ps(a, l.dz, sz);
     }
   }
   return {horizontal_sum(sa), horizontal_sum(sx), horizontal_sum(sy), horizontal_sum(sz), pairs};
@@ -78,32 +100,17 @@ PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range
 std::size_t collect_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
                          const float feature[kFeatureDim], const Constants& k, float reach_sq, std::uint32_t* index,
                          float* colour, std::size_t capacity) {
-  const __m256 wx = _mm256_set1_ps(w[0]), wy = _mm256_set1_ps(w[1]), wz = _mm256_set1_ps(w[2]);
-  __m256 fz[kFeatureDim];
-  for (std::size_t c = 0; c < kFeatureDim; ++c) fz[c] = _mm256_set1_ps(feature[c]);
+  const Point p(w, feature);
   const __m256 inv_c = _mm256_set1_ps(k.inv_two_ell_color_sq), reach = _mm256_set1_ps(reach_sq);
   const __m256 max_colour = _mm256_set1_ps(k.log_amplitude - k.log_threshold);
-  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   std::size_t count = 0;
   alignas(32) float terms[8];
   for (int r = 0; r < range_count; ++r) {
     for (std::uint32_t i = ranges[r].begin; i < ranges[r].end; i += 8) {
-      const auto remaining = static_cast<int>(ranges[r].end - i);
-      const __m256i load_mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(remaining), lane);
-      const __m256 dx = _mm256_sub_ps(_mm256_maskload_ps(fixed.x + i, load_mask), wx);
-      const __m256 dy = _mm256_sub_ps(_mm256_maskload_ps(fixed.y + i, load_mask), wy);
-      const __m256 dz = _mm256_sub_ps(_mm256_maskload_ps(fixed.z + i, load_mask), wz);
-      __m256 r2 = _mm256_mul_ps(dx, dx);
-      r2 = _mm256_fmadd_ps(dy, dy, r2);
-      r2 = _mm256_fmadd_ps(dz, dz, r2);
-      const __m256 near = _mm256_and_ps(_mm256_cmp_ps(r2, reach, _CMP_LE_OQ), _mm256_castsi256_ps(load_mask));
+      const Lanes l = offsets(fixed, i, ranges[r].end, p);
+      const __m256 near = _mm256_and_ps(_mm256_cmp_ps(l.r2, reach, _CMP_LE_OQ), _mm256_castsi256_ps(l.mask));
       if (_mm256_movemask_ps(near) == 0) continue;
-      __m256 c2 = _mm256_setzero_ps();
-      for (std::size_t c = 0; c < kFeatureDim; ++c) {
-        const __m256 d = _mm256_sub_ps(_mm256_maskload_ps(fixed.f[c] + i, load_mask), fz[c]);
-        c2 = _mm256_fmadd_ps(d, d, c2);
-      }
-      const __m256 term = _mm256_mul_ps(c2, inv_c);
+      const __m256 term = _mm256_mul_ps(colour_distance_sq(fixed, i, l, p), inv_c);
       auto bits = static_cast<unsigned>(
           _mm256_movemask_ps(_mm256_and_ps(near, _mm256_cmp_ps(term, max_colour, _CMP_LE_OQ))));
       if (bits == 0) continue;

@@ -15,15 +15,9 @@ PointSums point_scalar(const FixedCloudView& fixed, const Range* ranges, int ran
         const float d = fixed.f[c][i] - feature[c];
         colour += d * d;
       }
-      const float log_a = k.log_amplitude - (dx * dx + dy * dy + dz * dz) * k.inv_two_ell_sq -
-                          colour * k.inv_two_ell_color_sq;
-      if (log_a < k.log_threshold) continue;
-      const float a = std::exp(log_a);
-      sums.a += a;
-      sums.dx += a * dx;
-      sums.dy += a * dy;
-      sums.dz += a * dz;
-      ++sums.pairs;
+      add_pair(sums,
+               k.log_amplitude - (dx * dx + dy * dy + dz * dz) * k.inv_two_ell_sq - colour * k.inv_two_ell_color_sq, dx,
+               dy, dz, k);
     }
   }
   return sums;

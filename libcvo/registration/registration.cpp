@@ -218,15 +218,10 @@ kernel::PointSums Registration::candidate_sums(std::size_t j, const Eigen::Vecto
   for (std::size_t k = base; k < base + count; ++k) {
     const std::uint32_t i = candidate_fixed_[k];
     const float dx = sx_[i] - w.x(), dy = sy_[i] - w.y(), dz = sz_[i] - w.z();
-    const float log_a =
-        constants_.log_amplitude - (dx * dx + dy * dy + dz * dz) * constants_.inv_two_ell_sq - candidate_colour_[k];
-    if (log_a < constants_.log_threshold) continue;
-    const float a = std::exp(log_a);
-    p.a += a;
-    p.dx += a * dx;
-    p.dy += a * dy;
-    p.dz += a * dz;
-    ++p.pairs;
+    kernel::add_pair(p,
+                     constants_.log_amplitude - (dx * dx + dy * dy + dz * dz) * constants_.inv_two_ell_sq -
+                         candidate_colour_[k],
+                     dx, dy, dz, constants_);
   }
   return p;
 }
