@@ -140,6 +140,106 @@ bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
   return true;
 }
 
+// Eq. 7 and 8: frame to frame from the constant velocity, keyframe to frame from the chain; then
+// T̄_m^n, the keyframe result fused with the chain (see the header; the raw one goes to the graph).
+KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& result) {
+  Registrations r;
+  const auto start = Clock::now();
+  r.f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_);
+  result.frame_registration_ms = ms_since(start);
+  const bool f2f_ok = r.f2f.converged, separate = keyframe_ != previous_;
+  r.kf = r.f2f;  // the keyframe is the previous frame: one registration
+  r.chain = T_m_previous_ * (f2f_ok ? r.f2f.transform : velocity_);
+  if (separate) {
+    const auto keyframe_start = Clock::now();
+    // From a converged frame-to-frame result the chain is within millimetres of the answer: no
+    // wide basin is needed, so the keyframe registration starts at ℓ_min.
+    r.kf = registration_.align(clouds_[keyframe_], clouds_[current_], r.chain, f2f_ok ? parameters_.cvo.ell_min : 0.0);
+    result.keyframe_registration_ms = ms_since(keyframe_start);
+  }
+  r.T_mn = r.kf.converged && f2f_ok && separate ? fuse_with_chain(r.kf, r.f2f, r.chain) : r.kf.transform;
+  result.registration_ms = ms_since(start);
+  result.iterations = r.f2f.iterations + (separate ? r.kf.iterations : 0);
+  result.registration_status = r.kf.converged ? r.f2f.status : r.kf.status;
+  return r;
+}
+
+// γ (eq. 9) after a converged keyframe registration, and the thresholds (eq. 10): whether frame
+// n-1 becomes the keyframe. A trip at frame m+1 cannot move the keyframe to n-1 = m: frame n is
+// then tracked against m all the same.
+bool KeyframeOdometry::keyframe_trips(const Registrations& r, TrackResult& result) {
+  if (!r.kf.converged) return false;
+  const auto start = Clock::now();
+  const double ip = gamma_inner_product(clouds_[keyframe_], r.T_mn);
+  if (gamma_reference_ <= 0) gamma_reference_ = ip;  // this is frame m+1
+  gamma_ = ip / gamma_reference_;
+  bool trip = trips_threshold(r.T_mn, gamma_);
+  result.gamma_ms = ms_since(start);
+  if (trip && keyframe_ == previous_) {
+    trip = false;
+    reason_ = KeyframeReason::kNone;
+  }
+  return trip;
+}
+
+// Frame n tracked against keyframe m: a node of the open local graph, with its keyframe edge and,
+// when the keyframe is not n-1, its frame-to-frame edge.
+core::SE3 KeyframeOdometry::add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r,
+                                               TrackResult& result) {
+  const core::SE3 pose = keyframe_pose_ * r.T_mn;
+  result.status = TrackStatus::kOk;
+  result.inner_product = r.kf.inner_product;
+  auto& graph = graphs_[graph_];
+  graph.add_node({frame.index, frame.timestamp, pose});
+  graph.add_edge({keyframe_frame_, frame.index, r.kf.transform, r.kf.hessian});
+  if (r.f2f.converged && keyframe_ != previous_)
+    graph.add_edge({previous_frame_, frame.index, r.f2f.transform, r.f2f.hessian});
+  return pose;
+}
+
+// Frame n-1 becomes the keyframe (the paper's rule); T_{n-1}^n is then the keyframe-to-frame
+// transform of frame n and its inner product the new γ reference.
+core::SE3 KeyframeOdometry::keyframe_at_previous(const core::RgbdFrame& frame, const Registrations& r,
+                                                 TrackResult& result) {
+  start_keyframe(previous_, previous_frame_, previous_timestamp_, previous_pose_,
+                 r.kf.converged ? reason_ : KeyframeReason::kKeyframeLost);
+  const core::SE3 pose = previous_pose_ * r.f2f.transform;
+  const auto reference_start = Clock::now();
+  gamma_reference_ = gamma_inner_product(clouds_[keyframe_], r.f2f.transform);
+  result.gamma_ms += ms_since(reference_start);
+  gamma_ = 1.0;
+  result.status = TrackStatus::kOk;
+  result.keyframe = true;
+  result.inner_product = r.f2f.inner_product;
+  graphs_[graph_].add_node({frame.index, frame.timestamp, pose});
+  graphs_[graph_].add_edge({previous_frame_, frame.index, r.f2f.transform, r.f2f.hessian});
+  return pose;
+}
+
+// A frame with a previous one: registered, then tracked against the keyframe, made the start of a
+// new keyframe at n-1, or (neither registration converged) predicted and a restart; the motion
+// model learns from what converged.
+core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const core::SE3& predicted,
+                                             TrackResult& result) {
+  const Registrations r = register_frame(result);
+  const bool trip = keyframe_trips(r, result);
+  core::SE3 pose = predicted;
+  if (r.kf.converged && !trip) {
+    pose = add_to_local_graph(frame, r, result);
+  } else if (r.f2f.converged) {
+    pose = keyframe_at_previous(frame, r, result);
+  } else {
+    start_keyframe(current_, frame.index, frame.timestamp, pose, KeyframeReason::kRestart);
+    result.status = TrackStatus::kRegistrationFailed;
+    result.keyframe = true;
+  }
+  result.motion = previous_pose_.inverse() * pose;
+  if (r.f2f.converged || result.status == TrackStatus::kOk) velocity_dt_ = frame.timestamp - previous_timestamp_;
+  if (r.f2f.converged) velocity_ = r.f2f.transform;
+  else if (result.status == TrackStatus::kOk) velocity_ = result.motion;
+  return pose;
+}
+
 TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
   TrackResult result;
   reason_ = KeyframeReason::kNone;
@@ -164,7 +264,9 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
   }
 
   core::SE3 pose;
-  if (!have_previous_) {
+  if (have_previous_) {
+    pose = track_registered(frame, predicted, result);
+  } else {
     // The first frame, or the first usable one after a failure: it is the keyframe.
     const bool first = !have_keyframe_;
     pose = first ? parameters_.initial_pose : predicted;
@@ -172,76 +274,6 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.status = first ? TrackStatus::kFirstFrame : TrackStatus::kRegistrationFailed;
     result.keyframe = true;
     result.motion = first ? core::SE3() : velocity_;
-  } else {
-    const auto registration_start = Clock::now();
-    const auto f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_);
-    result.frame_registration_ms = ms_since(registration_start);
-    const bool f2f_ok = f2f.converged;
-    registration::RegistrationResult kf = f2f;  // the keyframe is the previous frame: one registration
-    const core::SE3 chain = T_m_previous_ * (f2f_ok ? f2f.transform : velocity_);
-    if (keyframe_ != previous_) {
-      const auto keyframe_start = Clock::now();
-      // From a converged frame-to-frame result the chain is within millimetres of the answer: no
-      // wide basin is needed, so the keyframe registration starts at ℓ_min.
-      kf = registration_.align(clouds_[keyframe_], clouds_[current_], chain, f2f_ok ? parameters_.cvo.ell_min : 0.0);
-      result.keyframe_registration_ms = ms_since(keyframe_start);
-    }
-    const bool kf_ok = kf.converged;
-    // T̄_m^n: the keyframe result fused with the chain (see the header); the raw one goes to the graph.
-    const core::SE3 T_mn = kf_ok && f2f_ok && keyframe_ != previous_ ? fuse_with_chain(kf, f2f, chain) : kf.transform;
-    result.registration_ms = ms_since(registration_start);
-    result.iterations = f2f.iterations + (keyframe_ != previous_ ? kf.iterations : 0);
-    result.registration_status = kf_ok ? f2f.status : kf.status;
-
-    bool trip = false;
-    const auto gamma_start = Clock::now();
-    if (kf_ok) {
-      const double ip = gamma_inner_product(clouds_[keyframe_], T_mn);
-      if (gamma_reference_ <= 0) gamma_reference_ = ip;  // this is frame m+1
-      gamma_ = ip / gamma_reference_;
-      trip = trips_threshold(T_mn, gamma_);
-    }
-    result.gamma_ms = ms_since(gamma_start);
-    // A trip at frame m+1 cannot move the keyframe to n-1 = m: track it against m all the same.
-    if (trip && keyframe_ == previous_) {
-      trip = false;
-      reason_ = KeyframeReason::kNone;
-    }
-    if (kf_ok && !trip) {
-      pose = keyframe_pose_ * T_mn;
-      result.status = TrackStatus::kOk;
-      result.inner_product = kf.inner_product;
-      auto& graph = graphs_[graph_];
-      graph.add_node({frame.index, frame.timestamp, pose});
-      graph.add_edge({keyframe_frame_, frame.index, kf.transform, kf.hessian});
-      if (f2f_ok && keyframe_ != previous_)
-        graph.add_edge({previous_frame_, frame.index, f2f.transform, f2f.hessian});
-    } else if (f2f_ok) {
-      // Frame n-1 becomes the keyframe (the paper's rule); T_{n-1}^n is then the keyframe-to-frame
-      // transform of frame n and its inner product the new γ reference.
-      start_keyframe(previous_, previous_frame_, previous_timestamp_, previous_pose_,
-                     kf_ok ? reason_ : KeyframeReason::kKeyframeLost);
-      pose = previous_pose_ * f2f.transform;
-      const auto reference_start = Clock::now();
-      gamma_reference_ = gamma_inner_product(clouds_[keyframe_], f2f.transform);
-      result.gamma_ms += ms_since(reference_start);
-      gamma_ = 1.0;
-      result.status = TrackStatus::kOk;
-      result.keyframe = true;
-      result.inner_product = f2f.inner_product;
-      graphs_[graph_].add_node({frame.index, frame.timestamp, pose});
-      graphs_[graph_].add_edge({previous_frame_, frame.index, f2f.transform, f2f.hessian});
-    } else {
-      // Neither registration converged: keep the prediction and restart from this frame.
-      pose = predicted;
-      start_keyframe(current_, frame.index, frame.timestamp, pose, KeyframeReason::kRestart);
-      result.status = TrackStatus::kRegistrationFailed;
-      result.keyframe = true;
-    }
-    result.motion = previous_pose_.inverse() * pose;
-    if (f2f_ok || result.status == TrackStatus::kOk) velocity_dt_ = frame.timestamp - previous_timestamp_;
-    if (f2f_ok) velocity_ = f2f.transform;
-    else if (result.status == TrackStatus::kOk) velocity_ = result.motion;
   }
 
   // The current frame becomes the previous one; the free cloud takes the next frame.

@@ -101,6 +101,16 @@ class KeyframeOdometry {
   [[nodiscard]] const KeyframeOdometryParameters& parameters() const { return parameters_; }
 
  private:
+  // Frame n's two registrations (eq. 7, 8) and T̄_m^n, the keyframe result fused with the chain.
+  struct Registrations {
+    registration::RegistrationResult f2f, kf;
+    core::SE3 chain, T_mn;
+  };
+  Registrations register_frame(TrackResult& result);
+  bool keyframe_trips(const Registrations& r, TrackResult& result);
+  core::SE3 track_registered(const core::RgbdFrame& frame, const core::SE3& predicted, TrackResult& result);
+  core::SE3 add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r, TrackResult& result);
+  core::SE3 keyframe_at_previous(const core::RgbdFrame& frame, const Registrations& r, TrackResult& result);
   void start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose, KeyframeReason why);
   bool trips_threshold(const core::SE3& T_mn, double gamma);
   double gamma_inner_product(const registration::PointCloud& keyframe, const core::SE3& T_mn);
