@@ -214,13 +214,13 @@ __attribute__((visibility("default"))) int open(const char* path, int flags, ...
   return libc().open(path, flags, mode);
 }
 
+// On 64-bit glibc open64 is open: the same node or the same call.
 __attribute__((visibility("default"))) int open64(const char* path, int flags, ...) {
   va_list args;
   va_start(args, flags);
   const mode_t mode = mode_argument(flags, args);
   va_end(args);
-  if (const auto fd = open_node(path, flags)) return *fd;
-  return libc().open(path, flags, mode);
+  return open(path, flags, mode);
 }
 
 __attribute__((visibility("default"))) int openat(int dir, const char* path, int flags, ...) {
