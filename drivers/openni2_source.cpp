@@ -87,6 +87,7 @@ core::Intrinsics device_intrinsics(openni::VideoStream& colour, int width, int h
     k.cx = own.cx;
     k.cy = own.cy;
     std::copy(std::begin(own.distortion), std::end(own.distortion), k.distortion.begin());
+    k.readout_s = own.readout_s;
     return k;
   }
   // A float field of view holds about 7 digits, a focal length to some 1e-5 px: rounded to 1e-4 px

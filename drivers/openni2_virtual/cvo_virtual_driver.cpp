@@ -58,7 +58,7 @@ struct Playback {
     std::strncpy(info.vendor, "cvo-slam", ONI_MAX_STR - 1);
     std::strncpy(info.name, "virtual TUM device", ONI_MAX_STR - 1);
     const auto& k = sequence.intrinsics();
-    intrinsics = {k.fx, k.fy, k.cx, k.cy, {}};
+    intrinsics = {k.fx, k.fy, k.cx, k.cy, {}, k.readout_s};
     std::copy(k.distortion.begin(), k.distortion.end(), std::begin(intrinsics.distortion));
     fps = frame_rate(sequence);
   }

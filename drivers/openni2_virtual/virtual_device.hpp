@@ -17,12 +17,14 @@ namespace cvo::drivers::virtual_device {
 inline constexpr std::string_view kScheme = "cvo-virtual:";
 
 /// Stream property (read only): the colour camera's intrinsics, which OpenNI's fields of view
-/// cannot carry (the principal point, the lens distortion). Its value is `StreamIntrinsics`. The
+/// cannot carry (the principal point, the lens distortion, a rolling shutter's readout). Its value
+/// is `StreamIntrinsics`. The
 /// depth stream answers it too: depth is registered to colour.
 inline constexpr int kIntrinsicsProperty = 0x43564F01;  // "CVO" 1, clear of OpenNI's and PS1080's ids
 struct StreamIntrinsics {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   double distortion[5] = {0, 0, 0, 0, 0};  // k1, k2, p1, p2, k3 as core::Intrinsics
+  double readout_s = 0;                     // as core::Intrinsics
 };
 
 /// Device property (int, 1 or 0): 1 (the default) plays at the recorded rate, as a camera would;

@@ -107,6 +107,8 @@ const std::vector<Field>& table() {
       row("cvo.min_step", &Config::cvo, &CvoParameters::min_step, kPositive,
           "converged when |Δρ| + |Δφ| (m + rad) is below this at ℓ_min"),
       row("cvo.threads", &Config::cvo, &CvoParameters::threads, kThreads, "tracker threads"),
+      row("cvo.mutual_visibility", &Config::cvo, &CvoParameters::mutual_visibility, kAny,
+          "registration sums only points each view sees (no pull from the image borders)"),
       row("odometry.max_points", &Config::odometry, &OdometryParameters::max_points, kAtLeastOne,
           "capacity of each point cloud (trackers, loop detector); a larger selection is clamped"),
       row("odometry.restart_after_failures", &Config::odometry, &OdometryParameters::restart_after_failures,

@@ -7,6 +7,12 @@
 //   u = fx x'' + cx,  v = fy y'' + cy,  depth_metres = raw_depth / depth_scale.
 // All coefficients zero is the plain pinhole u = fx x / z + cx. Depth is registered in the same
 // (distorted) colour image, and its value is z, the distance along the optical axis.
+//
+// Rolling shutter: a sensor that reads its rows one after another sees row v at
+//   t(v) = t_frame + readout_s (v / (height - 1) - 1/2),
+// the frame's stamp being its middle row's time; readout_s = 0 is a global shutter. A camera
+// turning at ω rad/s shears and stretches its image by about ω · readout_s between the first row and
+// the last (the trackers undo it with their motion model: point_selection.hpp).
 #include <array>
 #include <optional>
 #include <string>
@@ -21,6 +27,9 @@ struct Intrinsics {
   double depth_scale = 5000.0;  // raw 16-bit depth units per metre (TUM: 5000)
   // k1, k2, p1, p2, k3 in OpenCV's order (its distCoeffs for 5 coefficients); zeros: none.
   std::array<double, 5> distortion{};
+  double readout_s = 0;  // rolling shutter: first row to last row (s); 0 = global shutter
+
+  [[nodiscard]] bool rolling_shutter() const { return readout_s > 0; }
 
   [[nodiscard]] bool has_distortion() const {
     for (const double c : distortion)
@@ -45,7 +54,9 @@ std::array<T, 2> distort(const std::array<double, 5>& d, T x, T y) {
 /// Named presets: "tum_fr1", "tum_fr2", "tum_fr3" (TUM RGB-D benchmark calibrations, 640x480,
 /// 5000 units/m, with the published distortion of fr1 and fr2, whose images are distorted; fr3's
 /// images were undistorted before release, so its coefficients are zero) and "synthetic" (the
-/// renderer's default camera, distortion-free).
+/// renderer's default camera, distortion-free, global shutter). fr1 and fr2 are Kinects (v1)
+/// with rolling shutters; their readout (not published by TUM) is a lower bound measured here
+/// (bench/odometry-tuning.md, "Rolling shutter").
 std::optional<Intrinsics> camera_preset(std::string_view name);
 std::vector<std::string> camera_preset_names();
 

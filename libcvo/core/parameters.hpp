@@ -53,6 +53,7 @@ struct CvoParameters {
   int max_iterations = 100;
   double min_step = 1e-4;                      // converged at ℓ_min when |Δρ| + |Δφ| < this (m + rad)
   int threads = 1;                             // the tracker runs single-threaded by default
+  bool mutual_visibility = true;               // align() sums only what both views see (registration.hpp)
 };
 
 /// What every tracker keeps besides the paper's values (libcvo/odometry); YAML section `odometry`.

@@ -17,10 +17,10 @@
 namespace cvo::io {
 namespace {
 
-constexpr std::array<std::string_view, 12> kKeys{"fx",          "fy", "cx", "cy", "width", "height",
-                                                 "depth_scale", "k1", "k2", "p1", "p2",    "k3"};
+constexpr std::array<std::string_view, 13> kKeys{"fx",          "fy", "cx", "cy", "width", "height",
+                                                 "depth_scale", "k1", "k2", "p1", "p2",    "k3", "readout_s"};
 constexpr std::size_t kRequiredKeys = 6;  // fx .. height; the rest default
-constexpr std::string_view kExpected = "fx, fy, cx, cy, width, height, depth_scale, k1, k2, p1, p2, k3";
+constexpr std::string_view kExpected = "fx, fy, cx, cy, width, height, depth_scale, k1, k2, p1, p2, k3, readout_s";
 constexpr std::array<std::string_view, 5> kDistortionKeys{"k1", "k2", "p1", "p2", "k3"};  // OpenCV's order
 constexpr std::string_view kDepthSensorKey = "depth_sensor";
 constexpr std::string_view kExtrinsicKey = "T_colour_depth";
@@ -90,6 +90,7 @@ void set_key(core::Intrinsics& k, const std::string& key, const YAML::Node& valu
   if (key == "cx") k.cx = *v;
   if (key == "cy") k.cy = *v;
   if (key == "depth_scale") k.depth_scale = *v;
+  if (key == "readout_s") k.readout_s = *v;
   for (std::size_t i = 0; i < kDistortionKeys.size(); ++i)
     if (key == kDistortionKeys[i]) k.distortion[i] = *v;
 }
@@ -171,6 +172,7 @@ std::string format_intrinsics_yaml(const core::Intrinsics& k, std::string_view c
   if (k.has_distortion())
     for (std::size_t i = 0; i < kDistortionKeys.size(); ++i)
       text.append(kDistortionKeys[i]).append(": ").append(exact(k.distortion[i])).append("\n");
+  if (k.rolling_shutter()) text += "readout_s: " + exact(k.readout_s) + "\n";
   return text;
 }
 

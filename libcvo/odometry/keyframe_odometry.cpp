@@ -130,6 +130,17 @@ core::SE3 KeyframeOdometry::colour_T_depth(const core::RgbdFrame& frame) const {
   return motion;
 }
 
+// The camera's motion per second at the last measured velocity, for a rolling-shutter camera's
+// rows (PointSelector::select): zero before there is one, for a global shutter, and where the
+// first or last row would turn more than kMaxCompensationDeg (a wrong velocity would feed back).
+core::Vector6d KeyframeOdometry::twist(const core::RgbdFrame& frame) const {
+  constexpr double kMaxCompensationDeg = 2.0;
+  if (!frame.intrinsics.rolling_shutter() || !have_previous_ || !(velocity_dt_ > 0)) return core::Vector6d::Zero();
+  const core::Vector6d xi = velocity_.log() / velocity_dt_;
+  const double edge_deg = core::degrees(xi.tail<3>().norm() * 0.5 * frame.intrinsics.readout_s);
+  return xi.allFinite() && edge_deg <= kMaxCompensationDeg ? xi : core::Vector6d::Zero();
+}
+
 bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
   const auto& k = parameters_.keyframe;
   if (gamma < k.inner_product_ratio_threshold) reason_ = KeyframeReason::kGamma;
@@ -248,7 +259,7 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
   const core::SE3 predicted = have_frame_ ? last_pose_ * velocity_ : parameters_.initial_pose;
 
   const auto selection_start = Clock::now();
-  const auto selection = selector_.select(frame, clouds_[current_], colour_T_depth(frame));
+  const auto selection = selector_.select(frame, clouds_[current_], colour_T_depth(frame), twist(frame));
   result.selection_ms = ms_since(selection_start);
   result.selection_status = selection.status;
   result.points = clouds_[current_].size();

@@ -115,6 +115,7 @@ class KeyframeOdometry {
   bool trips_threshold(const core::SE3& T_mn, double gamma);
   double gamma_inner_product(const registration::PointCloud& keyframe, const core::SE3& T_mn);
   [[nodiscard]] core::SE3 colour_T_depth(const core::RgbdFrame& frame) const;
+  [[nodiscard]] core::Vector6d twist(const core::RgbdFrame& frame) const;
   core::SE3 fuse_with_chain(const registration::RegistrationResult& kf, const registration::RegistrationResult& f2f,
                             const core::SE3& chain) const;
 

@@ -6,6 +6,8 @@
 #include <mutex>
 #include <stdexcept>
 
+#include <omp.h>
+
 #include "libcvo/posegraph/optimizer.hpp"
 
 namespace cvo::posegraph {
@@ -43,7 +45,12 @@ CholmodCommon::CholmodCommon() {
   common_.error_handler = log_cholmod_error;  // ... real errors are logged here
 }
 
+SerialOpenMp::SerialOpenMp() : saved_levels_(omp_get_max_active_levels()) { omp_set_max_active_levels(0); }
+
+SerialOpenMp::~SerialOpenMp() { omp_set_max_active_levels(saved_levels_); }
+
 bool Cholmod::factorize() {
+  const SerialOpenMp serial;
   cholmod_common* cc = common.get();
   factorized = cholmod_l_factorize(matrix.get(), factor.get(), cc) != 0 && cc->status != CHOLMOD_NOT_POSDEF;
   return factorized;

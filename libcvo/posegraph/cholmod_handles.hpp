@@ -47,6 +47,22 @@ using SparsePtr = std::unique_ptr<cholmod_sparse, SparseDeleter>;
 using FactorPtr = std::unique_ptr<cholmod_factor, FactorDeleter>;
 using DensePtr = std::unique_ptr<cholmod_dense, DenseDeleter>;
 
+/// While alive, the OpenMP parallel regions this thread starts run on this thread alone: OpenMP's
+/// max-active-levels, a per-thread setting, is 0 (no region is active), and the previous value
+/// comes back at the end of the scope. Other threads, and this one afterwards, are unaffected.
+class SerialOpenMp {
+ public:
+  SerialOpenMp();
+  ~SerialOpenMp();
+  SerialOpenMp(const SerialOpenMp&) = delete;
+  SerialOpenMp& operator=(const SerialOpenMp&) = delete;
+  SerialOpenMp(SerialOpenMp&&) = delete;
+  SerialOpenMp& operator=(SerialOpenMp&&) = delete;
+
+ private:
+  int saved_levels_;
+};
+
 /// A common with the matrix, its factor and the dense workspaces of its solves, all belonging to
 /// it. The workspaces (right-hand side, solution, and cholmod_l_solve2's Y and E) are kept between
 /// solves, so a solve allocates nothing once their size is set.
@@ -68,6 +84,13 @@ struct Cholmod {
 
   /// Numeric factorisation of matrix into factor (whose symbolic analysis it must hold); false
   /// when the matrix is not positive definite. Sets `factorized` to the result.
+  ///
+  /// It runs serially (SerialOpenMp). CHOLMOD's supernodal factorisation does its dense work in
+  /// the BLAS (serial here) and wraps a few memory-bound loops (scattering H into a supernode,
+  /// adding an update into its ancestor) in OpenMP regions of a compiled-in 4 threads. A pose
+  /// graph's supernodes are small (tens of columns), so those loops are short and each region's
+  /// fork and join costs more than the loop; with fewer cores than threads the team also
+  /// competes with the thread that waits for it.
   bool factorize();
   /// x = A^-1 b with the factor of the last successful factorize(); b and the result have
   /// matrix->nrow entries. The result points into `solution`, valid until the next solve. Throws

@@ -9,6 +9,27 @@
 namespace cvo::registration {
 namespace {
 
+// A point of row v moved to the frame's time (see PointSelector::select): P + τ(v) (ω × P + v).
+class RollingShutter {
+ public:
+  RollingShutter(const core::Intrinsics& K, const core::Vector6d& twist)
+      : on_(K.rolling_shutter() && K.height > 1 && twist.allFinite() && !twist.isZero()),
+        seconds_per_row_(static_cast<float>(K.readout_s / (K.height - 1))),
+        middle_row_(0.5f * static_cast<float>(K.height - 1)),
+        v_(twist.head<3>().cast<float>()), w_(twist.tail<3>().cast<float>()) {}
+
+  [[nodiscard]] Eigen::Vector3f at_frame_time(const Eigen::Vector3f& P, int row) const {
+    if (!on_) return P;
+    const float tau = seconds_per_row_ * (static_cast<float>(row) - middle_row_);
+    return P + tau * (w_.cross(P) + v_);
+  }
+
+ private:
+  bool on_;
+  float seconds_per_row_, middle_row_;
+  Eigen::Vector3f v_, w_;
+};
+
 constexpr int kRegion = 32;           // DSO's threshold region size (pixels)
 constexpr int kHistogramBins = 50;    // |g| on the 0-255 scale, clipped
 constexpr float kThresholdOffset = 7.0f / 255.0f;  // DSO's constant above the median
@@ -75,7 +96,8 @@ void PointSelector::build_ray_table(const core::Intrinsics& K) {
   ray_intrinsics_ = K;
 }
 
-SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth) {
+SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
+                                      const core::Vector6d& twist) {
   cloud.clear();
   SelectionResult result;
   if (frame.bgr.empty() || frame.depth.empty() || frame.bgr.cols != width_ || frame.bgr.rows != height_ ||
@@ -205,6 +227,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const Eigen::Matrix3f R_dc = R_cd.transpose();
   const Eigen::Vector3f t_cd = colour_T_depth.translation().cast<float>();
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
+  const RollingShutter shutter(K, twist);
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
     if (best < 0) continue;
@@ -218,7 +241,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const float rx = distorted ? rays_[2 * p] : (static_cast<float>(u) - cx) * fx_inv;
     const float ry = distorted ? rays_[2 * p + 1] : (static_cast<float>(v) - cy) * fy_inv;
     if (!compensate) {
-      cloud.push_back({rx * z, ry * z, z}, f);
+      cloud.push_back(shutter.at_frame_time(Eigen::Vector3f(rx * z, ry * z, z), v), f);
       continue;
     }
     // The ray at the depth time, projected through the lens into the depth image (registered to
@@ -232,7 +255,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const auto raw = static_cast<float>(frame.depth.at<std::uint16_t>(static_cast<int>(vd), static_cast<int>(ud)));
     if (raw <= 0 || raw < min_raw || raw > max_raw) continue;
     const Eigen::Vector3f P_c = R_cd * (P_d * (raw * depth_inv / P_d.z())) + t_cd;
-    cloud.push_back({P_c.x(), P_c.y(), P_c.z()}, f);
+    cloud.push_back(shutter.at_frame_time(P_c, v), f);
   }
   result.selected = cloud.size();
   if (cloud.overflowed() > 0) result.status = SelectionStatus::kCapacityClamped;

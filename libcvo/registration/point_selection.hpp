@@ -64,8 +64,18 @@ class PointSelector {
   /// colour pixel's ray. Selected points are colour edges, often at depth discontinuities, where a
   /// few pixels of rotation between the two images read the other side's depth. A point whose
   /// compensated depth is missing or out of range is dropped.
+  ///
+  /// `twist`: the camera's motion per second in its own frame, [v; ω] (SE3::log order), for a
+  /// rolling-shutter camera (frame.intrinsics.readout_s > 0; ignored otherwise). Row v was seen at
+  /// τ = readout_s (v / (height - 1) - 1/2) from the frame's time (camera.hpp), by the camera
+  /// exp(τ ξ) in the frame's camera; so each point is moved to the frame's time,
+  ///   P <- P + τ (ω × P + v),
+  /// to first order in τ ω (below 0.03 rad for 0.02 s at 90 °/s). Without it a camera pitching at ω
+  /// sees its image stretched by ω · readout_s, a rotation error that does not cancel between frames
+  /// turning at different rates.
   SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud,
-                         const core::SE3& colour_T_depth = core::SE3());
+                         const core::SE3& colour_T_depth = core::SE3(),
+                         const core::Vector6d& twist = core::Vector6d::Zero());
 
   [[nodiscard]] int width() const { return width_; }
   [[nodiscard]] int height() const { return height_; }

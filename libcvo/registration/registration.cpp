@@ -16,6 +16,7 @@ constexpr double kShrinkFraction = 0.01;   // shrink ℓ once the step is below 
 // a narrower slack makes points collect again sooner (the first step at each ℓ moves most).
 constexpr double kSlackFraction = 0.25;
 constexpr std::uint16_t kUncollected = 0xFFFF, kTooMany = 0xFFFE;
+constexpr float kFar = 1e15f;  // where a hidden fixed point is put: beyond every kernel's reach
 
 std::size_t next_power_of_two(std::size_t v) {
   std::size_t p = 1;
@@ -100,7 +101,7 @@ Registration::Registration(const Capacities& capacities, const core::CvoParamete
     : parameters_(parameters), isa_(isa), point_(kernel::point_function(isa)), collect_(kernel::collect_function(isa)), capacity_(capacities.max_points),
       bucket_mask_(next_power_of_two(std::max<std::size_t>(1024, 2 * capacities.max_points)) - 1),
       slot_key_(bucket_mask_ + 1), bucket_start_(bucket_mask_ + 2), bucket_of_(capacities.max_points), sx_(capacities.max_points),
-      sy_(capacities.max_points), sz_(capacities.max_points),
+      sy_(capacities.max_points), sz_(capacities.max_points), input_of_(capacities.max_points),
       slots_(std::min<std::size_t>(capacities.candidates_per_point, kTooMany - 1)),
       candidate_fixed_(capacities.max_points * slots_), candidate_colour_(capacities.max_points * slots_),
       candidate_count_(capacities.max_points, kUncollected), collected_at_(4 * capacities.max_points),
@@ -164,6 +165,7 @@ bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell
   // Scatter, using bucket_start_[b] as a cursor, then shift back so it holds the starts again.
   for (std::size_t i = 0; i < n; ++i) {
     const auto dst = bucket_start_[bucket_of_[i]]++;
+    input_of_[dst] = static_cast<std::uint32_t>(i);
     sx_[dst] = fixed.x()[i];
     sy_[dst] = fixed.y()[i];
     sz_[dst] = fixed.z()[i];
@@ -172,6 +174,45 @@ bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell
   for (std::size_t b = bucket_start_.size() - 1; b > 0; --b) bucket_start_[b] = bucket_start_[b - 1];
   bucket_start_[0] = 0;
   return true;
+}
+
+bool Registration::View::sees(const Eigen::Vector3f& p) const {
+  if (!(p.z() > 0)) return false;
+  const float u = p.x() / p.z(), v = p.y() / p.z();
+  return u >= x0 && u <= x1 && v >= y0 && v <= y1;
+}
+
+Registration::View Registration::view_of(const PointCloud& cloud, std::size_t n) {
+  View v{std::numeric_limits<float>::max(), -std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+         -std::numeric_limits<float>::max()};
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(cloud.z()[i] > 0)) continue;
+    const float u = cloud.x()[i] / cloud.z()[i], w = cloud.y()[i] / cloud.z()[i];
+    v.x0 = std::min(v.x0, u);
+    v.x1 = std::max(v.x1, u);
+    v.y0 = std::min(v.y0, w);
+    v.y1 = std::max(v.y1, w);
+  }
+  return v;
+}
+
+// Fixed points the moving camera (at T) does not see are moved out of every kernel's reach, in the
+// grid's copy (a hidden point then adds nothing to any sum). Candidates are collected again when
+// a point hidden before is seen now: no list holds it.
+void Registration::hide_fixed_unseen(const PointCloud& fixed, std::size_t n, const core::SE3& T) {
+  bool newly_seen = false;
+  const core::SE3 T_inv = T.inverse();
+  const Eigen::Matrix3f R = T_inv.rotation_matrix().cast<float>();
+  const Eigen::Vector3f t = T_inv.translation().cast<float>();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3f x = fixed.position(input_of_[k]);
+    const bool seen = moving_view_.sees(R * x + t);
+    newly_seen |= seen && sx_[k] == kFar;
+    sx_[k] = seen ? x.x() : kFar;
+    sy_[k] = seen ? x.y() : kFar;
+    sz_[k] = seen ? x.z() : kFar;
+  }
+  if (newly_seen) std::fill(candidate_count_.begin(), candidate_count_.end(), kUncollected);
 }
 
 void Registration::find_cells(const Eigen::Vector3f& w, Cells& cells) const {
@@ -264,6 +305,7 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
     const std::size_t begin = static_cast<std::size_t>(chunk) * kChunk, end = std::min(n, begin + kChunk);
     for (std::size_t j = begin + (stride - begin % stride) % stride; j < end; j += stride) {
       const Eigen::Vector3f w = R * moving.position(j) + t;
+      if (candidates && visibility_ && !fixed_view_.sees(w)) continue;
       float feature[kFeatureDim];
       for (std::size_t c = 0; c < kFeatureDim; ++c) feature[c] = moving.feature_channel(c)[j];
       const kernel::PointSums p = point_sums(view, j, w, feature, cells, candidates, sums.collections);
@@ -311,6 +353,12 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
   const double ell_min = std::min(parameters_.ell_min, parameters_.ell_init);
   double ell = ell_start > 0 ? std::clamp(ell_start, ell_min, parameters_.ell_init) : parameters_.ell_init;
   build_grid(fixed, nf, ell, slots_ > 0 ? kSlackFraction : 0.0);
+  visibility_ = parameters_.mutual_visibility;
+  if (visibility_) {
+    fixed_view_ = view_of(fixed, nf);
+    moving_view_ = view_of(moving, nm);
+    hide_fixed_unseen(fixed, nf, initial);
+  }
   core::SE3 T = initial;
   Sums sums;
   result.status = RegistrationStatus::kNotConverged;
@@ -352,6 +400,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
       // The grid and the candidates of the wider kernel serve the narrower one (a superset).
       if (slots_ > 0) set_length_scale(ell, kSlackFraction);
       else build_grid(fixed, nf, ell, 0.0);
+      if (visibility_) hide_fixed_unseen(fixed, nf, T);
     }
   }
   result.transform = T;

@@ -19,6 +19,16 @@
 // The reported Hessian is H / ℓ² at the final ℓ, the Gauss-Newton approximation of -∇²F, used as
 // the information of the estimate (pose-graph edges).
 //
+// Mutual visibility (CvoParameters::mutual_visibility; align() only). Each cloud covers its own
+// camera's view; where the views differ, a moving point near the edge of X's view finds partners on
+// one side only, and a fixed point the moving camera no longer sees has none: both pull T towards
+// less motion (the kernel correlation of two truncated clouds peaks short of the truth; on real
+// fast turns KF-CVO under-rotated by ~1 %). So align() sums only what both cameras see: moving
+// points whose T z_j falls outside X's view (the extent of X's image coordinates x/z, y/z) are
+// skipped each iteration, and fixed points outside Z's view, seen through T⁻¹, are hidden once per
+// length-scale. Then both clouds are cut at the same place at the truth, where the correlation of
+// the cut clouds peaks. γ and α (inner_product()) measure overlap and keep every point.
+//
 // Neighbour search: X is hashed once per length-scale into cells of side r_max (see kernel.hpp);
 // each moving point visits the 27 cells around it.
 //
@@ -62,7 +72,7 @@ struct RegistrationResult {
   int iterations = 0;
   bool converged = false;
   RegistrationStatus status = RegistrationStatus::kOk;
-  double inner_product = 0;    // F(T) at the final length-scale
+  double inner_product = 0;    // F(T) at the final length-scale (over what both views see: see above)
   double final_ell = 0;
   std::size_t pairs = 0;       // contributing pairs at the last iteration
   core::Matrix6d hessian = core::Matrix6d::Zero();  // H / ℓ², ordered [translation, rotation]
@@ -138,6 +148,13 @@ class Registration {
                           const float* feature, const Cells& cells);
   [[nodiscard]] kernel::PointSums candidate_sums(std::size_t j, const Eigen::Vector3f& w) const;
   RegistrationStatus check(const PointCloud& fixed, const PointCloud& moving) const;
+  // What a camera saw: the extent of its points' image coordinates x/z, y/z.
+  struct View {
+    float x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+    [[nodiscard]] bool sees(const Eigen::Vector3f& p) const;
+  };
+  static View view_of(const PointCloud& cloud, std::size_t n);
+  void hide_fixed_unseen(const PointCloud& fixed, std::size_t n, const core::SE3& T);
 
   core::CvoParameters parameters_;
   kernel::Isa isa_;
@@ -151,6 +168,9 @@ class Registration {
   std::vector<std::uint32_t> bucket_start_;  // size slots + 1
   std::vector<std::uint32_t> bucket_of_;     // per input point
   std::vector<float> sx_, sy_, sz_;
+  std::vector<std::uint32_t> input_of_;  // bucket order -> the fixed cloud's index
+  bool visibility_ = false;              // align() with mutual visibility: moving points X's view does not see skipped
+  View fixed_view_, moving_view_;
   std::array<std::vector<float>, kFeatureDim> sf_;
   kernel::Constants constants_;
   // Candidate pairs per moving point (see the header): slots [j * slots_, +count).

@@ -19,6 +19,7 @@ constexpr std::array kKindNames{
     KindName{PathKind::orbit, "orbit"},
     KindName{PathKind::sweep, "sweep"},
     KindName{PathKind::wall, "wall"},
+    KindName{PathKind::rpy, "rpy"},
 };
 
 // Unit viewing direction from yaw (about world z, from +x) and pitch (up positive).
@@ -47,6 +48,14 @@ core::SE3 wall(double seconds) {
   const Eigen::Vector3d eye(0.35 * std::sin(a), 0.5 + 0.2 * std::sin(2 * a), 1.3 + 0.12 * std::sin(3 * a + 0.5));
   const Eigen::Vector3d target(0.3 * std::sin(a + 1.0), 2.5, 1.3 + 0.25 * std::cos(2 * a));
   return look_at(eye, target, 0.09 * std::sin(a));
+}
+
+core::SE3 rpy(double seconds) {
+  const double a = 2 * kPi * seconds / path_period(PathKind::rpy);
+  const Eigen::Vector3d eye(0.02 * std::sin(2 * a), -0.8 + 0.02 * std::sin(3 * a), 1.3 + 0.02 * std::cos(a));
+  const double yaw = core::radians(90.0 + 20.0 * std::sin(5 * a));
+  const double pitch = core::radians(-15.0 + 12.0 * std::sin(7 * a + 0.3));
+  return look_at(eye, eye + direction(yaw, pitch), core::radians(15.0) * std::sin(6 * a + 0.7));
 }
 
 }  // namespace
@@ -86,6 +95,7 @@ core::SE3 path_pose(PathKind kind, double seconds) {
     case PathKind::orbit: return orbit(seconds);
     case PathKind::sweep: return sweep(seconds);
     case PathKind::wall: return wall(seconds);
+    case PathKind::rpy: return rpy(seconds);
   }
   return {};
 }

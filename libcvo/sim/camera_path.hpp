@@ -2,7 +2,7 @@
 // Canned smooth hand-held camera paths through the simulated room (world z up, see scene.hpp),
 // as closed-form functions of time so ground truth is exact at any timestamp. All are periodic
 // and stay >= 0.5 m from every surface (so every visible point is beyond a sensor's minimum
-// range); speeds stay below 0.5 m/s and 60 deg/s.
+// range); speeds stay below 0.5 m/s and, except rpy's, 60 deg/s.
 //
 //   orbit: the optical centre runs once round a 0.5 m circle at 1.3 m (+-0.1 m bob) while the
 //          camera looks outwards and ~23 degrees down, so it pans a full 360 degrees over walls, floor
@@ -13,6 +13,10 @@
 //   wall:  2 m in front of the y = +2.5 wall (the textured_wall plane), drifting on a Lissajous
 //          curve (+-0.35 m sideways, +-0.2 m in depth, +-0.12 m up) while looking at a wandering
 //          point of the wall and rolling +-5 degrees. Period 10 s.
+//   rpy:   TUM fr1/rpy's motion: the camera stays near (0, -0.8, 1.3) m (+-2 cm) looking at the
+//          furnished +y side and turns fast about all three axes (yaw +-20 degrees at 5/12 Hz, pitch
+//          +-12 at 7/12 Hz, roll +-15 at 1/2 Hz; up to ~85 deg/s), the motion where a tracker's
+//          rotation, not its translation, is tested. Period 12 s.
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -26,7 +30,7 @@
 
 namespace cvo::sim {
 
-enum class PathKind { orbit, sweep, wall };
+enum class PathKind { orbit, sweep, wall, rpy };
 
 std::string_view path_name(PathKind kind);
 std::optional<PathKind> parse_path_kind(std::string_view name);

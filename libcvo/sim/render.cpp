@@ -75,12 +75,24 @@ double axial_noise_sigma(double z) { return 0.0012 + 0.0019 * (z - 0.4) * (z - 0
 
 core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const core::SE3& T_world_camera,
                        const NoiseOptions& noise, std::uint64_t seed, const RenderOptions& options) {
+  return render(scene, k, [&](int) { return T_world_camera; }, noise, seed, options);
+}
+
+core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const PoseAtRow& T_world_camera_at_row,
+                       const NoiseOptions& noise, std::uint64_t seed, const RenderOptions& options) {
   if (const std::string problem = k.validate(); !problem.empty()) throw std::invalid_argument("render: " + problem);
   const int w = k.width, h = k.height;
-  const Eigen::Matrix3d r = T_world_camera.rotation_matrix();
-  const Eigen::Vector3d origin = T_world_camera.translation();
+  std::vector<Eigen::Matrix3d> row_rotation(static_cast<std::size_t>(h));
+  std::vector<Eigen::Vector3d> row_origin(static_cast<std::size_t>(h));
+  for (int v = 0; v < h; ++v) {
+    const core::SE3 pose = T_world_camera_at_row(v);
+    row_rotation[static_cast<std::size_t>(v)] = pose.rotation_matrix();
+    row_origin[static_cast<std::size_t>(v)] = pose.translation();
+  }
+  // A sub-pixel ray belongs to its pixel's row (one row, one exposure time).
   auto ray_through = [&](double u, double v) {
-    return Ray{origin, r * Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)};
+    const auto row = static_cast<std::size_t>(std::clamp(static_cast<int>(std::lround(v)), 0, h - 1));
+    return Ray{row_origin[row], row_rotation[row] * Eigen::Vector3d((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)};
   };
   auto colour_of = [&](const std::optional<Hit>& hit) {
     return hit ? surface_colour(scene, *hit) : Eigen::Vector3d::Zero().eval();

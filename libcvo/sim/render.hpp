@@ -22,6 +22,7 @@
 //   * axial Gaussian noise of std sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 m (Nguyen, Izadi and
 //     Lovell 2012, Kinect v1, valid for moderate incidence angles).
 #include <cstdint>
+#include <functional>
 
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/depth_sensor.hpp"
@@ -52,6 +53,12 @@ double axial_noise_sigma(double z);
 /// the scene's); index and timestamps of the result are 0. Throws std::invalid_argument when the
 /// intrinsics do not validate.
 core::RgbdFrame render(const Scene& scene, const core::Intrinsics& intrinsics, const core::SE3& T_world_camera,
+                       const NoiseOptions& noise = {}, std::uint64_t seed = 0, const RenderOptions& options = {});
+
+/// A rolling-shutter frame (core::Intrinsics::readout_s): row v seen from T_world_camera_at_row(v),
+/// colour and depth alike; the frame above is the case of one pose for every row.
+using PoseAtRow = std::function<core::SE3(int row)>;
+core::RgbdFrame render(const Scene& scene, const core::Intrinsics& intrinsics, const PoseAtRow& T_world_camera_at_row,
                        const NoiseOptions& noise = {}, std::uint64_t seed = 0, const RenderOptions& options = {});
 
 /// The frame a camera with a separate depth sensor delivers, before registration: colour seen from

@@ -1,6 +1,8 @@
 #include "libcvo/sim/sequence.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <string>
 #include <fstream>
 #include <stdexcept>
 #include <system_error>
@@ -62,15 +64,24 @@ SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceO
   const core::Trajectory truth = sample_path(options.path, options.frames, options.start_time, options.rate_hz);
   const std::string source = "# file: 'cvo-render --scene " + std::string(scene_name(options.scene)) + " --path " +
                              std::string(path_name(options.path)) + " --seed " + std::to_string(options.seed) +
-                             (options.noise.enabled ? " --noise" : "") + "'\n";
+                             (options.noise.enabled ? " --noise" : "") +
+                             (options.intrinsics.rolling_shutter()
+                                  ? " --rolling-shutter " + std::to_string(options.intrinsics.readout_s)
+                                  : "") +
+                             "'\n";
   std::string rgb_list = "# color images\n" + source + "# timestamp filename\n";
   std::string depth_list = "# depth maps\n" + source + "# timestamp filename\n";
 
   SequenceSummary summary;
   std::size_t valid = 0;
   for (std::size_t i = 0; i < truth.size(); ++i) {
-    const core::RgbdFrame frame =
-        render(scene, options.intrinsics, truth[i].pose, options.noise, hash(options.seed, i), options.render);
+    // The ground truth is the middle row's pose; a rolling shutter sees row v at its own time.
+    const double seconds = truth[i].timestamp - options.start_time;
+    const core::Intrinsics& k = options.intrinsics;
+    const auto pose_at_row = [&](int v) {
+      return path_pose(options.path, seconds + k.readout_s * (v / std::max(k.height - 1.0, 1.0) - 0.5));
+    };
+    const core::RgbdFrame frame = render(scene, k, pose_at_row, options.noise, hash(options.seed, i), options.render);
     const std::string stamp = stamp_string(truth[i].timestamp);
     write_image(dir / "rgb" / (stamp + ".png"), frame.bgr);
     write_image(dir / "depth" / (stamp + ".png"), frame.depth);

@@ -128,7 +128,21 @@ TEST(IntrinsicsFile, FormattedYamlReadsBackExactly) {
     EXPECT_EQ(back.height, k.height);
     EXPECT_EQ(back.depth_scale, k.depth_scale);
     EXPECT_EQ(back.distortion, k.distortion);
+    EXPECT_EQ(text.find("readout_s:") != std::string::npos, k.rolling_shutter()) << text;
+    EXPECT_EQ(back.readout_s, k.readout_s);
   }
+}
+
+TEST(IntrinsicsFile, ARollingShutterDeclaresItsReadoutAGlobalOneNothing) {
+  EXPECT_EQ(parse_intrinsics(kValid, "cam.yaml").readout_s, 0.0);
+  const auto k = parse_intrinsics(std::string(kValid) + "readout_s: 0.025\n", "cam.yaml");
+  EXPECT_DOUBLE_EQ(k.readout_s, 0.025);
+  EXPECT_TRUE(k.rolling_shutter());
+  expect_error(std::string(kValid) + "readout_s: -0.01\n", 9, "readout_s must be a number of seconds in [0, 1)");
+  expect_error(std::string(kValid) + "readout_s: 2\n", 9, "readout_s must be a number of seconds in [0, 1)");
+  // The TUM Kinects have rolling shutters; the renderer's camera has a global one.
+  EXPECT_TRUE(load_camera("tum_fr1").rolling_shutter());
+  EXPECT_FALSE(load_camera("synthetic").rolling_shutter());
 }
 
 TEST(IntrinsicsFile, ReadsEth3dOneLiner) {

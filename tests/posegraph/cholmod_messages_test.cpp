@@ -1,9 +1,12 @@
-// CHOLMOD's messages go to standard error, never into a program's standard output.
+// CHOLMOD's messages go to standard error, never into a program's standard output; its
+// factorisations run serially (SerialOpenMp).
 #include <string>
 
 #include <cholmod.h>
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include "libcvo/posegraph/cholmod_handles.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
 
 namespace cvo::posegraph {
@@ -40,6 +43,28 @@ TEST(CholmodMessages, GoToStandardErrorNotStandardOutput) {
   cholmod_l_free_factor(&L, &common);
   cholmod_l_free_sparse(&A, &common);
   cholmod_l_finish(&common);
+}
+
+// A scope that runs this thread's OpenMP regions alone, and gives the setting back after.
+TEST(SerialOpenMp, RunsThisThreadsRegionsAloneAndRestoresTheSetting) {
+  const int before = omp_get_max_active_levels();
+  const auto team = [] {
+    int size = 0;
+#pragma omp parallel num_threads(4)
+    {
+#pragma omp single
+      size = omp_get_num_threads();
+    }
+    return size;
+  };
+  {
+    const detail::SerialOpenMp serial;
+    EXPECT_EQ(team(), 1);
+  }
+  EXPECT_EQ(omp_get_max_active_levels(), before);
+  if (before >= 1) {
+    EXPECT_EQ(team(), 4);
+  }
 }
 
 }  // namespace

@@ -29,7 +29,8 @@ TEST(ScenePath, LookAtPointsTheOpticalAxisAndKeepsImageXLevel) {
 }
 
 // Every path, sampled at 30 Hz over a full period: inside the room, >= 0.5 m from every surface
-// of every scene, hand-held speeds, and back at the start after one period.
+// of every scene, hand-held speeds, and back at the start after one period. rpy turns in place,
+// faster than the others (as TUM's fr1/rpy does).
 TEST(ScenePath, StaysClearOfSurfacesAtHandHeldSpeeds) {
   const Scene room = make_scene(SceneKind::textured_room, 0);
   const Scene wall = make_scene(SceneKind::textured_wall, 0);
@@ -50,8 +51,14 @@ TEST(ScenePath, StaysClearOfSurfacesAtHandHeldSpeeds) {
     }
     EXPECT_GE(clearance, 0.5) << name;
     EXPECT_LE(max_speed, 0.5) << name;
-    EXPECT_LE(max_rate_deg, 60.0) << name;
-    EXPECT_GT(max_speed, 0.1) << name << " hardly moves";
+    const bool turns_in_place = kind == PathKind::rpy;
+    EXPECT_LE(max_rate_deg, turns_in_place ? 90.0 : 60.0) << name;
+    if (turns_in_place) {
+      EXPECT_GT(max_rate_deg, 60.0) << name << " turns slowly";
+      EXPECT_LT(max_speed, 0.1) << name << " does not stay in place";
+    } else {
+      EXPECT_GT(max_speed, 0.1) << name << " hardly moves";
+    }
     const core::SE3 back = path_pose(kind, 0).inverse() * path_pose(kind, path_period(kind));
     EXPECT_LT(back.translation().norm(), 1e-9) << name;
     EXPECT_LT(back.angle(), 1e-9) << name;

@@ -16,12 +16,14 @@ using namespace cvo;
 
 constexpr const char* kSynopsis =
     "cvo-render OUTDIR [--scene textured_room|textureless_room|textured_wall]\n"
-    "                         [--path orbit|sweep|wall] [--frames N] [--seed S] [--noise]";
+    "                         [--path orbit|sweep|wall|rpy] [--frames N] [--seed S] [--noise]\n"
+    "                         [--rolling-shutter SECONDS]";
 
 constexpr const char* kDescription =
     "Renders a synthetic RGB-D sequence with exact ground truth into OUTDIR in TUM layout:\n"
     "rgb/, depth/ (16-bit, 5000 units per metre), rgb.txt, depth.txt, groundtruth.txt, camera.yaml.\n"
-    "Camera: the 'synthetic' preset (640x480, fx = fy = 525); 30 Hz from t = 1000 s.";
+    "Camera: the 'synthetic' preset (640x480, fx = fy = 525); 30 Hz from t = 1000 s; a global\n"
+    "shutter unless --rolling-shutter gives its readout (camera.yaml then says readout_s).";
 
 constexpr const char* kNotes = "The same arguments always give byte-identical files.";
 
@@ -32,12 +34,13 @@ struct Arguments {
   std::optional<std::size_t> frames;   // default: one period of the path
   std::uint64_t seed = 0;
   bool noise = false;
+  double readout_s = 0;
 };
 
 void add_options(CLI::App& app, Arguments& args) {
   app.add_option("OUTDIR", args.out_dir, "the folder to write")->required();
   app.add_option("--scene", args.scene, "the scene")->check(CLI::IsMember(sim::scene_names()));
-  app.add_option("--path", args.path, "orbit (12 s loop), sweep (12 s) or wall (10 s)")
+  app.add_option("--path", args.path, "orbit (12 s loop), sweep (12 s), wall (10 s) or rpy (12 s, fast turns in place)")
       ->check(CLI::IsMember(sim::path_names()))
       ->default_str("wall for textured_wall, else orbit");
   app.add_option("--frames", args.frames, "number of frames")
@@ -46,6 +49,9 @@ void add_options(CLI::App& app, Arguments& args) {
       ->default_str("one period of the path");
   app.add_option("--seed", args.seed, "texture and noise seed, unsigned 64-bit")->transform(program::kDecimal);
   app.add_flag("--noise", args.noise, "Kinect-like depth noise and dropouts (default: exact depth)");
+  app.add_option("--rolling-shutter", args.readout_s,
+                 "seconds from the first row's exposure to the last's (default 0: global shutter)")
+      ->check(CLI::Range(0.0, 0.999));
 }
 
 sim::SequenceOptions sequence_options(const Arguments& args) {
@@ -57,6 +63,7 @@ sim::SequenceOptions sequence_options(const Arguments& args) {
   options.frames = args.frames.value_or(static_cast<std::size_t>(sim::path_period(options.path) * options.rate_hz));
   options.seed = args.seed;
   options.noise.enabled = args.noise;
+  options.intrinsics.readout_s = args.readout_s;
   return options;
 }
 
