@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 
 #include "libcvo/core/pixel_rays.hpp"
@@ -35,6 +36,40 @@ constexpr int kHistogramBins = 50;    // |g| on the 0-255 scale, clipped
 constexpr float kThresholdOffset = 7.0f / 255.0f;  // DSO's constant above the median
 constexpr int kMaxCellSize = 64;
 
+// Bytes p[0..N) as a little-endian integer (one load where the machine is little-endian).
+template <int N>
+std::uint64_t little_endian(const std::uint8_t* p) {
+  std::uint64_t x = 0;
+  for (int i = 0; i < N; ++i) x |= static_cast<std::uint64_t>(p[i]) << (8 * i);
+  return x;
+}
+
+// The raw depths d that pass step 3's float test !(d <= 0 || d < min_raw || d > max_raw): an
+// interval, each part of the test being monotone in d, found by bisection on that very test so
+// that it holds for any bounds (NaN, infinite, fractional), while the per-pixel test becomes two
+// 16-bit integer comparisons. Empty: {1, 0}.
+RawDepthRange valid_raw_depths(float min_raw, float max_raw) {
+  const auto above_min = [&](std::int32_t d) {
+    const auto f = static_cast<float>(d);
+    return !(f <= 0) && !(f < min_raw);
+  };
+  const auto below_max = [&](std::int32_t d) { return !(static_cast<float>(d) > max_raw); };
+  std::int32_t lo = 0, hi = 65536;  // first d in [0, 65536) with above_min, 65536 if none
+  while (lo < hi) {
+    const std::int32_t mid = (lo + hi) / 2;
+    if (above_min(mid)) hi = mid; else lo = mid + 1;
+  }
+  std::int32_t first = lo;
+  lo = -1, hi = 65535;  // last d in [0, 65536) with below_max, -1 if none
+  while (lo < hi) {
+    const std::int32_t mid = (lo + hi + 1) / 2;
+    if (below_max(mid)) lo = mid; else hi = mid - 1;
+  }
+  const std::int32_t last = lo;
+  if (first > last) return {1, 0};
+  return {static_cast<std::uint16_t>(first), static_cast<std::uint16_t>(last)};
+}
+
 // The fields the ray table depends on.
 bool same_rays(const core::Intrinsics& a, const core::Intrinsics& b) {
   return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.distortion == b.distortion;
@@ -55,8 +90,10 @@ const char* to_string(SelectionStatus status) {
 
 PointSelector::PointSelector(int width, int height, const core::SelectionParameters& parameters)
     : width_(width), height_(height), parameters_(parameters),
-      regions_x_((width + kRegion - 1) / kRegion), regions_y_((height + kRegion - 1) / kRegion) {
+      regions_x_((width + kRegion - 1) / kRegion), regions_y_((height + kRegion - 1) / kRegion),
+      words_per_row_((width + 63) / 64) {
   const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  const auto W = static_cast<std::size_t>(width), words = static_cast<std::size_t>(words_per_row_);
   grey_.resize(n);
   // Per-channel tables of w_c · value / 255: three loads and two adds per pixel instead of three
   // integer-to-float conversions and multiplies.
@@ -66,26 +103,273 @@ PointSelector::PointSelector(int width, int height, const core::SelectionParamet
   magnitude_.assign(n, 0.0f);  // borders stay zero: they are never candidates
   region_threshold_.resize(static_cast<std::size_t>(regions_x_ * regions_y_));
   smoothed_threshold_.resize(region_threshold_.size());
-  candidates_.reserve(n);
+  bins_.resize(static_cast<std::size_t>(kRegion) * W);
+  row_threshold_.resize(W);
+  row_flags_.assign(64 * words, 0);  // the first pixel and the padding stay 0: never candidates
+  candidate_bits_.resize(static_cast<std::size_t>(height) * words);
+  band_.resize(words);
+  column_cell_.resize(W);
   cell_best_.resize(n);  // enough for s = 1
+  cell_magnitude_.resize(n);
+}
+
+void PointSelector::grey_row(const std::uint8_t* bgr, float* grey) const {
+  // Bound by loads: three byte loads and three table loads a pixel. Four pixels' 12 bytes are read
+  // as two words and split by shifts, leaving the table loads.
+  const float* lut = grey_lut_.data();
+  int u = 0;
+  for (; u + 4 <= width_; u += 4, bgr += 12) {
+    const std::uint64_t a = little_endian<8>(bgr);  // pixels u, u + 1 and two bytes of u + 2
+    const std::uint64_t b = little_endian<4>(bgr + 8);
+    const auto byte = [](std::uint64_t x, int k) { return static_cast<std::size_t>((x >> (8 * k)) & 0xff); };
+    grey[u] = lut[byte(a, 0)] + lut[256 + byte(a, 1)] + lut[512 + byte(a, 2)];
+    grey[u + 1] = lut[byte(a, 3)] + lut[256 + byte(a, 4)] + lut[512 + byte(a, 5)];
+    grey[u + 2] = lut[byte(a, 6)] + lut[256 + byte(a, 7)] + lut[512 + byte(b, 0)];
+    grey[u + 3] = lut[byte(b, 1)] + lut[256 + byte(b, 2)] + lut[512 + byte(b, 3)];
+  }
+  for (; u < width_; ++u, bgr += 3) grey[u] = lut[bgr[0]] + lut[256 + bgr[1]] + lut[512 + bgr[2]];
+}
+
+void PointSelector::gradient_rows(int v0, int v1) {
+  // |g| of rows [v0, v1), interior pixels only: border pixels keep the zero magnitude set at
+  // construction. gx, gy themselves are only needed for the selected points (step 4).
+  const auto W = static_cast<std::size_t>(width_);
+  for (int v = std::max(v0, 1); v < std::min(v1, height_ - 1); ++v) {
+    const float* g = grey_.data() + static_cast<std::size_t>(v) * W;
+    float* m = magnitude_.data() + static_cast<std::size_t>(v) * W;
+    for (int u = 1; u + 1 < width_; ++u) {
+      const float gx = g[u + 1] - g[u - 1];  // central difference x 2: range [-1, 1]
+      const float gy = g[static_cast<std::ptrdiff_t>(u) + static_cast<std::ptrdiff_t>(W)] -
+                       g[static_cast<std::ptrdiff_t>(u) - static_cast<std::ptrdiff_t>(W)];
+      m[u] = 0.5f * std::sqrt(gx * gx + gy * gy);
+    }
+  }
+}
+
+void PointSelector::thresholds_and_candidates(const core::RgbdFrame& frame, RawDepthRange valid,
+                                              SelectionResult& result) {
+  // Steps 1-3 one row of regions at a time, so that each image row is read back while it is still
+  // in cache: grey and |g| of region row ry (grey one row ahead for the vertical difference), its
+  // thresholds, then the smoothed thresholds and candidates of row ry - 1, whose neighbours are
+  // all known by then.
+  const auto W = static_cast<std::size_t>(width_), words = static_cast<std::size_t>(words_per_row_);
+  std::fill_n(candidate_bits_.begin(), words, 0);                                   // row 0
+  std::fill_n(candidate_bits_.end() - static_cast<std::ptrdiff_t>(words), words, 0);  // last row
+  int grey_done = 0;  // rows [0, grey_done) have their grey
+  for (int ry = 0; ry <= regions_y_; ++ry) {
+    if (ry < regions_y_) {
+      const int v0 = ry * kRegion, v1 = std::min(height_, v0 + kRegion);
+      for (; grey_done < std::min(height_, v1 + 1); ++grey_done)
+        grey_row(frame.bgr.ptr<std::uint8_t>(grey_done), grey_.data() + static_cast<std::size_t>(grey_done) * W);
+      gradient_rows(v0, v1);
+      region_medians(ry);
+    }
+    if (ry > 0) {
+      smooth_thresholds(ry - 1);
+      find_candidates(frame.depth, ry - 1, valid, result);
+    }
+  }
+}
+
+void PointSelector::region_bins(int ry) {
+  // The histogram bin of |g| (0-255 scale, clipped) of every pixel of region row ry, into bins_.
+  // Local pointers: the byte stores could otherwise alias the members, which stops vectorisation.
+  const int W = width_;
+  for (int v = ry * kRegion; v < std::min(height_, (ry + 1) * kRegion); ++v) {
+    const float* m = magnitude_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(W);
+    std::uint8_t* bins = bins_.data() + static_cast<std::size_t>((v - ry * kRegion) * W);
+    for (int u = 0; u < W; ++u)
+      bins[u] = static_cast<std::uint8_t>(std::min(kHistogramBins - 1, static_cast<int>(m[u] * 255.0f)));
+  }
+}
+
+int PointSelector::count_at_most(int rx, int rows, int bin) const {
+  // Pixels of region rx (of the row in bins_) whose bin is <= `bin`, counted in byte lanes (at
+  // most kRegion each), a loop that vectorises, where a histogram increments one counter a pixel.
+  const int u0 = rx * kRegion, n = std::min(width_, u0 + kRegion) - u0;
+  const auto b = static_cast<std::uint8_t>(bin);
+  std::array<std::uint8_t, kRegion> lanes{};
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* row = bins_.data() + static_cast<std::size_t>(r * width_ + u0);
+    for (int k = 0; k < n; ++k) lanes[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(lanes[static_cast<std::size_t>(k)] + (row[k] <= b));
+  }
+  int count = 0;
+  for (const auto lane : lanes) count += lane;
+  return count;
+}
+
+void PointSelector::region_medians(int ry) {
+  // Median |g| + offset per region of row ry: the first bin b < kHistogramBins - 1 where at least
+  // half the region's pixels have a bin <= b (else the last bin), found by bisection, as that
+  // count grows with b.
+  region_bins(ry);
+  const int rows = std::min(height_, (ry + 1) * kRegion) - ry * kRegion;
+  for (int rx = 0; rx < regions_x_; ++rx) {
+    const int total = rows * (std::min(width_, (rx + 1) * kRegion) - rx * kRegion);
+    int lo = 0, hi = kHistogramBins - 1;
+    while (lo < hi) {
+      const int mid = (lo + hi) / 2;
+      if (2 * count_at_most(rx, rows, mid) >= total) hi = mid; else lo = mid + 1;
+    }
+    region_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] =
+        (static_cast<float>(lo) + 0.5f) / 255.0f + kThresholdOffset;
+  }
+}
+
+void PointSelector::smooth_thresholds(int ry) {
+  // The thresholds of row ry averaged over each region's 3x3 neighbourhood (the regions that exist).
+  for (int rx = 0; rx < regions_x_; ++rx) {
+    float sum = 0;
+    int n = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = rx + dx, y = ry + dy;
+        if (x < 0 || y < 0 || x >= regions_x_ || y >= regions_y_) continue;
+        sum += region_threshold_[static_cast<std::size_t>(y * regions_x_ + x)];
+        ++n;
+      }
+    smoothed_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] = sum / static_cast<float>(n);
+  }
+}
+
+void PointSelector::find_candidates(const cv::Mat& depth, int ry, RawDepthRange valid_range,
+                                    SelectionResult& result) {
+  // Candidates of region row ry: above their region's threshold with valid depth, interior pixels
+  // only. Flags without branches (the loop vectorises; local pointers, as the byte stores could
+  // alias the members), packed into candidate_bits_ row by row: later passes read only the bits.
+  const int W = width_;
+  std::uint8_t* flags = row_flags_.data();
+  float* threshold = row_threshold_.data();
+  const float* t = smoothed_threshold_.data() + static_cast<std::size_t>(ry * regions_x_);
+  for (int u = 0; u < W; ++u) threshold[u] = t[u / kRegion];
+  const std::uint16_t lo = valid_range.lo, hi = valid_range.hi;
+  for (int v = std::max(1, ry * kRegion); v < std::min(height_ - 1, (ry + 1) * kRegion); ++v) {
+    const auto* d_row = depth.ptr<std::uint16_t>(v);
+    const float* m = magnitude_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(W);
+    std::uint16_t valid = 0, candidates = 0;  // per row (< 2^16 pixels): narrow lanes vectorise better
+    for (int u = 1; u + 1 < W; ++u) {
+      const bool ok = (d_row[u] >= lo) & (d_row[u] <= hi);
+      const bool candidate = ok & (m[u] > threshold[u]);
+      valid = static_cast<std::uint16_t>(valid + ok);
+      candidates = static_cast<std::uint16_t>(candidates + candidate);
+      flags[u] = static_cast<std::uint8_t>(candidate);
+    }
+    pack_row_flags(v);
+    result.valid_depth_pixels += valid;
+    result.candidates += candidates;
+  }
+}
+
+void PointSelector::pack_row_flags(int v) {
+  // Eight 0/1 bytes b_i (little-endian in x) to the bits b_i << i: the product puts b_i at bit
+  // 56 + i and every other term below bit 56 without carries, or above bit 63.
+  std::uint64_t* bits = candidate_bits_.data() + static_cast<std::size_t>(v * words_per_row_);
+  const std::uint8_t* f = row_flags_.data();
+  for (std::size_t w = 0; w < static_cast<std::size_t>(words_per_row_); ++w) {
+    std::uint64_t word = 0;
+    for (std::size_t b = 0; b < 8; ++b, f += 8) {
+      std::uint64_t x = 0;
+      for (std::size_t i = 0; i < 8; ++i) x |= static_cast<std::uint64_t>(f[i]) << (8 * i);
+      word |= ((x * 0x0102040810204080ull) >> 56) << (8 * b);
+    }
+    bits[w] = word;
+  }
 }
 
 std::size_t PointSelector::count_for_cell_size(int s) {
-  // Keep the strongest candidate of every s x s cell; cell_best_ records the winners.
+  // The number of s x s cells holding a candidate (each will keep one). Per band of s rows, the OR
+  // of the rows' bits; then from each set bit, one more cell, and the search goes on from the next
+  // cell's first column: one step per occupied cell rather than a look at every cell.
+  for (int u = 0, next = s; u < width_; ++u) {  // the next cell's first column, without divisions
+    if (u == next) next += s;
+    column_cell_[static_cast<std::size_t>(u)] = next;
+  }
+  const auto words = static_cast<std::size_t>(words_per_row_);
+  std::uint64_t* band = band_.data();
+  std::size_t count = 0;
+  for (int y0 = 0; y0 < height_; y0 += s) {
+    std::fill_n(band, words, 0);
+    for (int v = y0; v < std::min(height_, y0 + s); ++v) {
+      const std::uint64_t* row = candidate_bits_.data() + static_cast<std::size_t>(v) * words;
+      for (std::size_t w = 0; w < words; ++w) band[w] |= row[w];
+    }
+    // Bits past the last column are 0 (row_flags_' padding), so every bit found is a pixel.
+    std::size_t w = 0;
+    std::uint64_t word = band[0];
+    while (true) {
+      while (word == 0 && ++w < words) word = band[w];
+      if (word == 0) break;
+      const auto u = 64 * w + static_cast<std::size_t>(std::countr_zero(word));
+      ++count;
+      const auto next = static_cast<std::size_t>(column_cell_[u]);
+      if (next / 64 != w) {
+        w = next / 64;
+        if (w >= words) break;
+        word = band[w];
+      }
+      word &= ~0ull << (next % 64);
+    }
+  }
+  return count;
+}
+
+void PointSelector::choose_winners(int s) {
+  // Keep the strongest candidate of every s x s cell in cell_best_. Candidates in row-major order
+  // and a strict comparison keep the first of equals; without branches, as which one wins is
+  // unpredictable. cell_magnitude_ starts below any candidate's |g| (> its threshold > 0).
   const int cells_x = (width_ + s - 1) / s;
   const int cells_y = (height_ + s - 1) / s;
-  std::fill_n(cell_best_.begin(), static_cast<std::size_t>(cells_x * cells_y), -1);
-  for (std::size_t k = 0; k < candidates_.size(); ++k) {
-    const auto p = candidates_[k];
-    const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
-    const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
-    auto& best = cell_best_[static_cast<std::size_t>((v / s) * cells_x + u / s)];
-    if (best < 0 || magnitude_[p] > magnitude_[candidates_[static_cast<std::size_t>(best)]])
-      best = static_cast<std::int32_t>(k);
+  const auto cells = static_cast<std::size_t>(cells_x * cells_y);
+  std::fill_n(cell_best_.begin(), cells, -1);
+  std::fill_n(cell_magnitude_.begin(), cells, -1.0f);
+  for (int u = 0, cell = 0, next = s; u < width_; ++u) {  // u / s without divisions
+    if (u == next) ++cell, next += s;
+    column_cell_[static_cast<std::size_t>(u)] = cell;
   }
-  std::size_t count = 0;
-  for (int c = 0; c < cells_x * cells_y; ++c) count += cell_best_[static_cast<std::size_t>(c)] >= 0;
-  return count;
+  const auto W = static_cast<std::size_t>(width_), words = static_cast<std::size_t>(words_per_row_);
+  const float* magnitude = magnitude_.data();
+  const std::int32_t* column_cell = column_cell_.data();
+  for (int v = 0; v < height_; ++v) {
+    const auto first_cell = static_cast<std::size_t>((v / s) * cells_x);
+    std::int32_t* best = cell_best_.data() + first_cell;
+    float* best_magnitude = cell_magnitude_.data() + first_cell;
+    const std::size_t row_start = static_cast<std::size_t>(v) * W;
+    for (std::size_t w = 0; w < words; ++w) {
+      for (std::uint64_t bits = candidate_bits_[static_cast<std::size_t>(v) * words + w]; bits != 0; bits &= bits - 1) {
+        const std::size_t u = 64 * w + static_cast<std::size_t>(std::countr_zero(bits));
+        const auto c = static_cast<std::size_t>(column_cell[u]);
+        const float m = magnitude[row_start + u];
+        const auto better = static_cast<std::int32_t>(m > best_magnitude[c]);
+        best_magnitude[c] = std::max(best_magnitude[c], m);  // best_magnitude[c] < m ? m : best_magnitude[c]
+        best[c] = (static_cast<std::int32_t>(row_start + u) & -better) | (best[c] & (better - 1));
+      }
+    }
+  }
+}
+
+int PointSelector::choose_cell_size(std::size_t candidates) {
+  // A few passes adapting s to bring the number of occupied cells near the target; the closest
+  // cell size seen wins.
+  const double target = static_cast<double>(std::max<std::size_t>(parameters_.target_points, 1));
+  int s = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(candidates) / target))));
+  std::size_t count = count_for_cell_size(s);
+  int best_s = s;
+  double best_error = std::abs(std::log(std::max<double>(static_cast<double>(count), 1.0) / target));
+  for (int pass = 0; pass < 4 && count > 0; ++pass) {
+    const double ratio = static_cast<double>(count) / target;
+    if (ratio > 0.85 && ratio < 1.15) break;
+    int next = std::clamp(static_cast<int>(std::lround(s * std::sqrt(ratio))), 1, kMaxCellSize);
+    if (next == s) next = std::clamp(ratio > 1 ? s + 1 : s - 1, 1, kMaxCellSize);  // rounding stalled
+    if (next == s) break;
+    s = next;
+    count = count_for_cell_size(s);
+    const double error = std::abs(std::log(std::max<double>(static_cast<double>(count), 1.0) / target));
+    if (error < best_error) {
+      best_error = error;
+      best_s = s;
+    }
+  }
+  return best_s;  // the passes may have overshot: go back to the closest cell size
 }
 
 void PointSelector::build_ray_table(const core::Intrinsics& K) {
@@ -112,105 +396,16 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const auto& K = frame.intrinsics;
   const auto W = static_cast<std::size_t>(width_);
 
-  // 1. Grey image and gradient magnitude. Border pixels keep the zero magnitude set at
-  // construction; gx, gy themselves are only needed for the selected points (step 4).
-  for (int v = 0; v < height_; ++v) {
-    const auto* row = frame.bgr.ptr<std::uint8_t>(v);
-    float* grey_row = grey_.data() + static_cast<std::size_t>(v) * W;
-    for (int u = 0; u < width_; ++u) {
-      const auto* px = row + 3 * u;
-      grey_row[u] = grey_lut_[px[0]] + grey_lut_[256 + px[1]] + grey_lut_[512 + px[2]];
-    }
-  }
-  for (int v = 1; v + 1 < height_; ++v) {
-    const float* g = grey_.data() + static_cast<std::size_t>(v) * W;
-    float* m = magnitude_.data() + static_cast<std::size_t>(v) * W;
-    for (int u = 1; u + 1 < width_; ++u) {
-      const float gx = g[u + 1] - g[u - 1];  // central difference x 2: range [-1, 1]
-      const float gy = g[static_cast<std::ptrdiff_t>(u) + static_cast<std::ptrdiff_t>(W)] -
-                       g[static_cast<std::ptrdiff_t>(u) - static_cast<std::ptrdiff_t>(W)];
-      m[u] = 0.5f * std::sqrt(gx * gx + gy * gy);
-    }
-  }
-
-  // 2. Region thresholds: median |g| + offset, smoothed over 3x3 regions.
-  for (int ry = 0; ry < regions_y_; ++ry) {
-    for (int rx = 0; rx < regions_x_; ++rx) {
-      std::array<int, kHistogramBins> histogram{};
-      int total = 0;
-      for (int v = ry * kRegion; v < std::min(height_, (ry + 1) * kRegion); ++v)
-        for (int u = rx * kRegion; u < std::min(width_, (rx + 1) * kRegion); ++u) {
-          const float g = magnitude_[static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u)] * 255.0f;
-          ++histogram[static_cast<std::size_t>(std::min(kHistogramBins - 1, static_cast<int>(g)))];
-          ++total;
-        }
-      int bin = 0;
-      for (int acc = 0; bin < kHistogramBins - 1; ++bin) {
-        acc += histogram[static_cast<std::size_t>(bin)];
-        if (2 * acc >= total) break;
-      }
-      region_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] =
-          (static_cast<float>(bin) + 0.5f) / 255.0f + kThresholdOffset;
-    }
-  }
-  for (int ry = 0; ry < regions_y_; ++ry)
-    for (int rx = 0; rx < regions_x_; ++rx) {
-      float sum = 0;
-      int n = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int x = rx + dx, y = ry + dy;
-          if (x < 0 || y < 0 || x >= regions_x_ || y >= regions_y_) continue;
-          sum += region_threshold_[static_cast<std::size_t>(y * regions_x_ + x)];
-          ++n;
-        }
-      smoothed_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] = sum / static_cast<float>(n);
-    }
-
-  // 3. Candidates with valid depth; adapt the cell size to reach the target count.
+  // 1-3: grey and |g|, the region thresholds, the candidates with valid depth.
   const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
   const auto max_raw = static_cast<float>(parameters_.max_depth_m * K.depth_scale);
-  candidates_.clear();
-  for (int v = 1; v + 1 < height_; ++v) {
-    const auto* depth_row = frame.depth.ptr<std::uint16_t>(v);
-    for (int u = 1; u + 1 < width_; ++u) {
-      const auto d = static_cast<float>(depth_row[u]);
-      if (d <= 0 || d < min_raw || d > max_raw) continue;
-      ++result.valid_depth_pixels;
-      const std::size_t i = static_cast<std::size_t>(v) * W + static_cast<std::size_t>(u);
-      if (magnitude_[i] > smoothed_threshold_[static_cast<std::size_t>((v / kRegion) * regions_x_ + u / kRegion)])
-        candidates_.push_back(static_cast<std::uint32_t>(i));
-    }
-  }
-  result.candidates = candidates_.size();
+  thresholds_and_candidates(frame, valid_raw_depths(min_raw, max_raw), result);
   if (result.valid_depth_pixels == 0) {
     result.status = SelectionStatus::kNoValidDepth;
     return result;
   }
-
-  const double target = static_cast<double>(std::max<std::size_t>(parameters_.target_points, 1));
-  int s = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(candidates_.size()) / target))));
-  std::size_t count = count_for_cell_size(s);
-  int best_s = s;
-  double best_error = std::abs(std::log(std::max<double>(static_cast<double>(count), 1.0) / target));
-  for (int pass = 0; pass < 4 && count > 0; ++pass) {
-    const double ratio = static_cast<double>(count) / target;
-    if (ratio > 0.85 && ratio < 1.15) break;
-    int next = std::clamp(static_cast<int>(std::lround(s * std::sqrt(ratio))), 1, kMaxCellSize);
-    if (next == s) next = std::clamp(ratio > 1 ? s + 1 : s - 1, 1, kMaxCellSize);  // rounding stalled
-    if (next == s) break;
-    s = next;
-    count = count_for_cell_size(s);
-    const double error = std::abs(std::log(std::max<double>(static_cast<double>(count), 1.0) / target));
-    if (error < best_error) {
-      best_error = error;
-      best_s = s;
-    }
-  }
-  if (s != best_s) {  // the passes overshot: go back to the closest cell size
-    s = best_s;
-    count_for_cell_size(s);
-  }
+  const int s = choose_cell_size(result.candidates);
+  choose_winners(s);
   result.cell_size = s;
 
   // 4. Back-project the winners, in row-major order of their cells (deterministic).
@@ -231,7 +426,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
     if (best < 0) continue;
-    const auto p = candidates_[static_cast<std::size_t>(best)];
+    const auto p = static_cast<std::size_t>(best);
     const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
     const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
     const float z = static_cast<float>(frame.depth.at<std::uint16_t>(v, u)) * depth_inv;

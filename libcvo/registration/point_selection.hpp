@@ -26,6 +26,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <opencv2/core/mat.hpp>
+
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
@@ -49,6 +51,11 @@ struct SelectionResult {
   std::size_t candidates = 0;  // above threshold with valid depth
   std::size_t selected = 0;
   int cell_size = 1;           // the s finally used
+};
+
+// Raw depths lo <= d <= hi are valid (point_selection.cpp: valid_raw_depths).
+struct RawDepthRange {
+  std::uint16_t lo, hi;
 };
 
 class PointSelector {
@@ -81,17 +88,37 @@ class PointSelector {
   [[nodiscard]] int height() const { return height_; }
 
  private:
+  void thresholds_and_candidates(const core::RgbdFrame& frame, RawDepthRange valid, SelectionResult& result);
+  void grey_row(const std::uint8_t* bgr, float* grey) const;
+  void gradient_rows(int v0, int v1);
+  void region_bins(int ry);
+  [[nodiscard]] int count_at_most(int rx, int rows, int bin) const;
+  void region_medians(int ry);
+  void smooth_thresholds(int ry);
+  void find_candidates(const cv::Mat& depth, int ry, RawDepthRange valid, SelectionResult& result);
+  void pack_row_flags(int v);
+  int choose_cell_size(std::size_t candidates);
   std::size_t count_for_cell_size(int s);
+  void choose_winners(int s);
   void build_ray_table(const core::Intrinsics& intrinsics);
 
   int width_, height_;
   core::SelectionParameters parameters_;
   int regions_x_, regions_y_;
+  int words_per_row_;                       // 64-pixel words of a row of candidate_bits_
   std::array<float, 3 * 256> grey_lut_{};  // B, G, R contributions to grey
   std::vector<float> grey_, magnitude_;
   std::vector<float> region_threshold_, smoothed_threshold_;
-  std::vector<std::uint32_t> candidates_;   // pixel indices, row-major order
-  std::vector<std::int32_t> cell_best_;     // per cell: best candidate index or -1
+  std::vector<std::uint8_t> bins_;  // step 2: the histogram bin of each pixel of one row of regions
+  // Step 3: per image row, each pixel's threshold and its candidate flag (0/1, padded to whole
+  // words); candidate_bits_: the flags of every row packed 64 to a word, bit u % 64 of word u / 64.
+  std::vector<float> row_threshold_;
+  std::vector<std::uint8_t> row_flags_;
+  std::vector<std::uint64_t> candidate_bits_;
+  std::vector<std::uint64_t> band_;         // the OR of the rows of one band of cells
+  std::vector<std::int32_t> column_cell_;   // per column: its cell's (winners) or the next cell's first column (counts)
+  std::vector<std::int32_t> cell_best_;     // per cell: pixel index of its strongest candidate or -1
+  std::vector<float> cell_magnitude_;       // per cell: that candidate's |g|
   // Distorted cameras only: undistorted (x/z, y/z) per pixel, row-major, for ray_intrinsics_.
   std::vector<float> rays_;
   core::Intrinsics ray_intrinsics_{};

@@ -219,5 +219,32 @@ TEST(PointSelection, CapacityIsClampedAndReported) {
   EXPECT_GT(tiny.overflowed(), 0u);
 }
 
+// The depth test runs on raw integer depths through bounds found once per frame from the float
+// test !(d <= 0 || d < min || d > max); odd bounds must keep that test's meaning.
+TEST(PointSelection, DepthBoundsKeepTheFloatTestsMeaning) {
+  const auto frame = rendered(sim::SceneKind::textured_room);
+  const auto select_with = [&](double min_depth, double max_depth, PointCloud& cloud) {
+    core::SelectionParameters parameters;
+    parameters.min_depth_m = min_depth;
+    parameters.max_depth_m = max_depth;
+    PointSelector selector(640, 480, parameters);
+    return selector.select(frame, cloud);
+  };
+  PointCloud a(8192), b(8192);
+  // A NaN bound rejects nothing (every comparison with it is false), as a bound of 0 or of 1e9.
+  const auto ra = select_with(std::nan(""), 2.5, a), rb = select_with(0.0, 2.5, b);
+  EXPECT_EQ(ra.valid_depth_pixels, rb.valid_depth_pixels);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a.position(i), b.position(i));
+  EXPECT_EQ(select_with(0.0, std::nan(""), a).valid_depth_pixels, select_with(0.0, 1e9, b).valid_depth_pixels);
+  // Fractional bounds: only whole raw depths inside them count, the ends included.
+  const auto ends = select_with(1.0, 2.0, a).valid_depth_pixels;
+  const double scale = frame.intrinsics.depth_scale;
+  EXPECT_EQ(select_with(1.0 - 0.4 / scale, 2.0 + 0.4 / scale, b).valid_depth_pixels, ends);
+  EXPECT_LE(select_with(1.0 + 0.4 / scale, 2.0 - 0.4 / scale, b).valid_depth_pixels, ends);
+  EXPECT_EQ(select_with(3.0, 1.0, a).status, SelectionStatus::kNoValidDepth);  // empty range
+  EXPECT_EQ(select_with(0.0, 0.0, a).status, SelectionStatus::kNoValidDepth);  // raw 0 is never valid
+}
+
 }  // namespace
 }  // namespace cvo::registration
