@@ -21,10 +21,12 @@
 // Timing: before either solver is timed, both solve a small piece of the graph once, so that
 // neither pays the process's one-off start-up costs (CHOLMOD's OpenMP thread pool, lazily bound
 // symbols, first allocations) inside its figure; whichever ran first used to. --repeat N solves
-// N times from the same guess and reports the median time, for machines shared with other work.
+// N times from the same guess, the two solvers taking turns, and reports each one's median time,
+// for machines shared with other work.
 //
 // Exit status: 0 done, 1 bad input file, 2 bad command line.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
@@ -211,22 +213,26 @@ PoseGraph warm_up_piece(const PoseGraph& graph) {
   return piece;
 }
 
-// Runs solve `repeat` times from the same graph; the last result, with the median time.
-template <typename Solve>
-Result timed(const Solve& solve, const PoseGraph& graph, const Options& options) {
-  std::vector<double> seconds;
-  Result r;
+// Both solvers `repeat` times from the same graph, taking turns (ours, Ceres, ours, ...) so that
+// a machine whose speed drifts slows both alike; each one's last result, with its median time.
+std::array<Result, 2> timed_side_by_side(const PoseGraph& graph, const Options& options) {
+  std::array<std::vector<double>, 2> seconds;
+  std::array<Result, 2> results;
   for (int k = 0; k < options.repeat; ++k) {
-    r = solve(graph, options);
-    seconds.push_back(r.seconds);
+    results[0] = run_ours(graph, options);
+    results[1] = run_ceres(graph, options);
+    for (std::size_t s = 0; s < 2; ++s) seconds[s].push_back(results[s].seconds);
   }
-  std::nth_element(seconds.begin(), seconds.begin() + options.repeat / 2, seconds.end());
-  r.seconds = seconds[options.repeat / 2];
-  return r;
+  for (std::size_t s = 0; s < 2; ++s) {
+    auto& t = seconds[s];
+    std::nth_element(t.begin(), t.begin() + options.repeat / 2, t.end());
+    results[s].seconds = t[static_cast<std::size_t>(options.repeat / 2)];
+  }
+  return results;
 }
 
 program::Json report_json(const Options& options, const PoseGraph& graph, const cvo::posegraph::G2oRepairs& repairs,
-                          const Result (&results)[2]) {
+                          const std::array<Result, 2>& results) {
   program::Json o;
   o["file"] = options.file;
   o["nodes"] = graph.nodes().size();
@@ -266,7 +272,7 @@ int run(const Options& options) {
     run_ours(piece, options);
     run_ceres(piece, options);
   }
-  const Result results[] = {timed(run_ours, graph, options), timed(run_ceres, graph, options)};
+  const std::array<Result, 2> results = timed_side_by_side(graph, options);
 
   if (options.json) {
     std::cout << program::to_text(report_json(options, graph, repairs, results));
