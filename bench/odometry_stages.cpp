@@ -83,7 +83,7 @@ int run(const fs::path& sequence_dir, std::size_t max_frames, const std::vector<
     const double whole = core::ms_since(start);
     trajectory.push_back({frame.timestamp, r.pose});
     keyframes += r.keyframe;
-    if (r.keyframe) ++reasons[odometry::to_string(tracker.keyframe_reason())];
+    if (r.keyframe) ++reasons[odometry::to_string(r.reason)];
     if (r.status != odometry::TrackStatus::kOk) continue;  // first frames and failures: not the steady state
     const double parts = r.selection_ms + r.frame_registration_ms + r.keyframe_registration_ms + r.gamma_ms;
     const double values[] = {r.selection_ms, r.frame_registration_ms, r.keyframe_registration_ms, r.gamma_ms,

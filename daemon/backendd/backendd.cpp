@@ -20,6 +20,8 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
+#include "daemon/common/status.hpp"
+#include "daemon/common/supervise.hpp"
 #include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/io/input_error.hpp"
@@ -27,6 +29,7 @@
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/tracker_messages.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "libcvo/slam/mapper.hpp"
 
@@ -136,59 +139,25 @@ Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(c
                          "cannot open LCM provider '" + publish_url(b) + "'");
   std::string warning;
   store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning, b.unsaved_records_max);
-  if (!warning.empty()) note("warning: " + warning);
+  if (!warning.empty()) notes_.note("warning: " + warning);
   note_store_change();  // a new store on a full disk: started degraded
 }
 
 Backendd::~Backendd() = default;
 
-void Backendd::note(const std::string& detail) {
-  std::cerr << kProcess << ": " << detail << std::endl;
-  const std::lock_guard lock(detail_mutex_);
-  detail_ = detail;
-}
-
-void Backendd::note_limited(const std::string& kind, const std::string& detail) {
-  std::int64_t held_back = 0;
-  {
-    const std::lock_guard lock(detail_mutex_);
-    auto& limit = note_limits_[kind];
-    const auto now = Clock::now();
-    if (limit.last != Clock::time_point{} && now - limit.last < 1s) {
-      ++limit.held_back;
-      return;
-    }
-    held_back = std::exchange(limit.held_back, 0);
-    limit.last = now;
-  }
-  note(held_back == 0 ? detail : detail + " (and " + std::to_string(held_back) + " like it not shown)");
-}
-
 int Backendd::run() {
   const auto recovered = recovered_.size();
   let_in_recovered(std::exchange(recovered_, {}));
-  note("store " + store_->file().string() + " (" + std::to_string(recovered) + " records recovered), LCM " +
+  notes_.note("store " + store_->file().string() + " (" + std::to_string(recovered) + " records recovered), LCM " +
        config_.backendd.lcm_url);
   std::thread receive([this] { receive_loop(); });
   std::thread work([this] { work_loop(); });
   systemd_.ready();
-  auto last_watchdog = Clock::now();
-  while (true) {
-    if (const auto signal = wait_for_stop_signal(50ms)) {
-      note(std::string("stopping on ") + (*signal == SIGTERM ? "SIGTERM" : "SIGINT"));
-      break;
-    }
-    if (input_ended_ && config_.backendd.exit_on_eof) break;
-    if (const auto period = systemd_.watchdog_period(); period && Clock::now() - last_watchdog >= *period) {
-      // The worker may be inside a long optimisation: allow it the watchdog's full interval.
-      const auto fresh = [&](const std::atomic<std::int64_t>& heartbeat) {
-        return core::steady_now_ns() - heartbeat.load() < std::chrono::nanoseconds(30s).count();
-      };
-      if (fresh(receive_heartbeat_ns_) && fresh(work_heartbeat_ns_)) systemd_.watchdog();
-      last_watchdog = Clock::now();
-    }
-  }
-  systemd_.stopping();
+  // The worker may be inside a long optimisation: allow it the watchdog's full interval.
+  const Heartbeat* const beats[] = {&receive_heartbeat_, &work_heartbeat_};
+  const auto ended = [&] { return input_ended_ && config_.backendd.exit_on_eof; };
+  if (const auto signal = supervise(systemd_, {beats, 30s}, ended))
+    notes_.note(std::string("stopping on ") + signal_name(*signal));
   stop_ = true;
   receive.join();
   work.join();
@@ -206,12 +175,12 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     std::string error;
     const auto key = identify(record.kind, record.payload.data(), record.payload.size(), &error, nullptr);
     if (!key) {
-      note_limited("stored unreadable", "stored record skipped: " + error);
+      notes_.note_limited("stored unreadable", "stored record skipped: " + error);
       continue;
     }
     const auto crc = crc32_of(record.payload.data(), record.payload.size());
     if (door_.check(*key, crc) != Admission::kNew) {
-      note_limited("stored repeat", "stored record skipped: " + describe(*key) + " is in the store twice");
+      notes_.note_limited("stored repeat", "stored record skipped: " + describe(*key) + " is in the store twice");
       continue;
     }
     door_.admit(*key, crc);
@@ -242,7 +211,7 @@ void Backendd::receive_loop() {
   lcm.subscribe("CVO_POSE", &PoseHandler::handle, &poses);
   const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
-    receive_heartbeat_ns_ = core::steady_now_ns();
+    receive_heartbeat_.beat();
     retry_store(false);
     ask_for_missing(lcm, false);
     if (input_ended_) {  // a log that ended: nothing more will come; wait for the stop
@@ -251,11 +220,11 @@ void Backendd::receive_loop() {
     }
     if (lcm.handleTimeout(100) >= 0) continue;
     if (log) {
-      note("end of " + config_.backendd.lcm_url + (config_.backendd.exit_on_eof ? ": finishing" : ""));
+      notes_.note("end of " + config_.backendd.lcm_url + (config_.backendd.exit_on_eof ? ": finishing" : ""));
       input_ended_ = true;
       continue;
     }
-    note_limited("receive failed", "LCM receive failed; retrying");
+    notes_.note_limited("receive failed", "LCM receive failed; retrying");
     std::this_thread::sleep_for(100ms);
   }
   // What is in the socket was sent before the stop (a tracker's last keyframe and local graph):
@@ -271,7 +240,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
   const std::string channel = kind == RecordKind::kKeyframe ? "CVO_KEYFRAME" : "CVO_LOCAL_GRAPH";
   const auto refuse = [&](std::size_t why, const std::string& detail) {
     ++bad_messages_[why];
-    note_limited("refused " + std::to_string(why), detail);
+    notes_.note_limited("refused " + std::to_string(why), detail);
   };
   try {
     std::string error;
@@ -281,7 +250,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     const auto crc = crc32_of(data, size);
     switch (door_.check(*key, crc)) {
       case Admission::kRepeat:
-        return note_limited("repeat", describe(*key) + " received again: stored already, not used twice");
+        return notes_.note_limited("repeat", describe(*key) + " received again: stored already, not used twice");
       case Admission::kConflict:
         return refuse(cvo_lcm::status_t::BAD_CONFLICT,
                       describe(*key) + " repeats an existing one with other content: refused");
@@ -303,7 +272,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     const bool to_store = !room && !log && !store_->health().failing && waiting_in_store_ < kMaxWaitingInStore;
     if (!room && !to_store) {
       ++queue_drops_;
-      return note_limited("queue full", describe(*key) + " refused: " + std::to_string(queue_.size()) +
+      return notes_.note_limited("queue full", describe(*key) + " refused: " + std::to_string(queue_.size()) +
                                             " records wait for the back end already");
     }
     QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now(), std::nullopt};
@@ -311,7 +280,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     RecordRef where;
     const auto appended = store_->append(queued.record.kind, queued.record.payload, &where);
     if (appended == Appended::kNotDurable)
-      note_limited("not stored", "warning: " + describe(*key) + " used but not stored (lost on restart): " +
+      notes_.note_limited("not stored", "warning: " + describe(*key) + " used but not stored (lost on restart): " +
                                      describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
     door_.admit(*key, crc);
@@ -323,12 +292,12 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       queued.record.payload = {};
       ++waiting_in_store_;
       ++waited_in_store_;
-      note_limited("waiting in the store", describe(*key) + " waits in the store: " + std::to_string(queue_.size()) +
+      notes_.note_limited("waiting in the store", describe(*key) + " waits in the store: " + std::to_string(queue_.size()) +
                                                " records wait for the back end already");
     }
     queue_.push(std::move(queued));
   } catch (const std::exception& e) {  // out of memory, most likely: this message is lost, not the daemon
-    note_limited("receive failure", "skipped " + channel + ": " + e.what());
+    notes_.note_limited("receive failure", "skipped " + channel + ": " + e.what());
   }
 }
 
@@ -341,7 +310,7 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
   if (!pose) {
     const auto why = static_cast<std::size_t>(failure);
     ++bad_messages_[why];
-    return note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
+    return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
   }
   gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
 }
@@ -368,21 +337,21 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
     lcm.publish("CVO_KEYFRAME_REQUEST", &m);
     std::string ids;
     for (const auto id : request.ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
-    note_limited("keyframe request", "asking session " + slam::session_name(request.session) +
+    notes_.note_limited("keyframe request", "asking session " + slam::session_name(request.session) +
                                          " again for keyframes " + ids + " (lost in transport)");
   }
   for (const auto& g : round.given_up) {
     const std::string which = g.first == g.last ? "keyframe " + std::to_string(g.first)
                                                 : "keyframes " + std::to_string(g.first) + "-" + std::to_string(g.last);
-    note_limited("keyframes lost", "gave up on " + which + " of session " + slam::session_name(g.session) + ": never came (lost)");
+    notes_.note_limited("keyframes lost", "gave up on " + which + " of session " + slam::session_name(g.session) + ": never came (lost)");
   }
   if (gaps_.recovered() > keyframes_recovered_)
-    note_limited("keyframes recovered", std::to_string(gaps_.recovered()) + " keyframes recovered after a loss in transport");
+    notes_.note_limited("keyframes recovered", std::to_string(gaps_.recovered()) + " keyframes recovered after a loss in transport");
   keyframes_requested_ = gaps_.requested();
   keyframes_recovered_ = gaps_.recovered();
   keyframes_lost_ = gaps_.lost();
   if (stopping && gaps_.requested() + gaps_.lost() > 0)
-    note("keyframes lost in transport: " + std::to_string(gaps_.requested()) + " asked for again, " +
+    notes_.note("keyframes lost in transport: " + std::to_string(gaps_.requested()) + " asked for again, " +
          std::to_string(gaps_.recovered()) + " recovered, " + std::to_string(gaps_.lost()) + " lost");
 }
 
@@ -390,10 +359,10 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
 void Backendd::note_store_change() {
   const auto health = store_->health();
   if (health.failing && !store_failing_)
-    note("warning: " + describe(health) + ": accepted records are used and held in memory (at most " +
+    notes_.note("warning: " + describe(health) + ": accepted records are used and held in memory (at most " +
          std::to_string(config_.backendd.unsaved_records_max) + "), and stored in order when the store works again");
   else if (!health.failing && store_failing_)
-    note("store " + store_->file().string() + " works again: every held record is stored (" +
+    notes_.note("store " + store_->file().string() + " works again: every held record is stored (" +
          std::to_string(store_->records()) + " records)");
   store_failing_ = health.failing;
 }
@@ -407,7 +376,7 @@ void Backendd::retry_store(bool final) {
   store_->retry();
   note_store_change();
   if (const auto health = store_->health(); final && health.degraded())
-    note("warning: stopping with the " + describe(health) + "; what is unsaved is lost on restart");
+    notes_.note("warning: stopping with the " + describe(health) + "; what is unsaved is lost on restart");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -417,7 +386,7 @@ void Backendd::work_loop() {
   name_this_thread("cvo-backend");
   const auto status_period = std::chrono::duration<double>(config_.backendd.status_period_s);
   while (true) {
-    work_heartbeat_ns_ = core::steady_now_ns();
+    work_heartbeat_.beat();
     const bool receiver_done = receiver_done_;  // read first: it pushes nothing after setting it
     auto queued = queue_.pop(50ms);
     if (queued) process(*queued);
@@ -437,15 +406,15 @@ void Backendd::process(QueuedRecord& queued) {
       --waiting_in_store_;
       std::string error;
       auto record = store_->read(*queued.in_store, &error);
-      if (!record) return note_limited("unreadable", "a record that waited in the store is lost: " + error);
+      if (!record) return notes_.note_limited("unreadable", "a record that waited in the store is lost: " + error);
       queued.record = std::move(*record);
     }
     if (queued.record.kind == RecordKind::kKeyframe) apply_keyframe(queued);
     else apply_local_graph(queued.record);
   } catch (const slam::MapperError& e) {
-    note_limited("not applied", std::string("not applied: ") + e.what());
+    notes_.note_limited("not applied", std::string("not applied: ") + e.what());
   } catch (const std::exception& e) {
-    note_limited("failure", std::string("record skipped after a failure: ") + e.what());
+    notes_.note_limited("failure", std::string("record skipped after a failure: ") + e.what());
   }
   ++work_->processed;
 }
@@ -456,12 +425,12 @@ void Backendd::apply_keyframe(const QueuedRecord& queued) {
   std::string error;
   const auto m = lcm::decode<cvo_lcm::keyframe_t>(payload.data(), static_cast<int>(payload.size()), &error);
   const auto k = m ? lcm::from_message(*m, &error) : std::nullopt;
-  if (!k) return note_limited("unreadable", "stored keyframe unreadable: " + error);
+  if (!k) return notes_.note_limited("unreadable", "stored keyframe unreadable: " + error);
   const auto outcome = w.mapper.add_keyframe({k->session, k->id, k->frame, k->pose, k->cloud});
   if (outcome.duplicate) return;
   w.first_arrival.try_emplace(k->session, queued.arrived);
   for (const auto& loop : outcome.loops)
-    note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
+    notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
          keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
   publish_map(outcome.joined);
 }
@@ -470,7 +439,7 @@ void Backendd::apply_local_graph(const StoredRecord& record) {
   std::string error;
   const auto m = lcm::decode<cvo_lcm::local_graph_t>(record.payload.data(), static_cast<int>(record.payload.size()), &error);
   const auto graph = m ? lcm::from_message(*m, &error) : std::nullopt;
-  if (!graph) return note_limited("unreadable", "stored local graph unreadable: " + error);
+  if (!graph) return notes_.note_limited("unreadable", "stored local graph unreadable: " + error);
   const auto joined = work_->mapper.add_local_graph(m->session, m->keyframe_id, *graph);
   ++work_->local_graphs;
   publish_map(joined);
@@ -485,18 +454,16 @@ void Backendd::publish_map(const std::vector<std::int64_t>& joined) {
   for (const auto session : joined) {
     const auto arrived = w.first_arrival.find(session);
     w.joins.push_back(join_text(map, session, arrived != w.first_arrival.end() ? arrived->second : std::nullopt));
-    note(w.joins.back());
+    notes_.note(w.joins.back());
   }
 }
 
 void Backendd::publish_status(std::int8_t state) {
   Work& w = *work_;
   const auto now = Clock::now();
-  cvo_lcm::status_t s{};
-  s.version = cvo_lcm::status_t::SCHEMA_VERSION;
+  lcm::ProcessStatus s;
+  s.process = kProcess;
   s.session = 0;  // the back end is no tracker session
-  s.utime = core::wall_utime();
-  s.pid = static_cast<std::int32_t>(getpid());
   // A store that does not keep every record is the daemon's degraded state (the stop says itself).
   const auto store = store_->health();
   s.state = store.degraded() && state != cvo_lcm::status_t::STATE_STOPPING ? cvo_lcm::status_t::STATE_DEGRADED : state;
@@ -504,18 +471,13 @@ void Backendd::publish_status(std::int8_t state) {
   const double elapsed = std::chrono::duration<double>(now - w.last_status).count();
   s.rate_hz = elapsed > 0 ? static_cast<double>(w.processed - w.processed_at_last_status) / elapsed : 0;
   s.queue_depth = static_cast<std::int32_t>(queue_.size());
-  s.rss_bytes = resident_bytes();
-  for (int k = 0; k < cvo_lcm::status_t::NUM_BAD_KINDS; ++k) s.bad_messages[k] = bad_messages_[k];
+  for (std::size_t k = 0; k < s.bad_messages.size(); ++k) s.bad_messages[k] = bad_messages_[k];
   s.queue_drops = queue_drops_;
   s.keyframes_requested = keyframes_requested_;
   s.keyframes_recovered = keyframes_recovered_;
   s.keyframes_lost = keyframes_lost_;
-  s.process = kProcess;
-  {
-    const std::lock_guard lock(detail_mutex_);
-    s.detail = detail_;
-  }
-  w.lcm.publish("CVO_STATUS", &s);
+  const cvo_lcm::status_t message = status_message(std::move(s), notes_);
+  w.lcm.publish("CVO_STATUS", &message);
   systemd_.status(store.degraded() ? "degraded: " + describe(store) + "; " + text(w.summary) : text(w.summary));
   w.processed_at_last_status = w.processed;
   w.last_status = now;
@@ -527,19 +489,19 @@ void Backendd::finish() {
   try {
     if (w.mapper.backend().local_graphs() > 0) {  // nothing to optimise before a local graph
       const auto report = w.mapper.finish();
-      note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
+      notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
            std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
     }
     publish_map({});
   } catch (const std::exception& e) {
-    note(std::string("final optimisation failed, the last map stands: ") + e.what());
+    notes_.note(std::string("final optimisation failed, the last map stands: ") + e.what());
   }
-  note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
+  notes_.note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
        std::to_string(w.mapper.loops_accepted()) + " loops accepted of " + std::to_string(w.mapper.loops_tried()) +
        " tried");
-  for (const auto& join : w.joins) note(join);
+  for (const auto& join : w.joins) notes_.note(join);
   if (const auto waited = waited_in_store_.load(); waited > 0)
-    note(std::to_string(waited) + " records waited in the store while the back end was behind (backendd.queue_max " +
+    notes_.note(std::to_string(waited) + " records waited in the store while the back end was behind (backendd.queue_max " +
          std::to_string(queue_.capacity()) + ")");
   publish_status(cvo_lcm::status_t::STATE_STOPPING);
 }

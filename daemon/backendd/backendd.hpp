@@ -14,7 +14,7 @@
 //                 period
 //
 // At start-up the store is read back and every record goes through the same door and path, so a
-// restart resumes every session received before. On SIGTERM/SIGINT: what is already in the socket
+// restart resumes every session received before. On SIGTERM/SIGINT/SIGHUP: what is already in the socket
 // is taken in, the queue is drained, a final global optimisation runs, the final CVO_MAP is
 // published, exit 0. No record can stop the daemon: what the mapper cannot apply is noted and
 // skipped.
@@ -34,6 +34,8 @@
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
 #include "daemon/backendd/work_queue.hpp"
+#include "daemon/common/heartbeat.hpp"
+#include "daemon/common/notes.hpp"
 #include "daemon/common/systemd_notify.hpp"
 #include "libcvo/config/config.hpp"
 
@@ -83,12 +85,9 @@ class Backendd {
   void publish_map(const std::vector<std::int64_t>& joined);
   void publish_status(std::int8_t state);
   void finish();
-  void note(const std::string& detail);
-  /// note(), at most once a second per `kind` of event (a flood of bad messages must not flood
-  /// the journal); what was held back is counted in the next one.
-  void note_limited(const std::string& kind, const std::string& detail);
 
   config::Config config_;
+  Notes notes_{"cvo-backendd"};  // the journal and CVO_STATUS's detail, at one log-rate policy
   SystemdNotifier systemd_;
   std::unique_ptr<KeyframeStore> store_;
   std::vector<StoredRecord> recovered_;
@@ -110,15 +109,7 @@ class Backendd {
   std::atomic<std::int64_t> bad_messages_[cvo_lcm::status_t::NUM_BAD_KINDS]{};
   // Keyframes lost in transport (gaps_'s counts, for CVO_STATUS): asked for, recovered, given up.
   std::atomic<std::int64_t> keyframes_requested_{0}, keyframes_recovered_{0}, keyframes_lost_{0};
-  std::atomic<std::int64_t> receive_heartbeat_ns_{0}, work_heartbeat_ns_{0};
-
-  struct NoteLimit {
-    std::chrono::steady_clock::time_point last{};
-    std::int64_t held_back = 0;
-  };
-  std::mutex detail_mutex_;
-  std::string detail_;
-  std::map<std::string, NoteLimit> note_limits_;
+  Heartbeat receive_heartbeat_, work_heartbeat_;
 };
 
 }  // namespace cvo::daemon::backendd

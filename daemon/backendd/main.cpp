@@ -4,7 +4,7 @@
 // A contract that scripts and the systemd unit rely on (extras may be added, nothing changed):
 //   cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]...
 //                [--publish-url URL] [--exit-on-eof]
-//   exit status 0 after SIGTERM/SIGINT (or the end of a file:// input with --exit-on-eof); 1 when the configuration, the store or the vocabulary is
+//   exit status 0 after SIGTERM/SIGINT/SIGHUP (or the end of a file:// input with --exit-on-eof); 1 when the configuration, the store or the vocabulary is
 //   unusable (the message says which); 2 on a usage error.
 #include <csignal>
 #include <iostream>
@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "daemon/backendd/backendd.hpp"
-#include "daemon/common/signals.hpp"
 #include "libcvo/config/config.hpp"
 #include "program/cli.hpp"
 
@@ -27,7 +26,7 @@ restart resumes every session received; a keyframe repeated with other content i
 detects and verifies loop closures across every session (ORB bag of words, RANSAC + SVD, CVO
 refinement, the alpha test), joins a new session to the map at its first verified loop, optimises
 the keyframe pose graph with a Cauchy kernel on loops, and publishes the multi-session map on
-CVO_MAP after each change, with a CVO_STATUS heartbeat. On SIGTERM/SIGINT it runs a final global
+CVO_MAP after each change, with a CVO_STATUS heartbeat. On SIGTERM/SIGINT/SIGHUP it runs a final global
 optimisation, publishes the final map and exits 0. Under systemd it sends READY, STATUS and
 WATCHDOG notifications.)";
 
@@ -67,7 +66,6 @@ int run(const Arguments& args) {
     std::cout << config::dump_config(config);
     return 0;
   }
-  daemon::block_stop_signals();
   // A file-size limit (ulimit -f, LimitFSIZE=) must fail a store write with EFBIG, which the store
   // survives (it holds the record), rather than kill the daemon with SIGXFSZ.
   std::signal(SIGXFSZ, SIG_IGN);

@@ -13,6 +13,7 @@ sigset_t stop_signals() {
   sigemptyset(&set);
   sigaddset(&set, SIGTERM);
   sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGHUP);
   return set;
 }
 }  // namespace
@@ -30,6 +31,15 @@ std::optional<int> wait_for_stop_signal(std::chrono::milliseconds timeout) {
   const int signal = sigtimedwait(&set, nullptr, &ts);
   if (signal > 0) return signal;
   return std::nullopt;  // EAGAIN (timeout) or EINTR (another signal): the caller just loops
+}
+
+const char* signal_name(int signal) {
+  switch (signal) {
+    case SIGTERM: return "SIGTERM";
+    case SIGINT: return "SIGINT";
+    case SIGHUP: return "SIGHUP";
+    default: return "a signal";
+  }
 }
 
 }  // namespace cvo::daemon

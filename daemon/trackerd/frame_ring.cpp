@@ -1,11 +1,12 @@
 #include "daemon/trackerd/frame_ring.hpp"
 
 #include <stdexcept>
+#include <utility>
 
 namespace cvo::daemon::trackerd {
 
 FrameRing::FrameRing(std::size_t depth, Overflow overflow)
-    : depth_(depth), overflow_(overflow), slots_(depth + 2), queue_(depth) {
+    : depth_(depth), overflow_(overflow), slots_(depth + 3), queue_(depth) {
   if (depth == 0) throw std::invalid_argument("FrameRing: depth must be at least 1");
   free_.reserve(slots_.size());
   for (int i = static_cast<int>(slots_.size()) - 1; i >= 0; --i) free_.push_back(i);
@@ -54,12 +55,34 @@ RingSlot* FrameRing::begin_read(std::chrono::milliseconds timeout) {
   return &slots_[static_cast<std::size_t>(reading_)];
 }
 
+void FrameRing::give_back(int& slot) {
+  if (slot < 0) return;
+  free_.push_back(slot);
+  slot = -1;
+}
+
 void FrameRing::end_read() {
   {
     const std::lock_guard lock(mutex_);
     if (reading_ < 0) return;
-    free_.push_back(reading_);
-    reading_ = -1;
+    give_back(previous_);
+    previous_ = std::exchange(reading_, -1);
+  }
+  slot_free_.notify_one();
+}
+
+void FrameRing::skip_read() {
+  {
+    const std::lock_guard lock(mutex_);
+    give_back(reading_);
+  }
+  slot_free_.notify_one();
+}
+
+void FrameRing::release_previous() {
+  {
+    const std::lock_guard lock(mutex_);
+    give_back(previous_);
   }
   slot_free_.notify_one();
 }

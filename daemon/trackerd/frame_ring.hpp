@@ -5,6 +5,10 @@
 // waiting frame is dropped (counted), so the tracker always works on recent data and latency
 // stays bounded. In blocking mode (deterministic replay) the producer waits instead.
 //
+// The consumer keeps the frame it tracked last until it has tracked the next one: a keyframe
+// made at frame n is frame n-1 (the paper's rule), whose images the tracker shares rather than
+// copies, so that slot goes back only one frame later (end_read()).
+//
 // Slots are reused for the life of the ring, so a steady stream of same-sized frames does not
 // allocate; no method allocates after construction.
 #include <chrono>
@@ -41,9 +45,14 @@ class FrameRing {
   void abort_write();   // the slot was not filled (a bad read): give it back
 
   // Consumer. begin_read() returns the oldest frame, waiting up to `timeout`; nullptr on timeout
-  // or when the ring is closed and empty (see drained()).
+  // or when the ring is closed and empty (see drained()). end_read(): the frame read is kept as
+  // the previous one and the previous one before it goes back; skip_read(): the frame read goes
+  // straight back (it was not tracked; the previous one stays); release_previous(): the previous
+  // frame goes back too (a new session: nothing refers to it any more).
   RingSlot* begin_read(std::chrono::milliseconds timeout);
   void end_read();
+  void skip_read();
+  void release_previous();
 
   /// No more frames will come: the consumer gets the ones waiting, then nullptr; a producer
   /// blocked in begin_write() returns nullptr.
@@ -56,11 +65,13 @@ class FrameRing {
  private:
   std::size_t depth_;
   Overflow overflow_;
-  std::vector<RingSlot> slots_;   // depth + 2: the waiting frames, one being written, one being read
+  void give_back(int& slot);  // with the mutex held
+
+  std::vector<RingSlot> slots_;   // depth + 3: the waiting frames, one being written, one read, the previous
   std::vector<int> free_;         // reserved to slots_.size(): push/pop never allocate
   std::vector<int> queue_;        // circular FIFO of waiting slot indices
   std::size_t head_ = 0, count_ = 0;
-  int writing_ = -1, reading_ = -1;
+  int writing_ = -1, reading_ = -1, previous_ = -1;
   bool closed_ = false;
   std::int64_t dropped_ = 0;
   mutable std::mutex mutex_;

@@ -2,14 +2,13 @@
 //
 // A contract that scripts and the systemd unit rely on (extras may be added, nothing changed):
 //   cvo-trackerd [--config FILE] [--source SPEC] [--lcm-url URL] [--exit-on-eof] [--set key=value]...
-//   exit status 0 after SIGTERM/SIGINT or the end of the source with --exit-on-eof; 1 when the
+//   exit status 0 after SIGTERM/SIGINT/SIGHUP or the end of the source with --exit-on-eof; 1 when the
 //   configuration or the source is unusable (the message says which); 2 on a usage error.
 #include <iostream>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "daemon/common/signals.hpp"
 #include "daemon/trackerd/trackerd.hpp"
 #include "libcvo/config/config.hpp"
 #include "program/cli.hpp"
@@ -24,7 +23,7 @@ CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes on
 one at the end) and CVO_STATUS (once a second). Every start, and every camera that comes back
 after a disconnection, is a new session with a random id carried by every message. The map pose
 follows the newest CVO_MAP from cvo-backendd once it places this session. Stops cleanly on
-SIGTERM or SIGINT; under systemd it sends READY, STATUS and WATCHDOG notifications.)";
+SIGTERM, SIGINT or SIGHUP (stop signals are blocked from the first instant); under systemd it sends READY, STATUS and WATCHDOG notifications.)";
 
 constexpr const char* kSources = R"(sources (--source, trackerd.source):
   tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)
@@ -64,7 +63,6 @@ int run(const Arguments& args) {
     std::cout << config::dump_config(config);
     return 0;
   }
-  daemon::block_stop_signals();  // before any thread starts, so every thread inherits the mask
   daemon::trackerd::Trackerd trackerd(std::move(config));
   return trackerd.run();
 }

@@ -29,6 +29,8 @@ struct Intrinsics {
   std::array<double, 5> distortion{};
   double readout_s = 0;  // rolling shutter: first row to last row (s); 0 = global shutter
 
+  bool operator==(const Intrinsics&) const = default;  // every field: the same camera
+
   [[nodiscard]] bool rolling_shutter() const { return readout_s > 0; }
 
   [[nodiscard]] bool has_distortion() const {

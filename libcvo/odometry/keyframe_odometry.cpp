@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "libcvo/core/units.hpp"
 
@@ -27,6 +28,13 @@ core::CvoParameters gamma_parameters(const KeyframeOdometryParameters& p) {
   core::CvoParameters c = p.cvo;
   c.sigma = p.gamma_sigma;
   return c;
+}
+
+// The covariance of an edge measured with CVO Hessian `information`, when it is invertible.
+std::optional<core::Matrix6d> edge_covariance(const core::Matrix6d& information) {
+  const Eigen::FullPivLU<core::Matrix6d> lu(information);
+  if (!lu.isInvertible()) return std::nullopt;
+  return lu.inverse();
 }
 
 }  // namespace
@@ -57,7 +65,25 @@ KeyframeOdometry::KeyframeOdometry(int width, int height, const KeyframeOdometry
 void KeyframeOdometry::reset() {
   for (auto& graph : graphs_) graph.clear();
   graph_ = 0;
+  start_over();
+}
+
+std::optional<HandedLocalGraph> KeyframeOdometry::finish() {
+  const bool open = !graphs_[graph_].empty() && keyframe_id_ >= 0;
+  const HandedLocalGraph handed{keyframe_id_, &graphs_[graph_]};
+  if (open) graph_ = 1 - graph_;  // it stays put, as a closed graph, until a later one closes
+  graphs_[graph_].clear();        // the next session's open graph: finish() again hands out nothing
+  start_over();
+  if (!open) return std::nullopt;
+  return handed;
+}
+
+// Everything but the graphs to the state of a new tracker (previous_images_ lets go of the
+// caller's images).
+void KeyframeOdometry::start_over() {
   graph_closed_ = false;
+  keyframe_id_ = -1;
+  previous_images_ = core::RgbdFrame{};
   keyframe_ = 0;
   previous_ = 1;
   current_ = 2;
@@ -74,6 +100,7 @@ void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double tim
     graph_ = 1 - graph_;
     graph_closed_ = true;
   }
+  ++keyframe_id_;
   graphs_[graph_].clear();
   graphs_[graph_].add_node({index, timestamp, pose});
   keyframe_ = cloud;
@@ -196,13 +223,14 @@ bool KeyframeOdometry::keyframe_trips(const Registrations& r, TrackResult& resul
 // Frame n tracked against keyframe m: a node of the open local graph, with its keyframe edge and,
 // when the keyframe is not n-1, its frame-to-frame edge.
 core::SE3 KeyframeOdometry::add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r,
-                                               TrackResult& result) {
+                                               TrackStep& result) {
   const core::SE3 pose = keyframe_pose_ * r.T_mn;
   result.status = TrackStatus::kOk;
   result.inner_product = r.kf.inner_product;
   auto& graph = graphs_[graph_];
   graph.add_node({frame.index, frame.timestamp, pose});
   graph.add_edge({keyframe_frame_, frame.index, r.kf.transform, r.kf.hessian});
+  result.edge_covariance = edge_covariance(r.kf.hessian);
   if (r.f2f.converged && keyframe_ != previous_)
     graph.add_edge({previous_frame_, frame.index, r.f2f.transform, r.f2f.hessian});
   return pose;
@@ -211,7 +239,7 @@ core::SE3 KeyframeOdometry::add_to_local_graph(const core::RgbdFrame& frame, con
 // Frame n-1 becomes the keyframe (the paper's rule); T_{n-1}^n is then the keyframe-to-frame
 // transform of frame n and its inner product the new γ reference.
 core::SE3 KeyframeOdometry::keyframe_at_previous(const core::RgbdFrame& frame, const Registrations& r,
-                                                 TrackResult& result) {
+                                                 TrackStep& result) {
   start_keyframe(previous_, previous_frame_, previous_timestamp_, previous_pose_,
                  r.kf.converged ? reason_ : KeyframeReason::kKeyframeLost);
   const core::SE3 pose = previous_pose_ * r.f2f.transform;
@@ -224,6 +252,7 @@ core::SE3 KeyframeOdometry::keyframe_at_previous(const core::RgbdFrame& frame, c
   result.inner_product = r.f2f.inner_product;
   graphs_[graph_].add_node({frame.index, frame.timestamp, pose});
   graphs_[graph_].add_edge({previous_frame_, frame.index, r.f2f.transform, r.f2f.hessian});
+  result.edge_covariance = edge_covariance(r.f2f.hessian);  // n-1 is the keyframe: this is its edge
   return pose;
 }
 
@@ -231,7 +260,7 @@ core::SE3 KeyframeOdometry::keyframe_at_previous(const core::RgbdFrame& frame, c
 // new keyframe at n-1, or (neither registration converged) predicted and a restart; the motion
 // model learns from what converged.
 core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const core::SE3& predicted,
-                                             TrackResult& result) {
+                                             TrackStep& result) {
   const Registrations r = register_frame(result);
   const bool trip = keyframe_trips(r, result);
   core::SE3 pose = predicted;
@@ -251,8 +280,20 @@ core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const
   return pose;
 }
 
-TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
-  TrackResult result;
+// What the frame closed and made, and what it was tracked against (before the clouds' roles move
+// on: a keyframe made at n-1 is the previous cloud and previous_images_ now).
+void KeyframeOdometry::hand_out(const core::RgbdFrame& frame, TrackStep& step) const {
+  step.keyframe_id = keyframe_id_;
+  step.gamma = gamma_;
+  step.reason = reason_;
+  if (graph_closed_) step.closed_graph = HandedLocalGraph{keyframe_id_ - 1, &graphs_[1 - graph_]};
+  if (step.keyframe)
+    step.new_keyframe = NewKeyframe{keyframe_id_, keyframe_ == previous_ ? previous_images_ : frame, keyframe_pose_,
+                                    &clouds_[keyframe_]};
+}
+
+TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
+  TrackStep result;
   reason_ = KeyframeReason::kNone;
   gamma_ = 0;
   graph_closed_ = false;
@@ -271,6 +312,7 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.motion = velocity_;
     have_frame_ = true;
     have_previous_ = false;
+    hand_out(frame, result);
     return result;
   }
 
@@ -287,8 +329,10 @@ TrackResult KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.motion = first ? core::SE3() : velocity_;
   }
 
-  // The current frame becomes the previous one; the free cloud takes the next frame.
   result.pose = last_pose_ = pose;
+  hand_out(frame, result);
+  // The current frame becomes the previous one; the free cloud takes the next frame.
+  previous_images_ = frame;  // its images are the caller's: a header copy
   previous_ = current_;
   previous_frame_ = frame.index;
   previous_timestamp_ = frame.timestamp;

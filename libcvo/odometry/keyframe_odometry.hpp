@@ -39,6 +39,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
@@ -70,34 +71,59 @@ struct KeyframeOdometryParameters {
   double chain_full_weight_deg = core::KeyframeTrackingParameters{}.chain_full_weight_deg;
 };
 
-/// Why the last frame made a new keyframe.
+/// Why a frame made a new keyframe.
 enum class KeyframeReason { kNone, kFirst, kGamma, kTranslation, kRotation, kKeyframeLost, kRestart, kGraphFull };
 const char* to_string(KeyframeReason reason);
+
+/// A local graph handed out, named by its keyframe's id in the session. The graph is the
+/// tracker's: it stays valid until the tracker's next track() or reset().
+struct HandedLocalGraph {
+  std::int64_t keyframe_id = -1;
+  const LocalGraph* graph = nullptr;
+};
+
+/// A keyframe a frame made: frame n itself (the first frame, a restart) or frame n-1 (the paper's
+/// rule). `frame` shares the caller's images (a cv::Mat header, no pixel copy): the caller keeps
+/// frame n-1's images unchanged until the track() of frame n has returned and its step was used
+/// (cvo-trackerd releases a ring slot one frame late for that). `cloud` is the tracker's, valid
+/// until its next track().
+struct NewKeyframe {
+  std::int64_t id = -1;  // from 0 in every session
+  core::RgbdFrame frame;
+  core::SE3 pose;  // T_odom_keyframe: the anchor of the local graph it opens
+  const registration::PointCloud* cloud = nullptr;  // its CVO points, in its camera frame
+};
+
+/// Everything one track() gives its caller, so that nobody asks the tracker a second time.
+struct TrackStep : TrackResult {
+  std::int64_t keyframe_id = -1;  // the keyframe this frame is tracked against (-1 before the first)
+  double gamma = 0;               // γ of this frame (eq. 9); 0 when no keyframe registration ran
+  KeyframeReason reason = KeyframeReason::kNone;  // why this frame made a keyframe
+  // Covariance of this frame's keyframe→frame edge T_m^n (the inverse of its CVO Hessian,
+  // [translation, rotation]); none for a frame without one (a first frame, a restart, a failure).
+  std::optional<core::Matrix6d> edge_covariance;
+  std::optional<HandedLocalGraph> closed_graph;  // the local graph this frame closed
+  std::optional<NewKeyframe> new_keyframe;       // the keyframe this frame made
+};
 
 class KeyframeOdometry {
  public:
   KeyframeOdometry(int width, int height, const KeyframeOdometryParameters& parameters);
 
-  /// Tracks the next frame. Never throws on bad frames: see TrackResult::status.
-  TrackResult track(const core::RgbdFrame& frame);
+  /// Tracks the next frame. Never throws on bad frames: see TrackResult::status. Its images must
+  /// stay unchanged until the next track() has returned (NewKeyframe says why).
+  TrackStep track(const core::RgbdFrame& frame);
+
+  /// Ends the session: hands out the open local graph (its keyframe and the frames tracked
+  /// against it, so the back end has every tracked frame; nullopt when none is open), valid until
+  /// the next track() or reset(), and the next frame starts a new session as after reset().
+  std::optional<HandedLocalGraph> finish();
 
   /// Back to the state of a new tracker: the next frame is the first (at
-  /// parameters().initial_pose, a new keyframe), no graph is open or closed. For a camera that was
-  /// re-initialised (a new session); every buffer is kept, so it does not allocate.
+  /// parameters().initial_pose, a new keyframe, id 0), no graph is open or closed. For a camera
+  /// that was re-initialised (a new session); every buffer is kept, so it does not allocate.
   void reset();
 
-  /// Why the last track() made a keyframe (kNone when it did not).
-  [[nodiscard]] KeyframeReason keyframe_reason() const { return reason_; }
-  /// γ of the last frame (eq. 9); 0 when no keyframe registration ran.
-  [[nodiscard]] double gamma() const { return gamma_; }
-  /// Frame index of the current keyframe.
-  [[nodiscard]] std::uint64_t keyframe_index() const { return keyframe_frame_; }
-  /// True right after a track() that closed a local graph; it stays readable until the next one.
-  [[nodiscard]] bool local_graph_closed() const { return graph_closed_; }
-  [[nodiscard]] const LocalGraph& closed_local_graph() const { return graphs_[1 - graph_]; }
-  [[nodiscard]] const LocalGraph& current_local_graph() const { return graphs_[graph_]; }
-  /// The current keyframe's CVO points (its camera frame), e.g. for CVO_KEYFRAME.
-  [[nodiscard]] const registration::PointCloud& keyframe_cloud() const { return clouds_[keyframe_]; }
   [[nodiscard]] const KeyframeOdometryParameters& parameters() const { return parameters_; }
 
  private:
@@ -108,10 +134,12 @@ class KeyframeOdometry {
   };
   Registrations register_frame(TrackResult& result);
   bool keyframe_trips(const Registrations& r, TrackResult& result);
-  core::SE3 track_registered(const core::RgbdFrame& frame, const core::SE3& predicted, TrackResult& result);
-  core::SE3 add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r, TrackResult& result);
-  core::SE3 keyframe_at_previous(const core::RgbdFrame& frame, const Registrations& r, TrackResult& result);
+  core::SE3 track_registered(const core::RgbdFrame& frame, const core::SE3& predicted, TrackStep& result);
+  core::SE3 add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r, TrackStep& result);
+  core::SE3 keyframe_at_previous(const core::RgbdFrame& frame, const Registrations& r, TrackStep& result);
   void start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose, KeyframeReason why);
+  void hand_out(const core::RgbdFrame& frame, TrackStep& step) const;
+  void start_over();
   bool trips_threshold(const core::SE3& T_mn, double gamma);
   double gamma_inner_product(const registration::PointCloud& keyframe, const core::SE3& T_mn);
   [[nodiscard]] core::SE3 colour_T_depth(const core::RgbdFrame& frame) const;
@@ -141,9 +169,13 @@ class KeyframeOdometry {
   double velocity_dt_ = 0;    // colour-stamp seconds velocity_ spans; 0: none yet
   core::SE3 last_pose_;       // the last published pose (tracked or predicted)
 
+  // The previous frame (n-1), sharing the caller's images: the keyframe when one is made at n-1.
+  core::RgbdFrame previous_images_;
+
   std::array<LocalGraph, 2> graphs_;  // [graph_] is open, the other the last closed one
   int graph_ = 0;
-  bool graph_closed_ = false;
+  bool graph_closed_ = false;      // by the last track()
+  std::int64_t keyframe_id_ = -1;  // of the current keyframe, from 0 in the session
 };
 
 }  // namespace cvo::odometry

@@ -6,11 +6,15 @@
 // one the clean recording gives: every good message was used.
 //
 // No network: the input is a log and the output another (file:// providers both ways).
+#include <signal.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -164,6 +168,36 @@ TEST(BackenddPoison, EveryRefusalIsCountedByKindAndEveryGoodMessageIsUsed) {
       EXPECT_NEAR(a.keyframes[i].pose.position[c], b.keyframes[i].pose.position[c], 1e-9) << "keyframe " << i;
   }
   EXPECT_EQ(a.num_loops, b.num_loops);
+}
+
+// SIGHUP is a stop like SIGTERM: the queue is drained, the final optimisation runs and the final
+// map goes out, exit 0 (its default action would kill the daemon with 129 and no final map).
+TEST(Backendd, SigHupStopsCleanlyWithTheFinalMap) {
+  const cvo::test::TempDir dir("backendd_sighup");
+  const auto good = cvo::testing::tracker_recording(dir.path());
+  write_log(dir.path() / "in.lcmlog", good, {});
+  const auto out = dir.path() / "out.lcmlog";
+  const auto err_file = dir.path() / "err.txt";
+  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
+                         {"--lcm-url", "file://" + (dir.path() / "in.lcmlog").string() + "?speed=0", "--publish-url",
+                          "file://" + out.string() + "?mode=w", "--store", (dir.path() / "s.store").string()},
+                         err_file);
+  for (const auto until = std::chrono::steady_clock::now() + 300s;
+       cvo::testing::slurp(err_file).find("end of") == std::string::npos && std::chrono::steady_clock::now() < until;)
+    std::this_thread::sleep_for(50ms);
+  ASSERT_TRUE(backendd.running()) << cvo::testing::slurp(err_file);
+  backendd.signal(SIGHUP);
+  const auto code = backendd.wait_for(120s);
+  ASSERT_TRUE(code) << "still running after SIGHUP";
+  const auto err = cvo::testing::slurp(err_file);
+  EXPECT_EQ(*code, 0) << err;
+  EXPECT_NE(err.find("stopping on SIGHUP"), std::string::npos) << err;
+  const auto published = cvo::testing::read_published(out);
+  ASSERT_FALSE(published.maps.empty()) << err;
+  ASSERT_FALSE(published.statuses.empty());
+  EXPECT_EQ(published.statuses.back().state, +cvo_lcm::status_t::STATE_STOPPING);
+  const auto keyframes = std::count_if(good.begin(), good.end(), [](const Event& e) { return e.channel == "CVO_KEYFRAME"; });
+  EXPECT_EQ(static_cast<std::ptrdiff_t>(published.maps.back().keyframes.size()), keyframes) << "the final map has them all";
 }
 
 TEST(Backendd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {

@@ -73,6 +73,40 @@ TEST(FrameRing, CloseReleasesABlockedProducerAndDrainsTheConsumer) {
   EXPECT_TRUE(ring.drained());
 }
 
+// A keyframe made at frame n is frame n-1, whose images the tracker shares: however fast frames
+// come, the slot of the frame tracked last is not written again until the next one was tracked
+// (end_read), nor when a frame is skipped; release_previous() gives it back.
+TEST(FrameRing, TheFrameTrackedLastStaysUntilTheNextOneIsTracked) {
+  FrameRing ring(1, FrameRing::Overflow::kDropOldest);
+  put(ring, 0);
+  RingSlot* previous = ring.begin_read(100ms);
+  ASSERT_NE(previous, nullptr);
+  ring.end_read();
+  for (std::uint64_t i = 1; i < 10; ++i) put(ring, i);  // overload: every free slot is reused
+  EXPECT_EQ(previous->frame.index, 0u) << "the previous frame's slot was written while kept";
+
+  RingSlot* skipped = ring.begin_read(100ms);
+  ASSERT_NE(skipped, nullptr);
+  ring.skip_read();
+  for (std::uint64_t i = 10; i < 20; ++i) put(ring, i);
+  EXPECT_EQ(previous->frame.index, 0u) << "skipping a frame gave the previous one back";
+
+  RingSlot* current = ring.begin_read(100ms);
+  ASSERT_NE(current, nullptr);
+  const auto tracked = current->frame.index;
+  ring.end_read();  // now `current` is the previous frame, and frame 0's slot is free
+  for (std::uint64_t i = 20; i < 30; ++i) put(ring, i);
+  EXPECT_EQ(current->frame.index, tracked);
+
+  ring.release_previous();
+  bool reused = false;
+  for (std::uint64_t i = 30; i < 40; ++i) {
+    put(ring, i);
+    reused = reused || current->frame.index != tracked;
+  }
+  EXPECT_TRUE(reused) << "release_previous() gave the slot back";
+}
+
 TEST(FrameRing, WritingAndReadingDoNotAllocate) {
   FrameRing ring(2, FrameRing::Overflow::kDropOldest);
   const auto before = thread_allocations();

@@ -2,6 +2,7 @@
 // providers here, so no packet leaves the process; the UDP multicast replay is in
 // trackerd_netns_test.cpp), real recordings made by tum2lcm or written event by event.
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -9,6 +10,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -308,6 +310,64 @@ TEST(Trackerd, ShutdownUnderLoadIsCleanAndFastAndDropsAreCounted) {
   EXPECT_LE(log.poses.size() + static_cast<std::size_t>(log.statuses.back().dropped_frames), 50u);
   EXPECT_NE(err.find("tracked " + std::to_string(log.poses.size()) + " frames"), std::string::npos)
       << "every tracked frame's pose was flushed before exit\n" << err;
+}
+
+// SIGHUP (a terminal closing, or `systemctl kill -s HUP`) is a stop like SIGTERM: exit 0, the open
+// local graph published, not death by the signal's default action.
+TEST(Trackerd, SigHupStopsCleanlyAndPublishesTheOpenLocalGraph) {
+  cvo::test::TempDir dir;
+  const auto out = dir.path() / "out.lcmlog";
+  const auto err_file = dir.path() / "stderr.txt";
+  DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string(), "--deterministic"}), err_file);
+  for (const auto until = std::chrono::steady_clock::now() + cvo::testing::scaled(120s);
+       cvo::testing::slurp(err_file).find("end of") == std::string::npos && std::chrono::steady_clock::now() < until;)
+    std::this_thread::sleep_for(50ms);
+  ASSERT_TRUE(d.running()) << cvo::testing::slurp(err_file);
+  d.signal(SIGHUP);
+  const auto code = d.wait_for(cvo::testing::scaled(5000ms));
+  ASSERT_TRUE(code) << "still running after SIGHUP";
+  const auto err = cvo::testing::slurp(err_file);
+  EXPECT_EQ(*code, 0) << err;
+  EXPECT_NE(err.find("stopping on SIGHUP"), std::string::npos) << err;
+  const auto log = cvo::testing::read_published(out);
+  EXPECT_EQ(log.poses.size(), 50u);
+  ASSERT_FALSE(log.keyframes.empty());
+  EXPECT_EQ(log.local_graphs.size(), log.keyframes.size()) << "the open local graph went out before the exit";
+}
+
+// Whether `pid` blocks SIGTERM now (/proc/PID/status, SigBlk: a hexadecimal mask, bit n-1 for signal n).
+bool blocks_sigterm(pid_t pid) {
+  const auto status = cvo::testing::slurp("/proc/" + std::to_string(pid) + "/status");
+  const auto at = status.find("SigBlk:");
+  if (at == std::string::npos) return false;
+  return (std::stoull(status.substr(at + 7), nullptr, 16) >> (SIGTERM - 1) & 1) != 0;
+}
+
+// A stop that comes before the daemon is up (here: while it waits to read its configuration from a
+// FIFO) is held until it can stop cleanly: exit 0, never the 143 of a process killed half-started.
+TEST(Trackerd, AStopSignalInTheFirstInstantIsACleanStop) {
+  cvo::test::TempDir dir;
+  const auto fifo = dir.path() / "config.yaml";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const auto out = dir.path() / "out.lcmlog";
+  const auto err_file = dir.path() / "stderr.txt";
+  DaemonProcess d(kTrackerd, with(base_args(out), {"--config", fifo.string()}), err_file);
+  bool blocked = false;
+  for (const auto until = std::chrono::steady_clock::now() + cvo::testing::scaled(5s);
+       !(blocked = blocks_sigterm(d.pid())) && std::chrono::steady_clock::now() < until;)
+    std::this_thread::sleep_for(1ms);
+  ASSERT_TRUE(blocked) << "SIGTERM is not blocked while the daemon starts up";
+  d.signal(SIGTERM);  // the daemon has not read its configuration yet
+  std::this_thread::sleep_for(50ms);
+  {
+    std::ofstream config(fifo);
+    config << "trackerd:\n  source: tum:" << kClip.string() << "\n";
+  }
+  const auto code = d.wait_for(cvo::testing::scaled(20000ms));
+  ASSERT_TRUE(code) << "still running";
+  const auto err = cvo::testing::slurp(err_file);
+  EXPECT_EQ(*code, 0) << err;
+  EXPECT_NE(err.find("stopping on SIGTERM"), std::string::npos) << err;
 }
 
 // Under systemd: READY=1 once running, WATCHDOG=1 at half WATCHDOG_USEC, STATUS=..., STOPPING=1.

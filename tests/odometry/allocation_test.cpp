@@ -64,10 +64,10 @@ TEST(OdometryAllocation, KeyframeTrackAllocatesNothingAfterWarmUp) {
   int keyframes = 0, closed = 0;
   for (const core::RgbdFrame* frame : {&s.frames[3], &s.frames[4], &empty, &s.frames[6], &s.frames[7], &s.frames[8]}) {
     const auto before = process_allocations();
-    const TrackResult r = odometry.track(*frame);
+    const TrackStep r = odometry.track(*frame);
     allocations += process_allocations() - before;
     keyframes += r.keyframe;
-    closed += odometry.local_graph_closed();
+    closed += r.closed_graph.has_value();
   }
   EXPECT_GE(keyframes, 2);
   EXPECT_GE(closed, 1);
@@ -97,14 +97,15 @@ TEST(OdometryAllocation, KeyframeResetStartsOverWithoutAllocating) {
   auto allocations = process_allocations() - before;
   for (std::size_t i = 0; i < s.frames.size(); ++i) {
     const auto start = process_allocations();
-    const TrackResult r = odometry.track(s.frames[i]);
+    const TrackStep r = odometry.track(s.frames[i]);
     allocations += process_allocations() - start;
     if (i == 0) {
       EXPECT_EQ(r.status, TrackStatus::kFirstFrame);
       EXPECT_TRUE(r.keyframe);
-      EXPECT_EQ(odometry.keyframe_reason(), KeyframeReason::kFirst);
-      EXPECT_FALSE(odometry.local_graph_closed()) << "the old session's graph is not handed out again";
-      EXPECT_EQ(odometry.current_local_graph().nodes().size(), 1u);
+      EXPECT_EQ(r.reason, KeyframeReason::kFirst);
+      EXPECT_FALSE(r.closed_graph) << "the old session's graph is not handed out again";
+      ASSERT_TRUE(r.new_keyframe);
+      EXPECT_EQ(r.new_keyframe->id, 0) << "keyframe ids count from 0 again";
     }
     EXPECT_TRUE((r.pose.matrix().array() == first[i].matrix().array()).all()) << "frame " << i;
   }

@@ -61,8 +61,8 @@ std::vector<Switch> keyframe_switches(const std::vector<core::RgbdFrame>& frames
   for (const auto& f : frames) {
     const auto r = odometry.track(f);
     EXPECT_TRUE(r.tracked()) << "frame " << f.index;
-    if (gammas) gammas->push_back(odometry.gamma());
-    if (r.keyframe && f.index > 0) switches.push_back({f.index, odometry.keyframe_index(), odometry.keyframe_reason()});
+    if (gammas) gammas->push_back(r.gamma);
+    if (r.new_keyframe && f.index > 0) switches.push_back({f.index, r.new_keyframe->frame.index, r.reason});
   }
   return switches;
 }
@@ -128,12 +128,13 @@ TEST(KeyframeOdometry, TracksConstantMotionAndClosesLocalGraphs) {
     const auto e = testing::motion_error(truth, first.inverse() * r.pose);
     EXPECT_LT(e.translation_mm, 3.0) << "frame " << f.index;
     EXPECT_LT(e.rotation_deg, 0.15) << "frame " << f.index;
-    if (odometry.local_graph_closed()) {
+    if (r.closed_graph) {
       ++closed;
-      const auto& g = odometry.closed_local_graph();
+      const auto& g = *r.closed_graph->graph;
       // Keyframe first, then every frame tracked against it; the new keyframe is the last node.
       EXPECT_GE(g.nodes().size(), 2u);
-      EXPECT_EQ(g.nodes().back().frame_index, odometry.keyframe_index());
+      ASSERT_TRUE(r.new_keyframe) << "a graph closes when a keyframe is made";
+      EXPECT_EQ(g.nodes().back().frame_index, r.new_keyframe->frame.index);
       EXPECT_GE(g.edges().size(), g.nodes().size() - 1);
       for (const auto& edge : g.edges()) EXPECT_GT(edge.information.trace(), 0.0);
     }
@@ -248,27 +249,83 @@ TEST(KeyframeOdometry, ChainFusionStaysAccurateAndZeroWeightPublishesTheKeyframe
     p.chain_weight = weight;
     KeyframeOdometry odometry(320, 240, p);
     core::SE3 first;
+    std::vector<core::SE3> poses;
+    std::vector<LocalGraph> graphs;  // every closed one, then the open one
     for (const auto& f : frames) {
       const auto r = odometry.track(f);
       ASSERT_TRUE(r.tracked()) << "weight " << weight << " frame " << f.index;
       if (f.index == 0) first = r.pose;
+      poses.push_back(r.pose);
+      if (r.closed_graph) graphs.push_back(*r.closed_graph->graph);
       core::SE3 truth;
       for (std::uint64_t i = 0; i < f.index; ++i) truth = truth * step;
       const auto e = testing::motion_error(truth, first.inverse() * r.pose);
       EXPECT_LT(e.translation_mm, 3.0) << "weight " << weight << " frame " << f.index;
       EXPECT_LT(e.rotation_deg, 0.2) << "weight " << weight << " frame " << f.index;
-      if (weight == 0.0 && f.index >= 2) {
-        const auto& g = odometry.current_local_graph();
-        const LocalGraphEdge* edge = nullptr;
-        for (const auto& candidate : g.edges())
-          if (candidate.from == g.keyframe().frame_index && candidate.to == f.index) edge = &candidate;
-        ASSERT_NE(edge, nullptr) << "frame " << f.index;
-        const auto d = testing::motion_error(g.keyframe().pose * edge->measurement, r.pose);
-        EXPECT_LT(d.translation_mm, 1e-6) << "frame " << f.index;
-        EXPECT_LT(d.rotation_deg, 1e-6) << "frame " << f.index;
+    }
+    if (weight != 0.0) continue;
+    graphs.push_back(*odometry.finish()->graph);
+    for (const auto& g : graphs)
+      for (const auto& edge : g.edges()) {
+        if (edge.from != g.keyframe().frame_index || edge.to < 2) continue;
+        const auto d = testing::motion_error(g.keyframe().pose * edge.measurement, poses[edge.to]);
+        EXPECT_LT(d.translation_mm, 1e-6) << "frame " << edge.to;
+        EXPECT_LT(d.rotation_deg, 1e-6) << "frame " << edge.to;
       }
+  }
+}
+
+// What a back end needs comes back from track() itself: the keyframe made at frame n is frame
+// n-1, whose images it shares (no copy), with its id (from 0), pose and cloud; the graph it closes
+// is named by the old keyframe's id; every frame tracked against a keyframe carries its edge's
+// covariance; finish() hands out the open graph once and starts a new session.
+TEST(KeyframeOdometry, EachStepCarriesWhatItClosedAndMadeAndFinishEndsTheSession) {
+  const auto frames = constant_motion(core::SE3::from_translation({0.012, 0.0, 0.0}), 8);
+  KeyframeOdometry odometry(320, 240, only(0.0, 0.03, 180.0));
+  std::int64_t keyframes = 0, graphs = 0;
+  std::uint64_t keyframe_frame = 0;
+  for (const auto& f : frames) {
+    const auto r = odometry.track(f);
+    ASSERT_TRUE(r.tracked()) << "frame " << f.index;
+    EXPECT_EQ(r.keyframe_id, keyframes - (r.new_keyframe ? 0 : 1)) << "frame " << f.index;
+    if (r.new_keyframe) {
+      const auto& k = *r.new_keyframe;
+      EXPECT_EQ(k.id, keyframes++);
+      const auto& source = f.index == 0 ? f : frames[f.index - 1];
+      EXPECT_EQ(k.frame.index, source.index);
+      EXPECT_EQ(k.frame.bgr.data, source.bgr.data) << "the keyframe shares its frame's images";
+      EXPECT_EQ(k.frame.depth.data, source.depth.data);
+      ASSERT_NE(k.cloud, nullptr);
+      EXPECT_GT(k.cloud->size(), 100u);
+      if (f.index > 0) EXPECT_EQ(r.reason, KeyframeReason::kTranslation);
+    }
+    if (r.closed_graph) {
+      EXPECT_EQ(r.closed_graph->keyframe_id, graphs++) << "graphs close in keyframe order";
+      EXPECT_EQ(r.closed_graph->graph->keyframe().frame_index, keyframe_frame) << "named by the old keyframe";
+    }
+    if (r.new_keyframe) keyframe_frame = r.new_keyframe->frame.index;
+    if (f.index > 0) {
+      ASSERT_TRUE(r.edge_covariance) << "frame " << f.index;
+      EXPECT_GT(r.edge_covariance->trace(), 0.0);
+      EXPECT_TRUE(r.edge_covariance->isApprox(r.edge_covariance->transpose(), 1e-9));
+    } else {
+      EXPECT_FALSE(r.edge_covariance) << "a first frame has no edge";
     }
   }
+  ASSERT_GE(keyframes, 3) << "3 cm of translation every 2.5 frames";
+  EXPECT_EQ(graphs, keyframes - 1);
+
+  const auto open = odometry.finish();
+  ASSERT_TRUE(open);
+  EXPECT_EQ(open->keyframe_id, keyframes - 1);
+  EXPECT_EQ(open->graph->nodes().back().frame_index, frames.back().index);
+  EXPECT_FALSE(odometry.finish()) << "the open graph is handed out once";
+
+  const auto again = odometry.track(frames[0]);
+  EXPECT_EQ(again.status, TrackStatus::kFirstFrame);
+  ASSERT_TRUE(again.new_keyframe);
+  EXPECT_EQ(again.new_keyframe->id, 0) << "a new session counts keyframes from 0";
+  EXPECT_FALSE(again.closed_graph);
 }
 
 TEST(KeyframeOdometry, FailuresPredictAndRestart) {
@@ -285,7 +342,7 @@ TEST(KeyframeOdometry, FailuresPredictAndRestart) {
   // The next usable frame restarts with a keyframe at its predicted pose: no jump, no crash.
   const auto r3 = odometry.track(frames[3]);
   EXPECT_TRUE(r3.keyframe);
-  EXPECT_EQ(odometry.keyframe_reason(), KeyframeReason::kRestart);
+  EXPECT_EQ(r3.reason, KeyframeReason::kRestart);
   EXPECT_LT((r3.pose.translation() - r2.pose.translation()).norm(), 0.05);
   EXPECT_TRUE(odometry.track(frames[4]).tracked());
 }

@@ -341,7 +341,7 @@ int run(const Arguments& args) {
     trajectory = run_slam(args, config, sequences, groundtruth, report);
   } else {
     Tracker tracker = make_tracker(args, config, sequences.front().intrinsics());
-    trajectory = stream(sequences.front(), [&](const core::RgbdFrame& f) { return std::visit([&](auto& t) { return t.track(f); }, tracker); },
+    trajectory = stream(sequences.front(), [&](const core::RgbdFrame& f) { return std::visit([&](auto& t) -> odometry::TrackResult { return t.track(f); }, tracker); },
                         report, report.keyframes);
   }
   if (trajectory.empty() && (report.slam == std::nullopt || report.frames == report.failed.size())) {

@@ -16,10 +16,9 @@ using core::ms_since;
 
 struct SlamPipeline::Session {
   Session(slam::SessionId session, int width, int height, const config::Config& config)
-      : id(session), tracker(width, height, config::keyframe_odometry_parameters(config)), output(width, height) {}
+      : id(session), tracker(width, height, config::keyframe_odometry_parameters(config)) {}
   slam::SessionId id;
   odometry::KeyframeOdometry tracker;
-  odometry::KeyframeOutput output;
 };
 
 SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary)
@@ -34,22 +33,17 @@ void SlamPipeline::begin_session(slam::SessionId session, int width, int height)
 
 odometry::TrackResult SlamPipeline::track(const core::RgbdFrame& frame) {
   Session& s = *session_;
-  const odometry::TrackResult r = s.tracker.track(frame);
+  const odometry::TrackStep step = s.tracker.track(frame);
   const auto start = Clock::now();
-  const odometry::KeyframeStep step = s.output.after_track(s.tracker, r, frame);
-  if (step.closed_graph != nullptr) mapper_.add_local_graph(s.id, step.closed_graph_keyframe, *step.closed_graph);
-  if (step.keyframe != nullptr)
-    mapper_.add_keyframe({s.id, step.keyframe_id, *step.keyframe, step.keyframe_pose, s.tracker.keyframe_cloud()});
-  s.output.keep(frame);
+  if (const auto& g = step.closed_graph) mapper_.add_local_graph(s.id, g->keyframe_id, *g->graph);
+  if (const auto& k = step.new_keyframe) mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
   statistics_.backend_ms += ms_since(start);
-  return r;
+  return step;
 }
 
 void SlamPipeline::end_session() {
   if (!session_) return;
-  const auto& open = session_->tracker.current_local_graph();
-  if (!open.empty() && session_->output.keyframe_id() >= 0)
-    mapper_.add_local_graph(session_->id, session_->output.keyframe_id(), open);
+  if (const auto open = session_->tracker.finish()) mapper_.add_local_graph(session_->id, open->keyframe_id, *open->graph);
   session_.reset();
 }
 

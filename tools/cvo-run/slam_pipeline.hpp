@@ -4,10 +4,10 @@
 // building in several runs):
 //   every frame       KF-CVO tracks it (odometry::KeyframeOdometry, a new one per session: each
 //                     session has its own odometry frame);
-//   after each frame  odometry::KeyframeOutput says which local graph closed and which frame became
-//                     a keyframe (the tracker's own keyframe cloud goes with it, as cvo-trackerd
-//                     sends it); both go to slam::Mapper, the back end cvo-backendd runs too;
-//   end_session()     the session's open local graph goes to the mapper;
+//   after each frame  the tracker's step says which local graph closed and which frame became a
+//                     keyframe (with the tracker's own keyframe cloud, as cvo-trackerd sends it);
+//                     both go to slam::Mapper, the back end cvo-backendd runs too;
+//   end_session()     the session's open local graph (the tracker's finish()) goes to the mapper;
 //   finish()          the global optimisation.
 // The tracker never sees the corrections: it runs in its own odometry frame, and the back end
 // works on relative poses.
@@ -20,7 +20,6 @@
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
-#include "libcvo/odometry/keyframe_output.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/slam/mapper.hpp"
 

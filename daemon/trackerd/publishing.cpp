@@ -1,0 +1,257 @@
+#include "daemon/trackerd/publishing.hpp"
+
+#include <poll.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <span>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "cvo_lcm/keyframe_request_t.hpp"
+#include "cvo_lcm/keyframe_t.hpp"
+#include "cvo_lcm/local_graph_t.hpp"
+#include "cvo_lcm/pose_t.hpp"
+#include "daemon/common/realtime.hpp"
+#include "daemon/common/status.hpp"
+#include "libcvo/core/units.hpp"
+#include "libcvo/slam/mapper.hpp"
+#include "libcvo/lcm/decode.hpp"
+#include "libcvo/lcm/keyframe_conversion.hpp"
+#include "libcvo/lcm/local_graph_conversion.hpp"
+#include "libcvo/lcm/pose_conversion.hpp"
+#include "libcvo/lcm/tracker_messages.hpp"
+
+namespace cvo::daemon::trackerd {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Room for the largest CVO_KEYFRAME a camera's keyframe can be: every point, the images raw plus
+// an eighth for the encoders' own overhead (a compressed image larger than that is pathological,
+// and not kept); and for a full local graph (a node and two edges per frame).
+std::size_t max_keyframe_bytes(std::uint64_t camera_size, const odometry::KeyframeOdometryParameters& parameters) {
+  const auto pixels = (camera_size >> 32) * (camera_size & 0xffffffffU);
+  const std::size_t images = pixels * (3 + 2);  // BGR8 and 16-bit depth
+  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.max_points * (3 + 5) * sizeof(float) +
+         images + images / 8;
+}
+
+std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& parameters) {
+  cvo_lcm::local_graph_t graph{};
+  const auto empty = static_cast<std::size_t>(graph.getEncodedSize());
+  graph.num_nodes = 1;
+  graph.nodes.resize(1);
+  const auto node = static_cast<std::size_t>(graph.getEncodedSize()) - empty;
+  graph.num_edges = 1;
+  graph.edges.resize(1);
+  const auto edge = static_cast<std::size_t>(graph.getEncodedSize()) - empty - node;
+  return empty + parameters.local_graph_capacity * (node + 2 * edge);
+}
+
+std::string id_list(const std::vector<std::int64_t>& ids) {
+  std::string out;
+  for (const auto id : ids) out += (out.empty() ? "" : ", ") + std::to_string(id);
+  return out;
+}
+
+}  // namespace
+
+Publishing::Publishing(Shared& shared)
+    : shared_(shared),
+      lcm_(shared.config.trackerd.lcm_url),
+      receives_(!shared.config.trackerd.lcm_url.starts_with("file://")),
+      encoding_{*lcm::parse_colour_encoding(shared.config.trackerd.keyframe_colour_encoding), lcm::DepthEncoding::kPng},
+      session_(shared.session.load()) {}
+
+KeyframeHistory& Publishing::history() {
+  if (!history_)
+    history_ = std::make_unique<KeyframeHistory>(shared_.config.trackerd.keyframe_history,
+                                                 max_keyframe_bytes(shared_.out.camera_size, shared_.parameters),
+                                                 max_local_graph_bytes(shared_.parameters));
+  return *history_;
+}
+
+void Publishing::run() {
+  name_this_thread("cvo-publish");
+  struct Handler {
+    Publishing* self;
+    void map(const ::lcm::ReceiveBuffer* b, const std::string&) { self->apply_map(b->data, static_cast<int>(b->data_size)); }
+    void request(const ::lcm::ReceiveBuffer* b, const std::string&) {
+      self->answer_request(b->data, static_cast<int>(b->data_size));
+    }
+  } handler{this};
+  if (receives_) {
+    lcm_.subscribe("CVO_MAP", &Handler::map, &handler);
+    lcm_.subscribe("CVO_KEYFRAME_REQUEST", &Handler::request, &handler);
+  }
+  const auto period = std::chrono::duration<double>(shared_.config.trackerd.status_period_s);
+  Event event;
+  while (true) {
+    shared_.publish_heartbeat.beat();
+    if (shared_.out.ready) {
+      if (shared_.out.outbox->pop(event, 10ms)) publish(event);
+      else if (shared_.tracker_done && shared_.out.outbox->finished()) break;
+    } else if (shared_.tracker_done) {
+      break;
+    } else {
+      std::this_thread::sleep_for(10ms);
+    }
+    receive();
+    if (Clock::now() - last_status_ >= period) publish_status(-1);
+  }
+  publish_status(cvo_lcm::status_t::STATE_STOPPING);
+  shared_.publisher_done = true;
+}
+
+// CVO_MAP and CVO_KEYFRAME_REQUEST, without blocking the poses.
+void Publishing::receive() {
+  if (!receives_) return;
+  pollfd pfd{lcm_.getFileno(), POLLIN, 0};
+  while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) lcm_.handle();
+}
+
+void Publishing::publish(const Event& event) {
+  Outbox& outbox = *shared_.out.outbox;
+  if (event.session != session_) {  // noted here: the tracking thread does not allocate
+    session_ = event.session;
+    shared_.notes.note("camera re-initialised: new session " + slam::session_name(event.session));
+    // A camera change may have made keyframes larger.
+    history().reserve_keyframe_bytes(max_keyframe_bytes(shared_.out.camera_size, shared_.parameters));
+  }
+  if (event.has_pose && event.pose.keyframe_id >= 0) history().made(event.session, event.pose.keyframe_id);
+  if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
+    const auto& g = outbox.graph(event.graph_slot);
+    const auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime()));
+    lcm_.publish("CVO_LOCAL_GRAPH", bytes.data(), static_cast<unsigned>(bytes.size()));
+    history().keep_graph(event.session, g.keyframe_id, bytes);
+  }
+  if (event.keyframe_slot >= 0) publish_keyframe(event);
+  else if (event.has_pose && event.pose.is_keyframe)  // no outbox slot: counted by the outbox
+    history().never_sent(event.session, event.pose.keyframe_id);
+  if (event.has_pose) {
+    const double latency_ms = core::ms_since(event.pose.received);
+    const cvo_lcm::pose_t m = lcm::pose_message(event.session, event.pose, latency_ms);
+    lcm_.publish("CVO_POSE", &m);
+    latency_.add(m.latency_ms);
+    if (m.latency_ms > shared_.config.trackerd.deadline_ms) ++deadline_misses_;
+    if (published_++ == 0) shared_.notes.note("first pose published");
+    last_frame_ = Clock::now();
+  }
+  outbox.release(event);
+}
+
+void Publishing::publish_keyframe(const Event& event) {
+  const auto& k = shared_.out.outbox->keyframe(event.keyframe_slot);
+  std::string error;
+  const lcm::Keyframe keyframe{event.session, k.id, k.frame, k.pose, k.cloud};
+  const auto message = lcm::to_message(keyframe, encoding_, &error);
+  if (!message) {
+    ++unsent_;
+    history().never_sent(event.session, k.id);
+    shared_.notes.note("keyframe " + std::to_string(k.id) + " not published (lost): " + error);
+    return;
+  }
+  const auto bytes = lcm::encode(*message);
+  lcm_.publish("CVO_KEYFRAME", bytes.data(), static_cast<unsigned>(bytes.size()));
+  if (!history().keep_keyframe(event.session, k.id, bytes) && history().capacity() > 0)
+    shared_.notes.note("keyframe " + std::to_string(k.id) + " (" + std::to_string(bytes.size()) +
+                       " bytes) is larger than a history slot: it cannot be sent again");
+}
+
+// CVO_KEYFRAME_REQUEST: the back end missed keyframes of a session; those of this tracker's sessions
+// that the history still holds go out again as first sent (keyframe, then its local graph).
+// Requests for other sessions are other trackers'.
+void Publishing::answer_request(const void* data, int size) {
+  std::string error;
+  auto failure = lcm::DecodeFailure::kBody;
+  const auto request = lcm::decode<cvo_lcm::keyframe_request_t>(data, size, &error, &failure);
+  if (!request) return shared_.count_bad(static_cast<int>(failure), "skipped CVO_KEYFRAME_REQUEST", error);
+  const std::string what = "CVO_KEYFRAME_REQUEST for session " + slam::session_name(request->session);
+  if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS)
+    return shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
+                             std::to_string(request->num_ids) + " ids, more than " +
+                                 std::to_string(cvo_lcm::keyframe_request_t::MAX_IDS));
+  if (!shared_.out.ready) {  // nothing made yet: only a request for the running session concerns us
+    if (request->session == shared_.session.load())
+      shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what, "no keyframe made yet");
+    return;
+  }
+  const auto send = [&](const char* channel, std::span<const std::uint8_t> bytes) {
+    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+  };
+  const auto answer = history().answer(request->session, request->ids, send);
+  if (!answer.ours) return;
+  if (!answer.never.empty())
+    shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped part of " + what,
+                      "keyframes " + id_list(answer.never) + " were never made");
+  if (answer.sent.empty() && answer.lost.empty()) return;
+  const auto n = ++requests_answered_;
+  std::string done = answer.sent.empty() ? "" : "sent " + id_list(answer.sent);
+  if (!answer.lost.empty())
+    done += (done.empty() ? "" : "; ") + std::string("lost (not in the history of ") +
+            std::to_string(history().capacity()) + "): " + id_list(answer.lost);
+  shared_.notes.note_limited("keyframe request", "the back end asked again for keyframes of session " +
+                                                     slam::session_name(request->session) + " (#" +
+                                                     std::to_string(n) + "): " + done);
+}
+
+void Publishing::publish_status(std::int8_t state_override) {
+  const auto now = Clock::now();
+  const double elapsed = std::chrono::duration<double>(now - last_status_).count();
+  const auto& c = shared_.counters;
+  lcm::ProcessStatus s;
+  s.process = "cvo-trackerd";
+  s.session = session_;
+  s.rate_hz = elapsed > 0 ? static_cast<double>(published_ - published_at_last_status_) / elapsed : 0;
+  const auto l = latency_.summary();
+  s.latency_median_ms = l.median_ms;
+  s.latency_p99_ms = l.p99_ms;
+  s.deadline_misses = deadline_misses_;
+  s.dropped_frames = shared_.ring.dropped() + c.source_lost_frames;
+  s.failed_frames = c.failed_frames;
+  s.source_gaps = c.source_gaps;
+  s.allocations_after_warmup = c.allocations_after_warmup;
+  s.queue_depth = static_cast<std::int32_t>(shared_.ring.waiting());
+  for (std::size_t k = 0; k < s.bad_messages.size(); ++k) s.bad_messages[k] = c.bad_messages[k];
+  const std::int64_t outbox_lost = shared_.out.ready ? shared_.out.outbox->lost() : 0;
+  if (outbox_lost > outbox_lost_noted_) {  // noted here: the tracking thread does not allocate
+    shared_.notes.note(std::to_string(outbox_lost) +
+                       " keyframes or local graphs lost before publication (the publisher fell behind)");
+    outbox_lost_noted_ = outbox_lost;
+  }
+  s.keyframes_requested = shared_.out.ready ? history().resent() : 0;
+  s.keyframes_lost = outbox_lost + unsent_ + (shared_.out.ready ? history().lost() : 0);
+  s.state = state_override >= 0 ? state_override
+                                : lcm::tracker_state({published_, c.source_connected.load(), now - last_frame_ > 1s,
+                                                      c.failed_frames > failed_at_last_status_});
+  const cvo_lcm::status_t message = daemon::status_message(std::move(s), shared_.notes);
+  lcm_.publish("CVO_STATUS", &message);
+  shared_.systemd.status(std::to_string(published_) + " frames, " + std::to_string(std::lround(s.rate_hz)) +
+                          " Hz, latency p99 " + std::to_string(std::lround(s.latency_p99_ms)) + " ms, " +
+                          std::to_string(s.dropped_frames) + " dropped");
+  published_at_last_status_ = published_;
+  failed_at_last_status_ = c.failed_frames;
+  last_status_ = now;
+}
+
+// CVO_MAP: what lcm::decide_map_correction trusts moves the running session's map poses (placed:
+// its correction; not placed: map pose = odometry pose); anything else is counted by kind.
+void Publishing::apply_map(const void* data, int size) {
+  const std::int64_t session = shared_.session.load();
+  const auto& t = shared_.config.trackerd;
+  const lcm::CorrectionDecision d =
+      lcm::decide_map_correction(data, size, session, applied_, {t.max_map_jump_m, t.max_map_jump_deg});
+  if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
+  const bool was_placed = applied_.session == session && applied_.placed;
+  if (d.correction.placed != was_placed)
+    shared_.notes.note("session " + slam::session_name(session) +
+                       (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
+                       " (map revision " + std::to_string(d.correction.revision) + ")");
+  applied_ = d.correction;
+  shared_.correction.set(session, {d.correction.T_map_odom, d.correction.placed});
+}
+
+}  // namespace cvo::daemon::trackerd

@@ -1,0 +1,50 @@
+#pragma once
+// cvo-publish: Outbox -> LCM. Every event's CVO_POSE, CVO_KEYFRAME and CVO_LOCAL_GRAPH (encoded
+// here, and kept as sent in the KeyframeHistory, so the back end's CVO_KEYFRAME_REQUEST is answered
+// with the very bytes it missed), CVO_STATUS once a period and systemd's STATUS. In from LCM:
+// CVO_MAP (what lcm::decide_map_correction trusts sets the running session's MapCorrection) and
+// CVO_KEYFRAME_REQUEST. Runs until the tracker is done and the outbox is empty.
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "daemon/common/latency_window.hpp"
+#include "daemon/trackerd/keyframe_history.hpp"
+#include "daemon/trackerd/shared.hpp"
+#include "libcvo/lcm/map_decision.hpp"
+#include "libcvo/lcm/rgbd_conversion.hpp"
+
+namespace cvo::daemon::trackerd {
+
+class Publishing {
+ public:
+  explicit Publishing(Shared& shared);
+  void run();  // the thread's body
+
+ private:
+  void receive();
+  void publish(const Event& event);
+  void publish_keyframe(const Event& event);
+  void answer_request(const void* data, int size);
+  void publish_status(std::int8_t state_override);
+  void apply_map(const void* data, int size);
+  KeyframeHistory& history();
+
+  Shared& shared_;
+  ::lcm::LCM lcm_;
+  const bool receives_;  // a file:// output is a log being written: nothing comes back on it
+  const lcm::RgbdEncoding encoding_;
+  std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
+  lcm::AppliedCorrection applied_;            // the last CVO_MAP correction applied
+  LatencyWindow latency_{1024};
+  std::int64_t session_;  // of the last event published
+  std::int64_t published_ = 0, published_at_last_status_ = 0, deadline_misses_ = 0, failed_at_last_status_ = 0;
+  std::int64_t unsent_ = 0;             // keyframes that could not be encoded (lost before publication)
+  std::int64_t outbox_lost_noted_ = 0;  // the outbox's lost() when last noted
+  std::int64_t requests_answered_ = 0;
+  Clock::time_point last_status_ = Clock::now(), last_frame_ = Clock::now();
+};
+
+}  // namespace cvo::daemon::trackerd
