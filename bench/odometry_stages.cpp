@@ -115,7 +115,6 @@ int main(int argc, char** argv) {
   app.add_option("SEQUENCE", sequence, "TUM RGB-D folder");
   app.add_option("--out", out, "also write the trajectory (TUM format), for cvo-eval");
   app.add_option("--frames", frames, "only the first N frames (0: all)")->transform(cvo::program::kDecimal);
-  app.add_option("--set", settings, "override one parameter, e.g. --set cvo.threads=2 (repeatable)")
-      ->allow_extra_args(false);
+  cvo::program::add_set_option(app, settings, "cvo.threads=2");
   return cvo::program::cli_main(app, argc, argv, [&] { return run(sequence, frames, settings, out); });
 }

@@ -173,6 +173,11 @@ TEST(Backendd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
       {"--config", "--lcm-url", "--store", "--publish-url", "--exit-on-eof", "--set", "--print-config"}, dir.path());
 }
 
+TEST(Backendd, SetWithoutAnEqualsSignIsAUsageError) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_set_needs_key_equals_value("cvo-backendd", "--print-config", dir.path());
+}
+
 TEST(BackenddPoison, ExitOnEofNeedsALog) {
   const cvo::test::TempDir dir("backendd_poison");
   DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",

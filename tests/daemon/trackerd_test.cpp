@@ -413,6 +413,11 @@ TEST(Trackerd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
                                     dir.path());
 }
 
+TEST(Trackerd, SetWithoutAnEqualsSignIsAUsageError) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_set_needs_key_equals_value("cvo-trackerd", "--print-config", dir.path());
+}
+
 TEST(Trackerd, RepeatedSetOptionsEachTakeOneValue) {
   cvo::test::TempDir dir;
   const auto r = cvo::testing::run_tool(
