@@ -188,5 +188,19 @@ TEST(BackenddPoison, ExitOnEofNeedsALog) {
   EXPECT_NE(cvo::testing::slurp(dir.path() / "err.txt").find("backendd.exit_on_eof"), std::string::npos);
 }
 
+// The receiving provider is checked as the publishing one is, whether or not they are one.
+TEST(BackenddPoison, AnUnopenableLcmUrlIsAnErrorNamingItWithOrWithoutAPublishUrl) {
+  const cvo::test::TempDir dir("backendd_poison");
+  for (const bool publish : {false, true}) {
+    std::vector<std::string> args{"--lcm-url", "bogus://x", "--store", (dir.path() / "s").string()};
+    if (publish) args.insert(args.end(), {"--publish-url", "file://" + (dir.path() / "out.lcmlog").string() + "?mode=w"});
+    DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd", args, dir.path() / "err.txt");
+    EXPECT_EQ(backendd.wait_for(60s).value_or(-9), 1) << "with --publish-url: " << publish;
+    const auto err = cvo::testing::slurp(dir.path() / "err.txt");
+    EXPECT_NE(err.find("backendd.lcm_url"), std::string::npos) << err;
+    EXPECT_NE(err.find("bogus://x"), std::string::npos) << err;
+  }
+}
+
 }  // namespace
 }  // namespace cvo::daemon
