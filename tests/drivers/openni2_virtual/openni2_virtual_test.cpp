@@ -24,6 +24,7 @@
 #include <opencv2/core.hpp>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "tests/support/daemon_process.hpp"

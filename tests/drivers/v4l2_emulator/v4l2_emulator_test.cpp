@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/reconnecting_source.hpp"
 #include "tests/drivers/v4l2_emulator/emulated.hpp"
 #include "tests/support/slowdown.hpp"
