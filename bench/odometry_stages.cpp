@@ -21,6 +21,7 @@
 #include "libcvo/config/config.hpp"
 #include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/units.hpp"
+#include "libcvo/eval/percentile.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
@@ -36,12 +37,7 @@ struct Stage {
   std::vector<double> ms;  // one per tracked frame
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5);
-  return v[std::min(i, v.size() - 1)];
-}
+using eval::percentile;
 
 double mean(const std::vector<double>& v) {
   return v.empty() ? 0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
@@ -51,10 +47,10 @@ void print_table(const std::vector<Stage>& stages, const std::vector<double>& it
   const double total = mean(stages.back().ms);
   std::printf("| stage | median ms | p99 ms | mean ms | share of the mean |\n| --- | --- | --- | --- | --- |\n");
   for (const auto& s : stages)
-    std::printf("| %s | %.2f | %.2f | %.2f | %.0f %% |\n", s.name, percentile(s.ms, 0.5), percentile(s.ms, 0.99),
+    std::printf("| %s | %.2f | %.2f | %.2f | %.0f %% |\n", s.name, percentile(s.ms, 50), percentile(s.ms, 99),
                 mean(s.ms), total > 0 ? 100.0 * mean(s.ms) / total : 0.0);
   std::printf("\nsolver iterations per frame (both registrations): median %.0f, p99 %.0f\n",
-              percentile(iterations, 0.5), percentile(iterations, 0.99));
+              percentile(iterations, 50), percentile(iterations, 99));
 }
 
 int run(const fs::path& sequence_dir, std::size_t max_frames, const std::vector<std::string>& settings,
@@ -115,7 +111,6 @@ int main(int argc, char** argv) {
   app.add_option("SEQUENCE", sequence, "TUM RGB-D folder");
   app.add_option("--out", out, "also write the trajectory (TUM format), for cvo-eval");
   app.add_option("--frames", frames, "only the first N frames (0: all)")->transform(cvo::program::kDecimal);
-  app.add_option("--set", settings, "override one parameter, e.g. --set cvo.threads=2 (repeatable)")
-      ->allow_extra_args(false);
+  cvo::program::add_set_option(app, settings, "cvo.threads=2");
   return cvo::program::cli_main(app, argc, argv, [&] { return run(sequence, frames, settings, out); });
 }

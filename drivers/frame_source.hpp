@@ -1,12 +1,7 @@
 #pragma once
 // The one small interface every frame source implements: timestamped colour + registered depth
 // with intrinsics (core::RgbdFrame), read one at a time by the daemon's acquisition thread.
-//
-// Sources are named by a spec, the `--source` contract of cvo-trackerd:
-//   tum:DIR          a TUM RGB-D folder, at the recorded rate or as fast as possible
-//   lcm:URL          CVO_RGBD messages from an LCM provider: live (udpm://...) or a log (file://...)
-//   openni2:URI      an OpenNI2 device URI, "" / "any" for the first device, or an .oni recording
-//   v4l2:COLOUR,DEPTH  V4L2 device nodes (mmap streaming; YUYV/MJPEG colour, Z16 depth)
+// Sources are opened by the spec that names them (open_source.hpp).
 //
 // A read never throws on bad data: the result says what happened, so the caller can count it
 // and go on. Only open_source() throws, on a spec it cannot understand or a source that cannot be
@@ -86,8 +81,5 @@ class FrameSource {
 const char* to_string(ReadStatus status);
 /// Of a BadInput: "too short", "fingerprint", "body", "version", "content", "image size", ...
 using lcm::to_string;
-
-/// Opens the source a spec names (see the top of this file). Throws SourceError.
-std::unique_ptr<FrameSource> open_source(std::string_view spec, const SourceOptions& options = {});
 
 }  // namespace cvo::drivers

@@ -30,6 +30,7 @@
 #include <string>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/usb_cameras.hpp"
 
 namespace cvo::drivers {

@@ -1,7 +1,8 @@
 // The replay driver of the normal build: runs a harness's LLVMFuzzerTestOneInput once on every file
 // of the folders given (seeds and reproducers), as libFuzzer would replay them, so a parser change
 // that brings back a fixed crash fails an ordinary CTest case without clang or libFuzzer. A finding
-// aborts (sanitizers are not needed for the asserted guarantees; the asan preset adds them).
+// aborts (sanitizers are not needed for the asserted guarantees; the asan preset adds them). No
+// input at all replays nothing: exit 77, CTest's Skipped, never a pass.
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -22,6 +23,10 @@ int main(int argc, char** argv) {
     }
     for (const auto& entry : std::filesystem::recursive_directory_iterator(dir))
       if (entry.is_regular_file() && entry.path().filename() != "README.md") inputs.push_back(entry.path());
+  }
+  if (inputs.empty()) {
+    std::printf("replay: skipped: no input in the folders given\n");
+    return 77;
   }
   std::sort(inputs.begin(), inputs.end());  // a stable order, so a failing run names the same file first
   for (const auto& file : inputs) {

@@ -100,6 +100,22 @@ const CLI::Validator kDecimal(
     },
     "", "decimal");
 
+const CLI::Validator kAssignment(
+    [](const std::string& text) -> std::string {
+      const auto eq = text.find('=');
+      if (eq == std::string::npos || text.find_first_not_of(" \t") == eq)
+        return "needs KEY=VALUE, e.g. cvo.ell_init=0.15, not '" + text + "'";
+      return {};
+    },
+    "", "assignment");
+
+CLI::Option* add_set_option(CLI::App& app, std::vector<std::string>& assignments, const std::string& example) {
+  return app.add_option("--set", assignments, "override one configuration key, e.g. --set " + example + " (repeatable)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false)
+      ->check(kAssignment);
+}
+
 void describe(CLI::App& app, const std::string& synopsis, const std::string& notes) {
   app.formatter(std::make_shared<Formatter>(synopsis));
   app.footer(notes.empty() ? std::string(kExitStatuses) : notes + "\n\n" + kExitStatuses);

@@ -13,6 +13,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace cvo::program {
 
@@ -37,5 +38,13 @@ extern const CLI::Validator kPositive;
 /// (wrapped), "0x10" as hex and "010" as octal; the text is rewritten without leading zeros, so
 /// "010" is ten.
 extern const CLI::Validator kDecimal;
+
+/// A validator of "--set KEY=VALUE" assignments: the form only (a key, "=", then the value, which
+/// may be empty); the key and value are checked by config::apply_override when applied.
+extern const CLI::Validator kAssignment;
+
+/// The --set option every configurable program has, repeatable, each value KEY=VALUE (kAssignment:
+/// one without "=" is a usage error, exit 2, before anything runs). `example` is one assignment.
+CLI::Option* add_set_option(CLI::App& app, std::vector<std::string>& assignments, const std::string& example);
 
 }  // namespace cvo::program

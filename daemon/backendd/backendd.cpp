@@ -133,6 +133,10 @@ Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(c
   const auto& b = config_.backendd;
   if (b.exit_on_eof && !is_log(b.lcm_url))
     throw io::InputError("backendd.exit_on_eof", "needs a file:// lcm_url (a log that ends), not '" + b.lcm_url + "'");
+  // cvo-receive opens its own provider in its thread: one that cannot open would leave it deaf for
+  // good (publish_url's check below sees lcm_url only when the two are one).
+  if (!::lcm::LCM(b.lcm_url).good())
+    throw io::InputError("backendd.lcm_url", "cannot open LCM provider '" + b.lcm_url + "'");
   work_ = std::make_unique<Work>(loop_closure::Vocabulary::load(resolve_vocabulary(b.vocabulary)), config_);
   if (!work_->lcm.good())
     throw io::InputError(b.publish_url == "lcm_url" ? "backendd.lcm_url" : "backendd.publish_url",

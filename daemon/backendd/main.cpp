@@ -49,9 +49,7 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_flag("--exit-on-eof", args.exit_on_eof,
                "with a file:// --lcm-url (a recording): at its end, the final optimisation, the final map, exit 0 "
                "(backendd.exit_on_eof)");
-  app.add_option("--set", args.sets, "override one configuration key (repeatable)")
-      ->type_name("KEY=VALUE")
-      ->allow_extra_args(false);
+  program::add_set_option(app, args.sets, "backendd.status_period_s=2");
   app.add_flag("--print-config", args.print_config, "print the effective configuration as YAML and exit");
 }
 

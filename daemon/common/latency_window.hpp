@@ -3,7 +3,10 @@
 // allocates, so the realtime thread may call add(); summaries are computed by whoever reports.
 #include <algorithm>
 #include <cstddef>
+#include <span>
 #include <vector>
+
+#include "libcvo/eval/percentile.hpp"
 
 namespace cvo::daemon {
 
@@ -21,19 +24,15 @@ class LatencyWindow {
     count_ = std::min(count_ + 1, samples_.size());
   }
 
-  /// Nearest-rank percentiles of the samples held; all zero when there are none.
+  /// The percentiles of the samples held (eval::percentile, numpy's, on a copy made in the
+  /// scratch buffer: no allocation); all zero when there are none.
   LatencySummary summary() {
     LatencySummary s;
     if (count_ == 0) return s;
-    std::copy_n(samples_.begin(), count_, scratch_.begin());
-    const auto rank = [&](double q) {
-      const auto k = std::min(count_ - 1, static_cast<std::size_t>(q * static_cast<double>(count_)));
-      std::nth_element(scratch_.begin(), scratch_.begin() + static_cast<std::ptrdiff_t>(k),
-                       scratch_.begin() + static_cast<std::ptrdiff_t>(count_));
-      return scratch_[k];
-    };
-    s.median_ms = rank(0.5);
-    s.p99_ms = rank(0.99);
+    const std::span<double> held(scratch_.data(), count_);
+    std::copy_n(samples_.begin(), count_, held.begin());
+    s.median_ms = eval::percentile_in_place(held, 50);
+    s.p99_ms = eval::percentile_in_place(held, 99);
     return s;
   }
 

@@ -46,9 +46,7 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_option("--lcm-url", args.lcm_url, "where results are published (trackerd.lcm_url)")->type_name("URL");
   app.add_flag("--exit-on-eof", args.exit_on_eof, "exit 0 when a finite source ends, after tracking every frame");
   app.add_flag("--deterministic", args.deterministic, "never drop frames: a replay gives the same poses every time");
-  app.add_option("--set", args.sets, "override one configuration key (repeatable), e.g. trackerd.ring_slots=8")
-      ->type_name("KEY=VALUE")
-      ->allow_extra_args(false);
+  program::add_set_option(app, args.sets, "trackerd.ring_slots=8");
   app.add_flag("--print-config", args.print_config, "print the effective configuration as YAML and exit");
 }
 

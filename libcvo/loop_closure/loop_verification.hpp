@@ -13,10 +13,10 @@
 //      T_ij, j's points into i's frame. The measurement is Z = T_ij^-1 = T_j^-1 T_i. Not converged
 //      (or no overlap): "CVO failed".
 //   3b. not in the paper: the CVO pose must keep min_inlier_retention of RANSAC's inliers within
-//      ransac_inlier_m, else "CVO left the matches". On fr1/rpy, pairs 17-23 degrees apart, CVO
-//      sometimes slid 5-12 degrees away from a RANSAC pose within about 1 degree of the truth
-//      and α still came out above 0 (the wrong pose overlaps the clouds about as well); such a
-//      pose moves the matched keypoints tens of centimetres, a right one keeps them.
+//      ransac_inlier_m, else "CVO left the matches". CVO can slide from a RANSAC pose near the
+//      truth to a wrong one that overlaps the clouds about as well, α above 0 all the same; a
+//      wrong pose moves the matched keypoints far, a right one keeps them (what was seen on
+//      fr1/rpy: bench/odometry-tuning.md, "loop_closure.min_inlier_retention").
 //   4. α (eq. 12), every inner product <f_Xi, T.f_Xj> with X_i fixed, X_j moving, T mapping j's
 //      frame into i's, and all at ONE length-scale: ℓ_min (min(ell_min, ell_init) of the CVO
 //      parameters, where align() converges), so the four numbers are comparable:
@@ -26,8 +26,8 @@
 //      "alpha <= 0" (the CVO pose aligns no better than identity, the RANSAC pose, or what the
 //      trajectory already says: such a loop would add nothing or harm). When RANSAC's pose is
 //      already at the optimum (exact rendered depth), CVO can only tie with it: α is then at the
-//      noise level of the sparsified kernel (±0.2 % of the inner product, measured), and such a
-//      loop may be refused although it is right.
+//      noise level of the sparsified kernel (bench/odometry-tuning.md, "α at the optimum"), and
+//      such a loop may be refused although it is right.
 //
 // Information of the loop edge. The solver's Hessian H (registration.hpp: H/ℓ² at ℓ_min, order
 // [translation, rotation]) is the information of a LEFT perturbation T_ij <- exp(ξ) T_ij, ξ in

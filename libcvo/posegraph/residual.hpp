@@ -9,8 +9,8 @@
 // zero it differs in the two ways that matter on graphs whose initial guess is far off (torus3D):
 // |2 vec(q_E)| = 2 sin(theta/2) levels off instead of growing like theta, so edges with a large
 // rotation error pull less hard while the rest of the graph settles; and the translation error is
-// not bent by the rotation error (log(E) has V^-1(phi) t_E). With log(E), LM (ours, and GTSAM's on
-// Pose3) stops at cost 29 950 on torus3D; with this residual it reaches Ceres' 22 556.
+// not bent by the rotation error (log(E) has V^-1(phi) t_E). With log(E), LM stops short of Ceres'
+// cost on torus3D; with this residual it reaches it (libcvo/posegraph/README.md, "The residual").
 //
 // Retraction: T (+) d = (R exp(phi), t + R rho), d = [rho; phi] in the node's own frame; to first
 // order it is T exp(d).

@@ -22,8 +22,8 @@
 // Mutual visibility (CvoParameters::mutual_visibility; align() only). Each cloud covers its own
 // camera's view; where the views differ, a moving point near the edge of X's view finds partners on
 // one side only, and a fixed point the moving camera no longer sees has none: both pull T towards
-// less motion (the kernel correlation of two truncated clouds peaks short of the truth; on real
-// fast turns KF-CVO under-rotated by ~1 %). So align() sums only what both cameras see: moving
+// less motion (the kernel correlation of two truncated clouds peaks short of the truth; KF-CVO
+// under-rotated on real fast turns: libcvo/odometry/README.md, "Rotation"). So align() sums only what both cameras see: moving
 // points whose T z_j falls outside X's view (the extent of X's image coordinates x/z, y/z) are
 // skipped each iteration, and fixed points outside Z's view, seen through T⁻¹, are hidden once per
 // length-scale. Then both clouds are cut at the same place at the truth, where the correlation of

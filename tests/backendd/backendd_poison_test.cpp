@@ -27,8 +27,8 @@
 #include "daemon/backendd/keyframe_store.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "tests/backendd/tracker_recording.hpp"
-#include "tests/daemon/daemon_process.hpp"
-#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -207,6 +207,11 @@ TEST(Backendd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
       {"--config", "--lcm-url", "--store", "--publish-url", "--exit-on-eof", "--set", "--print-config"}, dir.path());
 }
 
+TEST(Backendd, SetWithoutAnEqualsSignIsAUsageError) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_set_needs_key_equals_value("cvo-backendd", "--print-config", dir.path());
+}
+
 TEST(BackenddPoison, ExitOnEofNeedsALog) {
   const cvo::test::TempDir dir("backendd_poison");
   DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
@@ -215,6 +220,20 @@ TEST(BackenddPoison, ExitOnEofNeedsALog) {
                          dir.path() / "err.txt");
   EXPECT_EQ(backendd.wait_for(60s).value_or(-9), 1);
   EXPECT_NE(cvo::testing::slurp(dir.path() / "err.txt").find("backendd.exit_on_eof"), std::string::npos);
+}
+
+// The receiving provider is checked as the publishing one is, whether or not they are one.
+TEST(BackenddPoison, AnUnopenableLcmUrlIsAnErrorNamingItWithOrWithoutAPublishUrl) {
+  const cvo::test::TempDir dir("backendd_poison");
+  for (const bool publish : {false, true}) {
+    std::vector<std::string> args{"--lcm-url", "bogus://x", "--store", (dir.path() / "s").string()};
+    if (publish) args.insert(args.end(), {"--publish-url", "file://" + (dir.path() / "out.lcmlog").string() + "?mode=w"});
+    DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd", args, dir.path() / "err.txt");
+    EXPECT_EQ(backendd.wait_for(60s).value_or(-9), 1) << "with --publish-url: " << publish;
+    const auto err = cvo::testing::slurp(dir.path() / "err.txt");
+    EXPECT_NE(err.find("backendd.lcm_url"), std::string::npos) << err;
+    EXPECT_NE(err.find("bogus://x"), std::string::npos) << err;
+  }
 }
 
 }  // namespace

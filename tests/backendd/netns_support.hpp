@@ -31,8 +31,8 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/lcm/decode.hpp"
-#include "tests/daemon/daemon_process.hpp"
-#include "tests/daemon/private_network.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/private_network.hpp"
 
 namespace cvo::testing {
 

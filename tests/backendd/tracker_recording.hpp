@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include "tests/daemon/daemon_process.hpp"
+#include "tests/support/daemon_process.hpp"
 #include "tests/support/run_tool.hpp"
 
 namespace cvo::testing {

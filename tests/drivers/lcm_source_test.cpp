@@ -12,6 +12,7 @@
 
 #include "cvo_lcm/pose_t.hpp"
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/tum_copy.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/decode.hpp"

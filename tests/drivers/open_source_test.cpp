@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 
 namespace cvo::drivers {
 namespace {

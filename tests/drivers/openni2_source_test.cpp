@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/openni2_source.hpp"
 #include "drivers/reconnecting_source.hpp"
 

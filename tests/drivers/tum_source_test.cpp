@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/tum_copy.hpp"
 #include "support/temp_dir.hpp"
 

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/reconnecting_source.hpp"
 #include "drivers/usb_cameras.hpp"
 #include "libcvo/io/input_error.hpp"

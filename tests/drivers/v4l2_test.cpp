@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/v4l2_formats.hpp"
 
 namespace cvo::drivers {

@@ -157,6 +157,12 @@ TEST(CvoRunCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
                                     dir.path());
 }
 
+TEST(CvoRunCli, SetWithoutAnEqualsSignIsAUsageError) {
+  const test::TempDir dir("cvo_run");
+  cvo::testing::expect_set_needs_key_equals_value(
+      "cvo-run", q(CVO_TEST_DATA_DIR "/fr1_rpy_50") + " --out " + q(dir.path() / "t.txt") + " --max-frames 2", dir.path());
+}
+
 // --set takes one value per occurrence: the folder after it is the SEQUENCE.
 TEST(CvoRunCli, AFolderAfterSetIsTheSequence) {
   const test::TempDir dir("cvo_run");

@@ -1,6 +1,7 @@
 #pragma once
 // The command-line contract every program shares (program/cli.hpp), checked the same way for each:
-// --help exits 0 and lists every option, an unknown option exits 2 with a message that names it.
+// --help exits 0 and lists every option, an unknown option exits 2 with a message that names it, and
+// so does a "--set" that is not KEY=VALUE.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -26,6 +27,18 @@ inline void expect_cli_contract(const std::string& tool, const std::string& subc
   EXPECT_NE(unknown.err.find("--no-such-option"), std::string::npos) << unknown.err;
   EXPECT_NE(unknown.err.find("usage: " + tool), std::string::npos) << unknown.err;
   EXPECT_TRUE(unknown.out.empty()) << unknown.out;
+}
+
+/// `args` (a command line that would otherwise be accepted) plus "--set KEY" without "=": a usage
+/// error, exit 2, naming --set and the form it needs, before anything runs.
+inline void expect_set_needs_key_equals_value(const std::string& tool, const std::string& args,
+                                              const std::filesystem::path& scratch) {
+  const ToolRun r = run_tool(tool, args + " --set cvo.ell_init", scratch);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--set"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("KEY=VALUE"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("usage: " + tool), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
 }
 
 }  // namespace cvo::testing

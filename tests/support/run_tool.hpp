@@ -55,10 +55,11 @@ inline std::string json_value(const std::string& text, const std::string& key) {
 /// operator+ of short strings.
 inline std::string quoted(const std::filesystem::path& p) { return std::string("'").append(p.string()).append("'"); }
 
-/// Runs CVO_TOOLS_DIR/<tool> <args>; stderr goes through a file in `scratch` (a folder the test owns).
-inline ToolRun run_tool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch) {
-  const auto err = scratch / (tool + ".stderr.txt");
-  const std::string command = quoted(std::filesystem::path(CVO_TOOLS_DIR) / tool) + " " + args + " 2>" + quoted(err);
+/// Runs `program <args>`; stderr goes through a file in `scratch` (a folder the test owns).
+inline ToolRun run_program(const std::filesystem::path& program, const std::string& args,
+                           const std::filesystem::path& scratch) {
+  const auto err = scratch / (program.filename().string() + ".stderr.txt");
+  const std::string command = quoted(program) + " " + args + " 2>" + quoted(err);
   ToolRun r;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe == nullptr) return r;
@@ -68,6 +69,11 @@ inline ToolRun run_tool(const std::string& tool, const std::string& args, const 
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.err = slurp(err);
   return r;
+}
+
+/// Runs CVO_TOOLS_DIR/<tool> <args>, as run_program.
+inline ToolRun run_tool(const std::string& tool, const std::string& args, const std::filesystem::path& scratch) {
+  return run_program(std::filesystem::path(CVO_TOOLS_DIR) / tool, args, scratch);
 }
 
 }  // namespace cvo::testing

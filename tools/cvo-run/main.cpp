@@ -111,9 +111,7 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_option("--plot", args.plot, "write the evaluation figure (needs ground truth)")->type_name("PNG");
   app.add_flag("--json", args.json, "print one JSON object on stdout; the summary then goes to stderr");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
-  app.add_option("--set", args.sets, "override one parameter, e.g. --set cvo.ell_init=0.12 (repeatable)")
-      ->type_name("KEY=VALUE")
-      ->allow_extra_args(false);
+  program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
   app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
       ->type_name("FILE");
 }

@@ -67,10 +67,6 @@ struct RunReport {
   std::optional<SlamReport> slam;       // --mode slam only
 };
 
-/// The p-th percentile (0..100) with linear interpolation between order statistics, numpy's
-/// default (so p = 50 is the median as eval::summarize has it); NaN for no values.
-double percentile(std::vector<double> values, double p);
-
 void print_text(std::FILE* out, const RunReport& report);
 program::Json to_json(const RunReport& report);
 

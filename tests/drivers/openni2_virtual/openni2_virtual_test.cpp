@@ -24,10 +24,11 @@
 #include <opencv2/core.hpp>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/tum_dataset.hpp"
-#include "tests/daemon/daemon_process.hpp"
-#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/drivers/tum_copy.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "drivers/v4l2_emulator/stats.h"
+#include "tests/support/v4l2_emulator/stats.h"
 #include "libcvo/io/tum_dataset.hpp"
 
 namespace cvo::testing {

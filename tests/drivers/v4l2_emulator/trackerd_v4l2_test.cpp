@@ -21,8 +21,8 @@
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
-#include "tests/daemon/daemon_process.hpp"
-#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/drivers/v4l2_emulator/emulated.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/slowdown.hpp"
@@ -106,7 +106,7 @@ TEST(TrackerdOnEmulatedV4l2, TracksEveryFrameOfTheClip) {
   EXPECT_EQ(run.log.statuses.back().dropped_frames, 0);
 
   // Through YUYV and millimetre depth, the same bounds as cvo-trackerd on the folder itself
-  // (tests/daemon/trackerd_test.cpp).
+  // (tests/trackerd/trackerd_test.cpp).
   const auto clip = io::TumSequence::open(cvo::testing::kEmulatedClip);
   const auto estimate = clip_timed(run.log.poses, clip);
   const auto rpe = eval::relative_pose_error(clip.groundtruth(), estimate);

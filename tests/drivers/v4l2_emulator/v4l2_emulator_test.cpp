@@ -1,5 +1,5 @@
 // The real v4l2: driver (drivers/v4l2_source.cpp, v4l2_formats.cpp) against emulated uvcvideo
-// cameras (drivers/v4l2_emulator, loaded with LD_PRELOAD; the cameras are described in this
+// cameras (tests/support/v4l2_emulator, loaded with LD_PRELOAD; the cameras are described in this
 // folder's CMakeLists.txt): format negotiation, mmap buffers, frames paired by capture time,
 // lost buffers counted, unplug and reconnection. And the emulator's answers to raw ioctls, as
 // uvcvideo gives them.
@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include "drivers/frame_source.hpp"
+#include "drivers/open_source.hpp"
 #include "drivers/reconnecting_source.hpp"
 #include "tests/drivers/v4l2_emulator/emulated.hpp"
 #include "tests/support/slowdown.hpp"

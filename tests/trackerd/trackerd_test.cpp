@@ -25,8 +25,8 @@
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
-#include "tests/daemon/daemon_process.hpp"
-#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/lcm/image_bombs.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
@@ -471,6 +471,11 @@ TEST(Trackerd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
                                     {"--config", "--source", "--lcm-url", "--exit-on-eof", "--deterministic", "--set",
                                      "--print-config", "tum:DIR", "lcm:URL", "openni2:URI", "v4l2:COLOUR[,DEPTH]"},
                                     dir.path());
+}
+
+TEST(Trackerd, SetWithoutAnEqualsSignIsAUsageError) {
+  cvo::test::TempDir dir;
+  cvo::testing::expect_set_needs_key_equals_value("cvo-trackerd", "--print-config", dir.path());
 }
 
 TEST(Trackerd, RepeatedSetOptionsEachTakeOneValue) {

@@ -30,8 +30,8 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/v4l2_emulator/config.hpp"
-#include "drivers/v4l2_emulator/scene.hpp"
+#include "tests/support/v4l2_emulator/config.hpp"
+#include "tests/support/v4l2_emulator/scene.hpp"
 
 namespace cvo::drivers::v4l2_emulator {
 

@@ -1,4 +1,4 @@
-#include "drivers/v4l2_emulator/config.hpp"
+#include "tests/support/v4l2_emulator/config.hpp"
 
 #include <linux/videodev2.h>
 

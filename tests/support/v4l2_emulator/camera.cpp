@@ -1,4 +1,4 @@
-#include "drivers/v4l2_emulator/camera.hpp"
+#include "tests/support/v4l2_emulator/camera.hpp"
 
 #include <fcntl.h>
 #include <linux/videodev2.h>
@@ -14,7 +14,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "drivers/v4l2_emulator/libc.hpp"
+#include "tests/support/v4l2_emulator/libc.hpp"
 
 namespace cvo::drivers::v4l2_emulator {
 namespace {

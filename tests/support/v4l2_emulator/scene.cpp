@@ -1,4 +1,4 @@
-#include "drivers/v4l2_emulator/scene.hpp"
+#include "tests/support/v4l2_emulator/scene.hpp"
 
 #include <linux/videodev2.h>
 

@@ -27,9 +27,9 @@
 #include <unordered_map>
 #include <vector>
 
-#include "drivers/v4l2_emulator/camera.hpp"
-#include "drivers/v4l2_emulator/libc.hpp"
-#include "drivers/v4l2_emulator/stats.h"
+#include "tests/support/v4l2_emulator/camera.hpp"
+#include "tests/support/v4l2_emulator/libc.hpp"
+#include "tests/support/v4l2_emulator/stats.h"
 
 namespace cvo::drivers::v4l2_emulator {
 

@@ -14,7 +14,7 @@
 #include "daemon/common/signals.hpp"
 #include "daemon/trackerd/trackerd.hpp"
 #include "drivers/reconnecting_source.hpp"
-#include "tests/daemon/lcm_log.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace cvo::daemon::trackerd {

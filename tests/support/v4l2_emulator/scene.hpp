@@ -12,7 +12,7 @@
 
 #include <opencv2/core/mat.hpp>
 
-#include "drivers/v4l2_emulator/config.hpp"
+#include "tests/support/v4l2_emulator/config.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 
 namespace cvo::drivers::v4l2_emulator {

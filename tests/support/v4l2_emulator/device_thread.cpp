@@ -6,7 +6,7 @@
 #include <cstring>
 #include <exception>
 
-#include "drivers/v4l2_emulator/camera.hpp"
+#include "tests/support/v4l2_emulator/camera.hpp"
 
 namespace cvo::drivers::v4l2_emulator {
 namespace {
