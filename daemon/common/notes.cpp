@@ -11,7 +11,7 @@ void Notes::note(const std::string& detail) {
   last_ = detail;
 }
 
-bool Notes::note_limited(const std::string& kind, const std::string& detail) {
+void Notes::note_limited(const std::string& kind, const std::string& detail) {
   long long held_back = 0;
   {
     const std::lock_guard lock(mutex_);
@@ -19,13 +19,12 @@ bool Notes::note_limited(const std::string& kind, const std::string& detail) {
     const auto now = std::chrono::steady_clock::now();
     if (limit.last != std::chrono::steady_clock::time_point{} && now - limit.last < period) {
       ++limit.held_back;
-      return false;
+      return;
     }
     held_back = std::exchange(limit.held_back, 0);
     limit.last = now;
   }
   note(held_back == 0 ? detail : detail + " (and " + std::to_string(held_back) + " like it not shown)");
-  return true;
 }
 
 std::string Notes::last() const {

@@ -16,8 +16,8 @@ class Notes {
   explicit Notes(std::string process) : process_(std::move(process)) {}
 
   void note(const std::string& detail);
-  /// note(), at most once per `period` for each `kind`; returns whether it was written.
-  bool note_limited(const std::string& kind, const std::string& detail);
+  /// note(), at most once per `period` for each `kind`.
+  void note_limited(const std::string& kind, const std::string& detail);
   /// The last note written.
   [[nodiscard]] std::string last() const;
 

@@ -12,11 +12,11 @@ namespace {
 TEST(Notes, AFloodOfOneKindIsWrittenOnceAPeriodAndCountsWhatWasHeldBack) {
   Notes notes("test");
   testing::internal::CaptureStderr();
-  EXPECT_TRUE(notes.note_limited("bad", "bad message #1"));
-  for (int i = 2; i <= 50; ++i) EXPECT_FALSE(notes.note_limited("bad", "bad message #" + std::to_string(i)));
-  EXPECT_TRUE(notes.note_limited("other", "another kind is not held back"));
+  notes.note_limited("bad", "bad message #1");
+  for (int i = 2; i <= 50; ++i) notes.note_limited("bad", "bad message #" + std::to_string(i));
+  notes.note_limited("other", "another kind is not held back");
   std::this_thread::sleep_for(Notes::period + std::chrono::milliseconds(50));
-  EXPECT_TRUE(notes.note_limited("bad", "bad message #51"));
+  notes.note_limited("bad", "bad message #51");
   const std::string log = testing::internal::GetCapturedStderr();
   EXPECT_EQ(log,
             "test: bad message #1\n"

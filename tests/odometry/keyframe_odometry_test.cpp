@@ -297,7 +297,9 @@ TEST(KeyframeOdometry, EachStepCarriesWhatItClosedAndMadeAndFinishEndsTheSession
       EXPECT_EQ(k.frame.depth.data, source.depth.data);
       ASSERT_NE(k.cloud, nullptr);
       EXPECT_GT(k.cloud->size(), 100u);
-      if (f.index > 0) EXPECT_EQ(r.reason, KeyframeReason::kTranslation);
+      if (f.index > 0) {
+        EXPECT_EQ(r.reason, KeyframeReason::kTranslation);
+      }
     }
     if (r.closed_graph) {
       EXPECT_EQ(r.closed_graph->keyframe_id, graphs++) << "graphs close in keyframe order";
