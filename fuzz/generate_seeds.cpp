@@ -38,6 +38,7 @@ cvo::core::RgbdFrame small_frame() {
   frame.intrinsics.cy = 3;
   frame.intrinsics.width = 8;
   frame.intrinsics.height = 6;
+  frame.intrinsics.readout_s = 0.01;  // a rolling shutter, so the seeds carry a readout
   frame.bgr.create(6, 8, CV_8UC3);
   frame.depth.create(6, 8, CV_16UC1);
   for (int y = 0; y < 6; ++y)

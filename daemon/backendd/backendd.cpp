@@ -10,6 +10,7 @@
 #include <limits>
 #include <thread>
 #include <utility>
+#include <variant>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -177,20 +178,23 @@ int Backendd::run() {
 void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
   for (auto& record : recovered) {
     std::string error;
-    const auto key = identify(record.kind, record.payload.data(), record.payload.size(), &error, nullptr);
-    if (!key) {
+    // A record of an older schema (another fingerprint or version) is skipped, said here.
+    auto message = identify(record.kind, record.payload.data(), record.payload.size(), &error, nullptr);
+    if (!message) {
       notes_.note_limited("stored unreadable", "stored record skipped: " + error);
       continue;
     }
+    const MessageKey key = message->key;
     const auto crc = crc32_of(record.payload.data(), record.payload.size());
-    if (door_.check(*key, crc) != Admission::kNew) {
-      notes_.note_limited("stored repeat", "stored record skipped: " + describe(*key) + " is in the store twice");
+    record.payload = {};  // decoded: the message holds what the bytes did
+    if (door_.check(key, crc) != Admission::kNew) {
+      notes_.note_limited("stored repeat", "stored record skipped: " + describe(key) + " is in the store twice");
       continue;
     }
-    door_.admit(*key, crc);
+    door_.admit(key, crc);
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
-               key->session, key->id, Clock::now());  // a gap in the store is asked for too
-    queue_.push({std::move(record), std::nullopt, std::nullopt});
+               key.session, key.id, Clock::now());  // a gap in the store is asked for too
+    queue_.push({std::move(*message), std::nullopt});
   }
 }
 
@@ -249,24 +253,26 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
   try {
     std::string error;
     std::size_t bad = cvo_lcm::status_t::BAD_BODY;
-    const auto key = identify(kind, data, size, &error, &bad);
-    if (!key) return refuse(bad, "skipped " + channel + ": " + error);
+    const auto message = identify(kind, data, size, &error, &bad);
+    if (!message) return refuse(bad, "skipped " + channel + ": " + error);
+    const MessageKey key = message->key;
     const auto crc = crc32_of(data, size);
-    switch (door_.check(*key, crc)) {
+    switch (door_.check(key, crc)) {
       case Admission::kRepeat:
-        return notes_.note_limited("repeat", describe(*key) + " received again: stored already, not used twice");
+        return notes_.note_limited("repeat", describe(key) + " received again: stored already, not used twice");
       case Admission::kConflict:
         return refuse(cvo_lcm::status_t::BAD_CONFLICT,
-                      describe(*key) + " repeats an existing one with other content: refused");
+                      describe(key) + " repeats an existing one with other content: refused");
       case Admission::kNew:
         break;
     }
-    if (!usable(kind, data, size, &error, &bad)) return refuse(bad, "skipped " + channel + ": " + error);
+    auto value = usable(*message, &error, &bad);
+    if (!value) return refuse(bad, "skipped " + channel + ": " + error);
     // A graph is applied to its keyframe: one that never came is asked for again (a gap), and the
     // tracker sends the keyframe, then the graph.
-    if (kind == RecordKind::kLocalGraph && !door_.knows({RecordKind::kKeyframe, key->session, key->id})) {
-      gaps_.seen(KeyframeGaps::Seen::kGraphWithoutKeyframe, key->session, key->id, Clock::now());
-      return refuse(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME, "skipped " + describe(*key) + ": its keyframe never came");
+    if (kind == RecordKind::kLocalGraph && !door_.knows({RecordKind::kKeyframe, key.session, key.id})) {
+      gaps_.seen(KeyframeGaps::Seen::kGraphWithoutKeyframe, key.session, key.id, Clock::now());
+      return refuse(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME, "skipped " + describe(key) + ": its keyframe never came");
     }
     // Room first (a log waits for it). Live input that finds the queue full waits in the store
     // (only its place is queued), unless the store cannot take it now or too many wait there
@@ -276,27 +282,26 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     const bool to_store = !room && !log && !store_->health().failing && waiting_in_store_ < kMaxWaitingInStore;
     if (!room && !to_store) {
       ++queue_drops_;
-      return notes_.note_limited("queue full", describe(*key) + " refused: " + std::to_string(queue_.size()) +
+      return notes_.note_limited("queue full", describe(key) + " refused: " + std::to_string(queue_.size()) +
                                             " records wait for the back end already");
     }
-    QueuedRecord queued{{kind, std::vector<std::uint8_t>(data, data + size)}, Clock::now(), std::nullopt};
     // Used in any case; what the store cannot write now it holds and writes later, within a bound.
     RecordRef where;
-    const auto appended = store_->append(queued.record.kind, queued.record.payload, &where);
+    const auto appended = store_->append(kind, std::vector<std::uint8_t>(data, data + size), &where);
     if (appended == Appended::kNotDurable)
-      notes_.note_limited("not stored", "warning: " + describe(*key) + " used but not stored (lost on restart): " +
+      notes_.note_limited("not stored", "warning: " + describe(key) + " used but not stored (lost on restart): " +
                                      describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
-    door_.admit(*key, crc);
+    door_.admit(key, crc);
     gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
-               key->session, key->id, Clock::now());
+               key.session, key.id, Clock::now());
     // Had the store failed just now, the record is queued whole, past the bound by this one.
+    QueuedRecord queued{std::move(*value), Clock::now()};
     if (to_store && appended == Appended::kStored) {
-      queued.in_store = where;
-      queued.record.payload = {};
+      queued.content = where;
       ++waiting_in_store_;
       ++waited_in_store_;
-      notes_.note_limited("waiting in the store", describe(*key) + " waits in the store: " + std::to_string(queue_.size()) +
+      notes_.note_limited("waiting in the store", describe(key) + " waits in the store: " + std::to_string(queue_.size()) +
                                                " records wait for the back end already");
     }
     queue_.push(std::move(queued));
@@ -406,15 +411,11 @@ void Backendd::work_loop() {
 // noted and the daemon goes on with the next.
 void Backendd::process(QueuedRecord& queued) {
   try {
-    if (queued.in_store) {
-      --waiting_in_store_;
-      std::string error;
-      auto record = store_->read(*queued.in_store, &error);
-      if (!record) return notes_.note_limited("unreadable", "a record that waited in the store is lost: " + error);
-      queued.record = std::move(*record);
-    }
-    if (queued.record.kind == RecordKind::kKeyframe) apply_keyframe(queued);
-    else apply_local_graph(queued.record);
+    std::string error;
+    const auto value = value_of(queued, &error);
+    if (!value) return notes_.note_limited("unreadable", error);
+    if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value)) apply_keyframe(*keyframe, queued.arrived);
+    else apply_local_graph(std::get<LocalGraphRecord>(*value));
   } catch (const slam::MapperError& e) {
     notes_.note_limited("not applied", std::string("not applied: ") + e.what());
   } catch (const std::exception& e) {
@@ -423,28 +424,40 @@ void Backendd::process(QueuedRecord& queued) {
   ++work_->processed;
 }
 
-void Backendd::apply_keyframe(const QueuedRecord& queued) {
+// The record's value, decoded here only if it was not at the door: a replayed message's images, a
+// record that waited in the store whole.
+std::optional<RecordValue> Backendd::value_of(QueuedRecord& queued, std::string* error) {
+  if (auto* value = std::get_if<RecordValue>(&queued.content)) return std::move(*value);
+  std::optional<Identified> message;
+  if (auto* replayed = std::get_if<Identified>(&queued.content)) {
+    message = std::move(*replayed);
+  } else {
+    --waiting_in_store_;
+    const auto record = store_->read(std::get<RecordRef>(queued.content), error);
+    if (record) message = identify(record->kind, record->payload.data(), record->payload.size(), error, nullptr);
+    if (!message) {
+      *error = "a record that waited in the store is lost: " + *error;
+      return std::nullopt;
+    }
+  }
+  auto value = usable(*message, error, nullptr);
+  if (!value) *error = "stored " + describe(message->key) + " unreadable: " + *error;
+  return value;
+}
+
+void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_point> arrived) {
   Work& w = *work_;
-  const auto& payload = queued.record.payload;
-  std::string error;
-  const auto m = lcm::decode<cvo_lcm::keyframe_t>(payload.data(), static_cast<int>(payload.size()), &error);
-  const auto k = m ? lcm::from_message(*m, &error) : std::nullopt;
-  if (!k) return notes_.note_limited("unreadable", "stored keyframe unreadable: " + error);
-  const auto outcome = w.mapper.add_keyframe({k->session, k->id, k->frame, k->pose, k->cloud});
+  const auto outcome = w.mapper.add_keyframe({k.session, k.id, k.frame, k.pose, k.cloud});
   if (outcome.duplicate) return;
-  w.first_arrival.try_emplace(k->session, queued.arrived);
+  w.first_arrival.try_emplace(k.session, arrived);
   for (const auto& loop : outcome.loops)
     notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
          keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
   publish_map(outcome.joined);
 }
 
-void Backendd::apply_local_graph(const StoredRecord& record) {
-  std::string error;
-  const auto m = lcm::decode<cvo_lcm::local_graph_t>(record.payload.data(), static_cast<int>(record.payload.size()), &error);
-  const auto graph = m ? lcm::from_message(*m, &error) : std::nullopt;
-  if (!graph) return notes_.note_limited("unreadable", "stored local graph unreadable: " + error);
-  const auto joined = work_->mapper.add_local_graph(m->session, m->keyframe_id, *graph);
+void Backendd::apply_local_graph(const LocalGraphRecord& record) {
+  const auto joined = work_->mapper.add_local_graph(record.session, record.keyframe_id, record.graph);
   ++work_->local_graphs;
   publish_map(joined);
 }

@@ -2,13 +2,14 @@
 // cvo-backendd's wiring: two named threads around libcvo's SLAM mapper (slam::Mapper, the same
 // back end cvo-run --mode slam uses).
 //
-//   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded and checked -> the door (each
+//   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded once and checked -> the door (each
 //                 keyframe (session, id) and local graph once; a repeat with other content is
 //                 refused, message_door.hpp) -> appended to the keyframe store (durable before
-//                 anything else happens) -> work queue (when it is full, only where the record
-//                 lies in the store is queued, and it is read back in its turn); what never came
-//                 of a session (a gap in its keyframe ids, a local graph or CVO_POSE naming an
-//                 unknown keyframe) is asked for again on CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
+//                 anything else happens) -> work queue, the decoded value (when it is full,
+//                 only where the record lies in the store is queued, and it is read back and
+//                 decoded in its turn); what never came of a session (a gap in its keyframe ids,
+//                 a local graph or CVO_POSE naming an unknown keyframe) is asked for again on
+//                 CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
 //   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
 //                 keyframe-graph optimisation) -> CVO_MAP after each change; CVO_STATUS once a
 //                 period
@@ -27,6 +28,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "cvo_lcm/status_t.hpp"
@@ -64,10 +66,13 @@ class Backendd {
 
  private:
   struct Work;
+  // A record decoded once: received, its value (decoded and checked at the door); replayed from
+  // the store, its message (decoded at the door, its images decoded in its turn, so that a long
+  // store is not held decoded); waiting in the store (the queue was full), only where it lies (read
+  // back and decoded in its turn: what waits there is not held in memory at all).
   struct QueuedRecord {
-    StoredRecord record;  // its payload empty while it waits in the store (`in_store`)
+    std::variant<RecordValue, Identified, RecordRef> content;
     std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
-    std::optional<RecordRef> in_store;  // the queue was full: read back from the store when its turn comes
   };
 
   void let_in_recovered(std::vector<StoredRecord> recovered);
@@ -80,8 +85,9 @@ class Backendd {
   void retry_store(bool final);
   void work_loop();
   void process(QueuedRecord& queued);
-  void apply_keyframe(const QueuedRecord& queued);
-  void apply_local_graph(const StoredRecord& record);
+  std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
+  void apply_keyframe(const lcm::Keyframe& keyframe, std::optional<std::chrono::steady_clock::time_point> arrived);
+  void apply_local_graph(const LocalGraphRecord& record);
   void publish_map(const std::vector<std::int64_t>& joined);
   void publish_status(std::int8_t state);
   void finish();

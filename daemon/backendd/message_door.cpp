@@ -1,7 +1,7 @@
 #include "daemon/backendd/message_door.hpp"
 
-#include "cvo_lcm/keyframe_t.hpp"
-#include "cvo_lcm/local_graph_t.hpp"
+#include <utility>
+
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -15,34 +15,35 @@ std::string describe(const MessageKey& key) {
   return key.kind == RecordKind::kKeyframe ? keyframe : "the local graph of " + keyframe;
 }
 
-std::optional<MessageKey> identify(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error,
+std::optional<Identified> identify(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error,
                                    std::size_t* bad) {
   lcm::DecodeFailure failure{};
   const auto length = static_cast<int>(size);
-  std::optional<MessageKey> key;
+  std::optional<Identified> out;
   if (kind == RecordKind::kKeyframe) {
-    if (const auto m = lcm::decode<cvo_lcm::keyframe_t>(data, length, error, &failure))
-      key = MessageKey{kind, m->session, m->id};
-  } else if (const auto m = lcm::decode<cvo_lcm::local_graph_t>(data, length, error, &failure)) {
-    key = MessageKey{kind, m->session, m->keyframe_id};
+    if (auto m = lcm::decode<cvo_lcm::keyframe_t>(data, length, error, &failure)) {
+      const MessageKey key{kind, m->session, m->id};
+      out = Identified{key, std::move(*m)};
+    }
+  } else if (auto m = lcm::decode<cvo_lcm::local_graph_t>(data, length, error, &failure)) {
+    const MessageKey key{kind, m->session, m->keyframe_id};
+    out = Identified{key, std::move(*m)};
   }
-  if (!key && bad != nullptr) *bad = static_cast<std::size_t>(failure);
-  return key;
+  if (!out && bad != nullptr) *bad = static_cast<std::size_t>(failure);
+  return out;
 }
 
-bool usable(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error, std::size_t* bad) {
-  const auto length = static_cast<int>(size);
+std::optional<RecordValue> usable(const Identified& message, std::string* error, std::size_t* bad) {
   auto failure = lcm::ContentFailure::kContent;
-  bool ok = false;
-  if (kind == RecordKind::kKeyframe) {
-    const auto m = lcm::decode<cvo_lcm::keyframe_t>(data, length, error);
-    ok = m && lcm::from_message(*m, error, &failure).has_value();
+  std::optional<RecordValue> value;
+  if (const auto* k = std::get_if<cvo_lcm::keyframe_t>(&message.message)) {
+    if (auto keyframe = lcm::from_message(*k, error, &failure)) value = std::move(*keyframe);
   } else {
-    const auto m = lcm::decode<cvo_lcm::local_graph_t>(data, length, error);
-    ok = m && lcm::from_message(*m, error, &failure).has_value();
+    const auto& g = std::get<cvo_lcm::local_graph_t>(message.message);
+    if (auto graph = lcm::from_message(g, error, &failure)) value = LocalGraphRecord{g.session, g.keyframe_id, std::move(*graph)};
   }
-  if (!ok && bad != nullptr) *bad = static_cast<std::size_t>(failure);
-  return ok;
+  if (!value && bad != nullptr) *bad = static_cast<std::size_t>(failure);
+  return value;
 }
 
 Admission MessageDoor::check(const MessageKey& key, std::uint32_t crc) const {

@@ -10,8 +10,13 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <variant>
 
+#include "cvo_lcm/keyframe_t.hpp"
+#include "cvo_lcm/local_graph_t.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
+#include "libcvo/lcm/keyframe_conversion.hpp"
+#include "libcvo/odometry/local_graph.hpp"
 
 namespace cvo::daemon::backendd {
 
@@ -25,16 +30,36 @@ struct MessageKey {
 /// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…" (slam::session_name).
 std::string describe(const MessageKey& key);
 
-/// The name of a CVO_KEYFRAME / CVO_LOCAL_GRAPH payload, decoded as the wire allows (no image is
-/// decoded). nullopt when it does not decode, with *error and *bad, the status_t::BAD_* index.
-std::optional<MessageKey> identify(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error,
+// A record is decoded once on its way in (its bytes go to the store): identify() turns the bytes
+// into the LCM message, usable() the message into the value the back end applies; each takes what
+// the step before gave, so nothing is decoded twice (the images above all).
+
+/// A CVO_KEYFRAME / CVO_LOCAL_GRAPH payload decoded from the wire (no image decoded yet), and its name.
+struct Identified {
+  MessageKey key;
+  std::variant<cvo_lcm::keyframe_t, cvo_lcm::local_graph_t> message;
+};
+
+/// A CVO_LOCAL_GRAPH as the back end applies it: the graph of keyframe (session, keyframe_id).
+struct LocalGraphRecord {
+  std::int64_t session = 0;
+  std::int64_t keyframe_id = 0;
+  odometry::LocalGraph graph;
+};
+
+/// What the back end applies of a record: a keyframe (images decoded) or a local graph.
+using RecordValue = std::variant<lcm::Keyframe, LocalGraphRecord>;
+
+/// The payload decoded as the wire allows, with its name. nullopt when it does not decode, with
+/// *error and *bad, the status_t::BAD_* index.
+std::optional<Identified> identify(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error,
                                    std::size_t* bad);
 
-/// Whether the payload's content is usable (images decode, poses and points are finite, the graph
-/// is well formed, its information matrices positive definite): what the back end will need of
-/// it. false with *error and *bad, the status_t::BAD_* index (BAD_CONTENT, BAD_NOT_FINITE,
-/// BAD_INFORMATION).
-bool usable(RecordKind kind, const std::uint8_t* data, std::size_t size, std::string* error, std::size_t* bad);
+/// The message's content when it is usable (images decode, poses and points are finite, the graph
+/// is well formed, its information matrices positive definite): what the back end will apply.
+/// nullopt with *error and *bad, the status_t::BAD_* index (BAD_CONTENT, BAD_NOT_FINITE,
+/// BAD_INFORMATION, BAD_IMAGE_*).
+std::optional<RecordValue> usable(const Identified& message, std::string* error, std::size_t* bad);
 
 enum class Admission { kNew, kRepeat, kConflict };
 

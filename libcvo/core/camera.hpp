@@ -29,7 +29,9 @@ struct Intrinsics {
   std::array<double, 5> distortion{};
   double readout_s = 0;  // rolling shutter: first row to last row (s); 0 = global shutter
 
-  bool operator==(const Intrinsics&) const = default;  // every field: the same camera
+  /// The same camera: every field equal. Whoever carries an Intrinsics (a message, a file) carries
+  /// every field, so that this holds after the trip (tests/lcm/intrinsics_round_trip_test.cpp).
+  bool operator==(const Intrinsics&) const = default;
 
   [[nodiscard]] bool rolling_shutter() const { return readout_s > 0; }
 

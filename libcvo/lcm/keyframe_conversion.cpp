@@ -34,6 +34,7 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
   m.height = frame->height;
   m.depth_scale = frame->depth_scale;
   std::copy(std::begin(frame->distortion), std::end(frame->distortion), m.distortion);
+  m.readout_s = frame->readout_s;
   m.colour_encoding = frame->colour_encoding;
   m.depth_encoding = frame->depth_encoding;
   const auto& cloud = keyframe.cloud;
@@ -79,6 +80,7 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   frame.height = m.height;
   frame.depth_scale = m.depth_scale;
   std::copy(std::begin(m.distortion), std::end(m.distortion), frame.distortion);
+  frame.readout_s = m.readout_s;
   frame.colour_encoding = m.colour_encoding;
   frame.depth_encoding = m.depth_encoding;
   frame.colour = m.colour;

@@ -211,6 +211,7 @@ std::optional<Message> to_message(const core::RgbdFrame& frame, const RgbdEncodi
   m.height = k.height;
   m.depth_scale = k.depth_scale;
   std::copy(k.distortion.begin(), k.distortion.end(), m.distortion);
+  m.readout_s = k.readout_s;
   m.colour_encoding = static_cast<std::int8_t>(encoding.colour);
   m.depth_encoding = static_cast<std::int8_t>(encoding.depth);
   if (!encode_colour(frame.bgr, encoding, m, error) || !encode_depth(frame.depth, encoding, m, error))
@@ -329,7 +330,7 @@ std::optional<core::RgbdFrame> from_message(const Message& m, std::string* error
   frame.index = static_cast<std::uint64_t>(m.frame_index);
   frame.timestamp = from_utime(m.utime);
   frame.depth_timestamp = from_utime(m.depth_utime);
-  frame.intrinsics = {m.fx, m.fy, m.cx, m.cy, m.width, m.height, m.depth_scale, {}};
+  frame.intrinsics = {m.fx, m.fy, m.cx, m.cy, m.width, m.height, m.depth_scale, {}, m.readout_s};
   std::copy(std::begin(m.distortion), std::end(m.distortion), frame.intrinsics.distortion.begin());
   if (const std::string bad = frame.intrinsics.validate(); !bad.empty()) return fail(error, "intrinsics: " + bad);
   if (!decode_colour(m, frame, error, kind) || !decode_depth(m, frame, error, kind)) return std::nullopt;

@@ -12,13 +12,13 @@ constexpr int kGraphNode = 8 + 8 + kPose3d;          // frame_index, utime, pose
 constexpr int kGraphEdge = 8 + 8 + kPose3d + 36 * 8;  // from, to, measurement, information
 
 // rgbd_frame_t: version, utime, depth_utime, frame_index (28), fx fy cx cy (60), width height (68),
-// depth_scale (76), distortion[5] (116), two encodings (118), then the counts.
-constexpr std::array kRgbdCounts{CountField{"colour_size", 118, 1}, CountField{"depth_size", 122, 1}};
+// depth_scale (76), distortion[5] (116), readout_s (124), two encodings (126), then the counts.
+constexpr std::array kRgbdCounts{CountField{"colour_size", 126, 1}, CountField{"depth_size", 130, 1}};
 // keyframe_t: version, session, id, frame_index, utime (36), pose (92), fx..cy (124), width height
-// (132), depth_scale (140), distortion[5] (180), two encodings (182), then the counts; a point is
-// xyz[3] + labels[5] floats.
-constexpr std::array kKeyframeCounts{CountField{"num_points", 182, 8 * 4}, CountField{"colour_size", 186, 1},
-                                     CountField{"depth_size", 190, 1}};
+// (132), depth_scale (140), distortion[5] (180), readout_s (188), two encodings (190), then the
+// counts; a point is xyz[3] + labels[5] floats.
+constexpr std::array kKeyframeCounts{CountField{"num_points", 190, 8 * 4}, CountField{"colour_size", 194, 1},
+                                     CountField{"depth_size", 198, 1}};
 // local_graph_t: version, session, keyframe_id, utime (28), then the counts.
 constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 28, kGraphNode},
                                        CountField{"num_edges", 32, kGraphEdge}};
@@ -41,8 +41,8 @@ std::int32_t read_be32(const std::uint8_t* p) {
 }  // namespace
 
 WireLayout wire_layout(std::string_view type_name) {
-  if (type_name == "rgbd_frame_t") return {126, kRgbdCounts};
-  if (type_name == "keyframe_t") return {194, kKeyframeCounts};
+  if (type_name == "rgbd_frame_t") return {134, kRgbdCounts};
+  if (type_name == "keyframe_t") return {202, kKeyframeCounts};
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
   if (type_name == "map_t") return {40, kMapCounts};
   if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};

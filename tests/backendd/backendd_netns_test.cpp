@@ -67,8 +67,8 @@ class BackenddNetns : public ::testing::Test {
 
   using Iterator = std::vector<Message>::const_iterator;
   static backendd::MessageKey keyframe_key(const Message& m) {
-    const auto key = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
-    return key.value_or(backendd::MessageKey{backendd::RecordKind::kKeyframe, -1, -1});
+    const auto message = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+    return message ? message->key : backendd::MessageKey{backendd::RecordKind::kKeyframe, -1, -1};
   }
   static std::set<KeyframeName> keyframes_in(Iterator begin, Iterator end) {
     std::set<KeyframeName> names;

@@ -200,6 +200,48 @@ TEST(Backendd, SigHupStopsCleanlyWithTheFinalMap) {
   EXPECT_EQ(static_cast<std::ptrdiff_t>(published.maps.back().keyframes.size()), keyframes) << "the final map has them all";
 }
 
+// A keyframe as schema version 3 wrote it (before readout_s): v3's fingerprint (its lcm-gen
+// header's getHash()), version 3, and the body without the 8 bytes of readout_s.
+std::vector<std::uint8_t> as_version_3(const Event& keyframe) {
+  static constexpr std::uint8_t kFingerprintV3[8] = {0x70, 0xd4, 0xc7, 0xdf, 0xf7, 0xc2, 0x1a, 0xde};
+  constexpr std::size_t kReadoutAt = 8 + 180;  // fingerprint, then the body offset (wire_layout.cpp)
+  std::vector<std::uint8_t> bytes = keyframe.bytes;
+  bytes.erase(bytes.begin() + kReadoutAt, bytes.begin() + kReadoutAt + 8);
+  std::copy(std::begin(kFingerprintV3), std::end(kFingerprintV3), bytes.begin());
+  bytes[11] = 3;  // the big-endian version field
+  return bytes;
+}
+
+// A store written by an older build holds keyframes of an older schema: each is skipped at the
+// start with a message saying so, and every record of the current schema is used.
+TEST(BackenddPoison, StoredRecordsOfAnOlderSchemaAreSkippedWithAMessage) {
+  const cvo::test::TempDir dir("backendd_poison");
+  const auto good = cvo::testing::tracker_recording(dir.path());
+  ASSERT_GE(good.size(), 8u);
+  std::size_t keyframes = 0;
+  {
+    std::vector<backendd::StoredRecord> none;
+    std::string warning;
+    backendd::KeyframeStore store(dir.path() / "old.store", none, warning);
+    for (const auto& e : good) {
+      const bool keyframe = e.channel == "CVO_KEYFRAME";
+      keyframes += keyframe;
+      if (keyframe && keyframes == 2) {  // the old record first, as an older build stored it
+        ASSERT_EQ(store.append(backendd::RecordKind::kKeyframe, as_version_3(e)), backendd::Appended::kStored);
+      }
+      store.append(keyframe ? backendd::RecordKind::kKeyframe : backendd::RecordKind::kLocalGraph, e.bytes);
+    }
+  }
+  { ::lcm::LogFile((dir.path() / "empty.lcmlog").string(), "w"); }
+  const Outcome o = run_backendd(dir.path(), "old", dir.path() / "empty.lcmlog");
+  ASSERT_EQ(o.exit_code, 0) << o.log;
+  EXPECT_NE(o.log.find("(" + std::to_string(good.size() + 1) + " records recovered)"), std::string::npos) << o.log;
+  EXPECT_NE(o.log.find("stored record skipped: cvo_lcm.keyframe_t: wrong fingerprint"), std::string::npos) << o.log;
+  EXPECT_NE(o.log.find("another schema version"), std::string::npos) << o.log;
+  ASSERT_FALSE(o.published.maps.empty()) << o.log;
+  EXPECT_EQ(o.published.maps.back().keyframes.size(), keyframes) << "every current record is used";
+}
+
 TEST(Backendd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   cvo::test::TempDir dir;
   cvo::testing::expect_cli_contract(

@@ -127,8 +127,8 @@ class BackenddStoreFull : public ::testing::Test {
     std::set<KeyframeName> names;
     for (const auto& m : messages_) {
       if (m.channel != "CVO_KEYFRAME") continue;
-      const auto key = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
-      if (key) names.emplace(key->session, key->id);
+      const auto message = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+      if (message) names.emplace(message->key.session, message->key.id);
     }
     return names;
   }

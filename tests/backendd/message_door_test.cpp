@@ -1,9 +1,12 @@
 // The receiver's door: messages are named by (session, keyframe id) from their encoding alone; a
-// name is let in once; the same bytes again are a repeat, other bytes a conflict.
+// name is let in once; the same bytes again are a repeat, other bytes a conflict. A message is
+// decoded once: identify() gives the decoded message, usable() the value the back end applies.
 #include <cstdint>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "cvo_lcm/status_t.hpp"
 #include "daemon/backendd/message_door.hpp"
@@ -26,14 +29,14 @@ TEST(MessageDoor, NamesMessagesBySessionAndKeyframeId) {
   const auto k = encoded(keyframe);
   const auto key = identify(RecordKind::kKeyframe, k.data(), k.size(), nullptr, nullptr);
   ASSERT_TRUE(key);
-  EXPECT_EQ(*key, (MessageKey{RecordKind::kKeyframe, keyframe.session, keyframe.id}));
+  EXPECT_EQ(key->key, (MessageKey{RecordKind::kKeyframe, keyframe.session, keyframe.id}));
 
   const auto graph = cvo::test::sample_local_graph();
   const auto g = encoded(graph);
   const auto graph_key = identify(RecordKind::kLocalGraph, g.data(), g.size(), nullptr, nullptr);
   ASSERT_TRUE(graph_key);
-  EXPECT_EQ(*graph_key, (MessageKey{RecordKind::kLocalGraph, graph.session, graph.keyframe_id}));
-  EXPECT_EQ(describe(*graph_key), "the local graph of keyframe 5 of session 0x005e551000000001");
+  EXPECT_EQ(graph_key->key, (MessageKey{RecordKind::kLocalGraph, graph.session, graph.keyframe_id}));
+  EXPECT_EQ(describe(graph_key->key), "the local graph of keyframe 5 of session 0x005e551000000001");
 
   // A local graph's bytes on the keyframe channel: another type, counted as such.
   std::string error;
@@ -65,20 +68,58 @@ TEST(MessageDoor, ANameIsLetInOnceAndOtherContentUnderItIsAConflict) {
   EXPECT_EQ(door.size(), 1u);
 }
 
+// What identify() decoded, usable() checks as the back end will use it.
+std::optional<RecordValue> value(RecordKind kind, const std::vector<std::uint8_t>& bytes, std::string* error,
+                                 std::size_t* bad) {
+  const auto message = identify(kind, bytes.data(), bytes.size(), error, bad);
+  EXPECT_TRUE(message) << *error;
+  return message ? usable(*message, error, bad) : std::nullopt;
+}
+
 TEST(MessageDoor, ContentIsCheckedAsTheBackEndWillUseIt) {
   const auto graph = encoded(cvo::test::sample_local_graph());
   std::string error;
   std::size_t bad = 0;
-  EXPECT_TRUE(usable(RecordKind::kLocalGraph, graph.data(), graph.size(), &error, &bad)) << error;
+  EXPECT_TRUE(value(RecordKind::kLocalGraph, graph, &error, &bad)) << error;
   const auto keyframe = encoded(cvo::test::sample_keyframe());  // its "JPEG" is a few bytes of header
-  EXPECT_FALSE(usable(RecordKind::kKeyframe, keyframe.data(), keyframe.size(), &error, &bad));
+  EXPECT_FALSE(value(RecordKind::kKeyframe, keyframe, &error, &bad));
   EXPECT_FALSE(error.empty());
   EXPECT_EQ(bad, +cvo_lcm::status_t::BAD_IMAGE_FORMAT) << "no frame header: refused before a decoder runs";
   auto indefinite = cvo::test::sample_local_graph();
   indefinite.edges[1].information[7] = -3.0;  // a negative variance
-  const auto bytes = encoded(indefinite);
-  EXPECT_FALSE(usable(RecordKind::kLocalGraph, bytes.data(), bytes.size(), &error, &bad));
+  EXPECT_FALSE(value(RecordKind::kLocalGraph, encoded(indefinite), &error, &bad));
   EXPECT_EQ(bad, +cvo_lcm::status_t::BAD_INFORMATION) << error;
+}
+
+// The value is what the back end applies: the keyframe with its images decoded, the graph of its
+// keyframe; nothing is left to decode after the door.
+TEST(MessageDoor, AUsableMessageGivesTheValueTheBackEndApplies) {
+  auto keyframe = cvo::test::sample_keyframe();
+  const cv::Mat bgr(keyframe.height, keyframe.width, CV_8UC3, cv::Scalar(1, 2, 3));
+  cv::imencode(".png", bgr, keyframe.colour);
+  keyframe.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_PNG;
+  keyframe.colour_size = static_cast<std::int32_t>(keyframe.colour.size());
+  cv::imencode(".png", cv::Mat(keyframe.height, keyframe.width, CV_16UC1, cv::Scalar(5000)), keyframe.depth);
+  keyframe.depth_size = static_cast<std::int32_t>(keyframe.depth.size());
+  std::string error;
+  std::size_t bad = 0;
+  const auto k = value(RecordKind::kKeyframe, encoded(keyframe), &error, &bad);
+  ASSERT_TRUE(k) << error;
+  const auto* decoded = std::get_if<lcm::Keyframe>(&*k);
+  ASSERT_NE(decoded, nullptr);
+  EXPECT_EQ(decoded->session, keyframe.session);
+  EXPECT_EQ(decoded->id, keyframe.id);
+  EXPECT_EQ(cv::norm(decoded->frame.bgr, bgr, cv::NORM_INF), 0) << "the images are decoded";
+  EXPECT_EQ(decoded->cloud.size(), static_cast<std::size_t>(keyframe.num_points));
+
+  const auto graph = cvo::test::sample_local_graph();
+  const auto g = value(RecordKind::kLocalGraph, encoded(graph), &error, &bad);
+  ASSERT_TRUE(g) << error;
+  const auto* local = std::get_if<LocalGraphRecord>(&*g);
+  ASSERT_NE(local, nullptr);
+  EXPECT_EQ(local->session, graph.session);
+  EXPECT_EQ(local->keyframe_id, graph.keyframe_id);
+  EXPECT_EQ(local->graph.nodes().size(), graph.nodes.size());
 }
 
 }  // namespace

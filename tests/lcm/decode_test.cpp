@@ -79,7 +79,8 @@ void set_be32(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t v)
 
 TEST(Decode, HugeOrNegativeCountsAreRefusedBeforeAllocating) {
   auto bytes = encode(test::sample_keyframe());
-  const std::size_t num_points = 8 + 182;  // fingerprint + offset in wire_layout.cpp
+  // fingerprint + its offset in the body (wire_layout.cpp; WireLayout tests check it against lcm-gen)
+  const std::size_t num_points = 8 + static_cast<std::size_t>(wire_layout("keyframe_t").counts.front().offset);
   std::string error;
   set_be32(bytes, num_points, 0x7fffffff);
   EXPECT_FALSE(decode<cvo_lcm::keyframe_t>(bytes.data(), static_cast<int>(bytes.size()), &error));

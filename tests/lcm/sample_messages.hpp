@@ -54,6 +54,7 @@ inline cvo_lcm::rgbd_frame_t sample_rgbd() {
   m.height = 2;
   m.depth_scale = 5000;
   for (int i = 0; i < 5; ++i) m.distortion[i] = 0.25 - 0.125 * i;  // fr1-like magnitudes, exact in binary
+  m.readout_s = 0.015625;
   m.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_RAW_BGR8;
   m.depth_encoding = cvo_lcm::rgbd_frame_t::DEPTH_RAW_U16LE;
   for (int i = 0; i < 4 * 2 * 3; ++i) m.colour.push_back(static_cast<std::uint8_t>(7 * i));
@@ -101,6 +102,7 @@ inline cvo_lcm::keyframe_t sample_keyframe() {
   m.height = 480;
   m.depth_scale = 5000;
   for (int i = 0; i < 5; ++i) m.distortion[i] = 0.5 - 0.25 * i;
+  m.readout_s = 0.03125;
   m.colour_encoding = cvo_lcm::rgbd_frame_t::COLOUR_JPEG;
   m.depth_encoding = cvo_lcm::rgbd_frame_t::DEPTH_PNG;
   m.num_points = 3;

@@ -25,11 +25,6 @@ std::string tum_timestamp(std::int64_t utime) {
   return std::to_string(seconds) + "." + std::string(6 - frac.size(), '0') + frac;
 }
 
-bool same(const core::Intrinsics& a, const core::Intrinsics& b) {
-  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
-         a.height == b.height && a.depth_scale == b.depth_scale && a.distortion == b.distortion;
-}
-
 void write_image(const fs::path& file, const cv::Mat& image) {
   bool ok = false;
   try {
@@ -71,7 +66,7 @@ LogToTumSummary log_to_tum(const fs::path& log, const fs::path& out_dir, const s
     const auto frame = lcm::from_message(*message, &error);
     if (!frame) throw io::InputError(log, where + ": " + error);
     if (!intrinsics) intrinsics = frame->intrinsics;
-    if (!same(*intrinsics, frame->intrinsics))
+    if (*intrinsics != frame->intrinsics)
       throw io::InputError(log, where + ": the intrinsics change; a TUM folder has one camera");
 
     const std::string rgb_name = "rgb/" + tum_timestamp(message->utime) + ".png";
