@@ -22,7 +22,7 @@ struct MessageKey {
   auto operator<=>(const MessageKey&) const = default;
 };
 
-/// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…" (slam::session_name).
+/// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…" (core::session_name).
 std::string describe(const MessageKey& key);
 
 /// The name of a CVO_KEYFRAME / CVO_LOCAL_GRAPH payload, decoded as the wire allows (no image is

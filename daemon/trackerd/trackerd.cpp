@@ -27,12 +27,12 @@
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "drivers/reconnecting_source.hpp"
 #include "libcvo/config/module_parameters.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
-#include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/keyframe_output.hpp"
@@ -218,7 +218,7 @@ void Trackerd::count_bad(int kind, const std::string& what, const std::string& w
 
 int Trackerd::run() {
   const auto& t = config_.trackerd;
-  note("session " + slam::session_name(session_));
+  note("session " + core::session_name(session_));
   note("source " + t.source + ", publishing on " + t.lcm_url + (t.deterministic ? " (deterministic)" : ""));
   if (t.lock_memory)
     if (const auto why = lock_all_memory(); !why.empty()) note("warning: " + why + "; running without locked memory");
@@ -430,7 +430,7 @@ void Trackerd::change_camera(Pipeline& p, const core::RgbdFrame& first) {
   p.warm_frames = 0;
   note("camera changed (" + from + " to " + size_name(k) + ", fx " + std::to_string(k.fx) + ") for " +
        std::to_string(config_.trackerd.camera_change_frames) + " frames in a row: tracking again in session " +
-       slam::session_name(session_.load()) +
+       core::session_name(session_.load()) +
        (resized ? "; the pipeline for the new size took " + std::to_string(thread_allocations() - allocations_before) +
                       " allocations (not counted as realtime defects: warm-up again)"
                 : ""));
@@ -587,7 +587,7 @@ void Trackerd::publish_event(Publisher& out, const Event& event) {
   Pipeline& p = *pipeline_;
   if (event.session != out.session) {  // noted here: the tracking thread does not allocate
     out.session = event.session;
-    note("camera re-initialised: new session " + slam::session_name(event.session));
+    note("camera re-initialised: new session " + core::session_name(event.session));
     const std::uint64_t size = camera_size_.load();  // a camera change may have made keyframes larger
     p.history.reserve_keyframe_bytes(max_keyframe_bytes(static_cast<int>(size >> 32),
                                                         static_cast<int>(size & 0xffffffffU), p.parameters));
@@ -641,7 +641,7 @@ void Trackerd::answer_request(Publisher& out, const void* data, int size) {
   auto failure = lcm::DecodeFailure::kBody;
   const auto request = lcm::decode<cvo_lcm::keyframe_request_t>(data, size, &error, &failure);
   if (!request) return count_bad(static_cast<int>(failure), "skipped CVO_KEYFRAME_REQUEST", error);
-  const std::string what = "CVO_KEYFRAME_REQUEST for session " + slam::session_name(request->session);
+  const std::string what = "CVO_KEYFRAME_REQUEST for session " + core::session_name(request->session);
   if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS)
     return count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
                      std::to_string(request->num_ids) + " ids, more than " +
@@ -664,7 +664,7 @@ void Trackerd::answer_request(Publisher& out, const void* data, int size) {
   if (!answer.lost.empty())
     done += (done.empty() ? "" : "; ") + std::string("lost (not in the history of ") +
             std::to_string(pipeline_->history.capacity()) + "): " + id_list(answer.lost);
-  note("the back end asked again for keyframes of session " + slam::session_name(request->session) + " (#" +
+  note("the back end asked again for keyframes of session " + core::session_name(request->session) + " (#" +
        std::to_string(n) + "): " + done);
 }
 
@@ -723,7 +723,7 @@ void Trackerd::apply_map(const void* data, int size) {
   if (!d.apply) return count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
   const bool was_placed = applied_.session == session && applied_.placed;
   if (d.correction.placed != was_placed)
-    note("session " + slam::session_name(session) + (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
+    note("session " + core::session_name(session) + (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
          " (map revision " + std::to_string(d.correction.revision) + ")");
   applied_ = d.correction;
   correction_.set(session, {d.correction.T_map_odom, d.correction.placed});
