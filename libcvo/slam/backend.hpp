@@ -95,8 +95,8 @@ class Backend {
   /// returns its local solution (valid until the next add_local_graph or optimise_all). Throws
   /// std::invalid_argument when the graph is empty, its first node is not `keyframe_id`, that
   /// keyframe's graph was added already, a node belongs to another session, the graph is
-  /// malformed (local_optimisation.hpp), or an information matrix is one posegraph's
-  /// check_information refuses.
+  /// malformed (local_optimisation.hpp), or an information matrix is one
+  /// core::check_information refuses.
   const LocalSolution& add_local_graph(core::SessionId session, posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
   /// One session (the first registered, else 0).
   const LocalSolution& add_local_graph(posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
