@@ -17,7 +17,7 @@
 #include "libcvo/core/depth_sensor.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/io/input_error.hpp"
-#include "libcvo/lcm/bad_kind.hpp"
+#include "libcvo/core/bad_kind.hpp"
 
 namespace cvo::drivers {
 
@@ -29,14 +29,12 @@ enum class ReadStatus {
   kDisconnected,  // the device or stream went away; close this source and open it again
 };
 
-/// Why a message or frame was refused: the shared list of refusal kinds (libcvo/lcm/bad_kind.hpp),
-/// CVO_STATUS's bad_messages indices, so the daemon counts them straight into CVO_STATUS.
-using BadInput = lcm::BadKind;
-
 struct ReadResult {
   ReadStatus status = ReadStatus::kTimeout;
-  BadInput bad_input = BadInput::kContent;  // when status == kBadInput
-  std::string message;                      // why, for kBadInput and kDisconnected
+  // Why a message or frame was refused: the shared list of refusal kinds (libcvo/core/bad_kind.hpp),
+  // CVO_STATUS's bad_messages indices, so the daemon counts them straight into CVO_STATUS.
+  core::BadKind bad_input = core::BadKind::kContent;  // when status == kBadInput
+  std::string message;                                // why, for kBadInput and kDisconnected
 };
 
 struct SourceOptions {
@@ -79,7 +77,7 @@ class FrameSource {
 
 /// "frame", "timeout", "end of stream", "bad input", "disconnected".
 const char* to_string(ReadStatus status);
-/// Of a BadInput: "too short", "fingerprint", "body", "version", "content", "image size", ...
-using lcm::to_string;
+/// Of a core::BadKind: "too short", "fingerprint", "body", "version", "content", "image size", ...
+using core::to_string;
 
 }  // namespace cvo::drivers

@@ -74,7 +74,7 @@ class LcmSource final : public FrameSource {
     }
     if (buffer->data_size > static_cast<std::uint32_t>(INT_MAX)) {
       gaps_.unreadable();
-      result_ = bad_input(BadInput::kBody, "CVO_RGBD: a message of " + std::to_string(buffer->data_size) + " bytes");
+      result_ = bad_input(core::BadKind::kBody, "CVO_RGBD: a message of " + std::to_string(buffer->data_size) + " bytes");
       return;
     }
     std::string error;
@@ -87,7 +87,7 @@ class LcmSource final : public FrameSource {
       return;
     }
     if (message->frame_index >= 0) gaps_.arrived(message->frame_index);
-    BadInput kind = BadInput::kContent;
+    core::BadKind kind = core::BadKind::kContent;
     auto frame = lcm::from_message(*message, &error, &kind);
     if (!frame) {
       result_ = bad_input(kind, error);

@@ -292,7 +292,7 @@ class OpenNi2Source final : public FrameSource {
     const auto& colour = frames_[1];
     if (depth.getWidth() != width_ || depth.getHeight() != height_ || colour.getWidth() != width_ ||
         colour.getHeight() != height_)
-      return bad_input(BadInput::kContent, spec_ + ": a frame of another size than the stream's " + std::to_string(width_) + "x" +
+      return bad_input(core::BadKind::kContent, spec_ + ": a frame of another size than the stream's " + std::to_string(width_) + "x" +
                   std::to_string(height_));
     // OpenNI's buffers are only borrowed: wrap them, convert or copy into the caller's images.
     const cv::Mat rgb(height_, width_, CV_8UC3, const_cast<void*>(colour.getData()),

@@ -9,10 +9,10 @@
 namespace cvo::drivers {
 
 inline ReadResult result(ReadStatus status, std::string message = {}) {
-  return {status, BadInput::kContent, std::move(message)};
+  return {status, core::BadKind::kContent, std::move(message)};
 }
 
-inline ReadResult bad_input(BadInput kind, std::string message) {
+inline ReadResult bad_input(core::BadKind kind, std::string message) {
   return {ReadStatus::kBadInput, kind, std::move(message)};
 }
 

@@ -30,7 +30,7 @@ class TumSource final : public FrameSource {
     try {
       frame = *sequence_.next();  // position < size, so there is a next frame
     } catch (const io::FrameError& e) {  // next() has moved past it: the following read goes on
-      return bad_input(BadInput::kContent, e.what());
+      return bad_input(core::BadKind::kContent, e.what());
     }
     return result(ReadStatus::kFrame);
   }

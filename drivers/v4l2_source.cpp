@@ -284,7 +284,7 @@ class V4l2Source final : public FrameSource {
       gone_ = node.path() + ": " + errno_text(d.error);
       return std::nullopt;
     }
-    if (d.error != 0) return bad_input(BadInput::kContent, node.path() + ": VIDIOC_DQBUF: " + errno_text(d.error));
+    if (d.error != 0) return bad_input(core::BadKind::kContent, node.path() + ": VIDIOC_DQBUF: " + errno_text(d.error));
     std::string bad;
     if (d.corrupt) {
       bad = "the driver marks the frame corrupt";
@@ -299,7 +299,7 @@ class V4l2Source final : public FrameSource {
     if (!bad.empty()) {
       if (waiting_[k].fresh) ++replaced_;  // its image may be half written now
       waiting_[k].fresh = false;
-      return bad_input(BadInput::kContent, node.path() + ": " + bad);
+      return bad_input(core::BadKind::kContent, node.path() + ": " + bad);
     }
     if (waiting_[k].fresh) ++replaced_;
     waiting_[k].fresh = true;

@@ -1,5 +1,5 @@
 // CVO_LOCAL_GRAPH as cvo-backendd receives it: decode, then from_message (nodes, edges, information
-// matrices checked by posegraph::check_information).
+// matrices checked by core::check_information).
 #include "cvo_lcm/local_graph_t.hpp"
 #include "fuzz/lcm_harness.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"

@@ -9,7 +9,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   cvo::fuzz::fuzz_message<cvo_lcm::rgbd_frame_t>(data, size, [](const cvo_lcm::rgbd_frame_t& message) {
     std::string error;
-    cvo::lcm::BadKind kind{};
+    cvo::core::BadKind kind{};
     const auto frame = cvo::lcm::from_message(message, &error, &kind);
     if (!frame) return;
     // from_message's promise: images of the message's size and the tracker's types.

@@ -23,7 +23,9 @@
 #include "daemon/common/signals.hpp"
 #include "daemon/common/status.hpp"
 #include "daemon/common/supervise.hpp"
+#include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -59,7 +61,7 @@ std::string publish_url(const config::BackenddParameters& b) { return b.publish_
 
 bool is_log(const std::string& url) { return url.starts_with("file://"); }
 
-std::string keyframe_name(slam::SessionId session, std::int64_t id) {
+std::string keyframe_name(core::SessionId session, std::int64_t id) {
   return describe(MessageKey{RecordKind::kKeyframe, session, id});
 }
 
@@ -90,7 +92,7 @@ std::string text(const MapSummary& s) {
 
 // How long a new session took to find its place in the map, after its first keyframe: in sensor
 // time (what the robot had to see) and on this machine (what the back end took, with its queue).
-std::string join_text(const slam::Map& map, slam::SessionId session, std::optional<Clock::time_point> first_arrival) {
+std::string join_text(const slam::Map& map, core::SessionId session, std::optional<Clock::time_point> first_arrival) {
   const auto s = std::find_if(map.sessions.begin(), map.sessions.end(), [&](const auto& m) { return m.session == session; });
   const std::int64_t at = s != map.sessions.end() ? s->joined_at_keyframe : -1;
   double first = std::numeric_limits<double>::quiet_NaN(), joined = first;
@@ -99,7 +101,7 @@ std::string join_text(const slam::Map& map, slam::SessionId session, std::option
     if (std::isnan(first)) first = k.timestamp;  // by id: the session's first keyframe
     if (k.id == at) joined = k.timestamp;
   }
-  std::string out = "session " + slam::session_name(session) + " joined the map at its keyframe " +
+  std::string out = "session " + core::session_name(session) + " joined the map at its keyframe " +
                     std::to_string(at) + " (" + fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
   if (!first_arrival) return out + "its first keyframe replayed from the store)";
   return out + fixed(std::chrono::duration<double>(Clock::now() - *first_arrival).count(), 2) +
@@ -123,7 +125,7 @@ struct Backendd::Work {
   // epoch's maps after a restart of the back end instead of refusing them as stale.
   const std::int64_t epoch = core::wall_utime();
   // When each session's first keyframe arrived (nullopt: it was replayed from the store).
-  std::map<slam::SessionId, std::optional<Clock::time_point>> first_arrival;
+  std::map<core::SessionId, std::optional<Clock::time_point>> first_arrival;
   std::vector<std::string> joins;  // every join noted, repeated in the closing note
   MapSummary summary;              // of the last map published
   std::int64_t local_graphs = 0, processed = 0, processed_at_last_status = 0;
@@ -346,13 +348,13 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
     lcm.publish("CVO_KEYFRAME_REQUEST", &m);
     std::string ids;
     for (const auto id : request.ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
-    notes_.note_limited("keyframe request", "asking session " + slam::session_name(request.session) +
+    notes_.note_limited("keyframe request", "asking session " + core::session_name(request.session) +
                                          " again for keyframes " + ids + " (lost in transport)");
   }
   for (const auto& g : round.given_up) {
     const std::string which = g.first == g.last ? "keyframe " + std::to_string(g.first)
                                                 : "keyframes " + std::to_string(g.first) + "-" + std::to_string(g.last);
-    notes_.note_limited("keyframes lost", "gave up on " + which + " of session " + slam::session_name(g.session) + ": never came (lost)");
+    notes_.note_limited("keyframes lost", "gave up on " + which + " of session " + core::session_name(g.session) + ": never came (lost)");
   }
   if (gaps_.recovered() > keyframes_recovered_)
     notes_.note_limited("keyframes recovered", std::to_string(gaps_.recovered()) + " keyframes recovered after a loss in transport");

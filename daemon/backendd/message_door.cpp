@@ -3,6 +3,7 @@
 #include <utility>
 
 #include "cvo_lcm/status_t.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
@@ -11,7 +12,7 @@
 namespace cvo::daemon::backendd {
 
 std::string describe(const MessageKey& key) {
-  const std::string keyframe = "keyframe " + std::to_string(key.id) + " of session " + slam::session_name(key.session);
+  const std::string keyframe = "keyframe " + std::to_string(key.id) + " of session " + core::session_name(key.session);
   return key.kind == RecordKind::kKeyframe ? keyframe : "the local graph of " + keyframe;
 }
 

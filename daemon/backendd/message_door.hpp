@@ -27,7 +27,7 @@ struct MessageKey {
   auto operator<=>(const MessageKey&) const = default;
 };
 
-/// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…" (slam::session_name).
+/// "keyframe 12 of session 0x…" / "the local graph of keyframe 12 of session 0x…" (core::session_name).
 std::string describe(const MessageKey& key);
 
 // A record is decoded once on its way in (its bytes go to the store): identify() turns the bytes

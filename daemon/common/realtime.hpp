@@ -17,8 +17,17 @@ std::string make_this_thread_realtime(int priority);
 /// Pins the calling thread to one CPU; "" on success, else why not.
 std::string pin_this_thread(int cpu);
 
-/// mlockall(MCL_CURRENT | MCL_FUTURE): no page fault on the tracking path after start-up; "" on
-/// success, else why not (RLIMIT_MEMLOCK too small without CAP_IPC_LOCK).
+/// mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT): every page this process touches stays
+/// resident from then on, so the tracking path, once it has run, never waits for a page to come
+/// back from swap or disk; "" on success, else why not (RLIMIT_MEMLOCK too small without
+/// CAP_IPC_LOCK).
+/// Why on fault: without MCL_ONFAULT, mlockall faults in and pins every page of every mapping,
+/// including all of each shared library's code, most of which the process never runs, and each
+/// thread's whole stack reservation; the daemon's resident size becomes the size of its address
+/// space. With it, what is locked is the working set: the code and data the tracking path has
+/// touched, which the warm-up frames (trackerd.warmup_frames) fault in before allocations and
+/// deadlines count; after warm-up the tracking thread allocates nothing, so it meets no new
+/// memory. A kernel without MCL_ONFAULT (before Linux 4.4) gets the old lock-everything call.
 std::string lock_all_memory();
 
 /// Resident set size of this process in bytes (from /proc/self/statm), 0 when unknown.

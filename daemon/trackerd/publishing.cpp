@@ -17,7 +17,7 @@
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/status.hpp"
 #include "libcvo/core/units.hpp"
-#include "libcvo/slam/mapper.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
@@ -117,7 +117,7 @@ void Publishing::publish(const Event& event) {
   Outbox& outbox = *shared_.out.outbox;
   if (event.session != session_) {  // noted here: the tracking thread does not allocate
     session_ = event.session;
-    shared_.notes.note("camera re-initialised: new session " + slam::session_name(event.session));
+    shared_.notes.note("camera re-initialised: new session " + core::session_name(event.session));
     // A camera change may have made keyframes larger.
     history().reserve_keyframe_bytes(max_keyframe_bytes(shared_.out.camera_size, shared_.parameters));
   }
@@ -169,7 +169,7 @@ void Publishing::answer_request(const void* data, int size) {
   auto failure = lcm::DecodeFailure::kBody;
   const auto request = lcm::decode<cvo_lcm::keyframe_request_t>(data, size, &error, &failure);
   if (!request) return shared_.count_bad(static_cast<int>(failure), "skipped CVO_KEYFRAME_REQUEST", error);
-  const std::string what = "CVO_KEYFRAME_REQUEST for session " + slam::session_name(request->session);
+  const std::string what = "CVO_KEYFRAME_REQUEST for session " + core::session_name(request->session);
   if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS)
     return shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
                              std::to_string(request->num_ids) + " ids, more than " +
@@ -194,7 +194,7 @@ void Publishing::answer_request(const void* data, int size) {
     done += (done.empty() ? "" : "; ") + std::string("lost (not in the history of ") +
             std::to_string(history().capacity()) + "): " + id_list(answer.lost);
   shared_.notes.note_limited("keyframe request", "the back end asked again for keyframes of session " +
-                                                     slam::session_name(request->session) + " (#" +
+                                                     core::session_name(request->session) + " (#" +
                                                      std::to_string(n) + "): " + done);
 }
 
@@ -247,7 +247,7 @@ void Publishing::apply_map(const void* data, int size) {
   if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
   const bool was_placed = applied_.session == session && applied_.placed;
   if (d.correction.placed != was_placed)
-    shared_.notes.note("session " + slam::session_name(session) +
+    shared_.notes.note("session " + core::session_name(session) +
                        (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
                        " (map revision " + std::to_string(d.correction.revision) + ")");
   applied_ = d.correction;

@@ -13,7 +13,7 @@
 #include "daemon/trackerd/publishing.hpp"
 #include "daemon/trackerd/tracking.hpp"
 #include "libcvo/io/input_error.hpp"
-#include "libcvo/slam/mapper.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
 namespace cvo::daemon::trackerd {
@@ -39,7 +39,7 @@ Trackerd::~Trackerd() = default;
 int Trackerd::run() {
   Shared& s = *shared_;
   const auto& t = s.config.trackerd;
-  s.notes.note("session " + slam::session_name(s.session));
+  s.notes.note("session " + core::session_name(s.session));
   s.notes.note("source " + t.source + ", publishing on " + t.lcm_url + (t.deterministic ? " (deterministic)" : ""));
   if (t.lock_memory)
     if (const auto why = lock_all_memory(); !why.empty()) s.notes.note("warning: " + why + "; running without locked memory");

@@ -5,7 +5,7 @@
 
 #include "daemon/common/realtime.hpp"
 #include "program/allocation_counter.hpp"
-#include "libcvo/slam/mapper.hpp"
+#include "libcvo/core/session.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {
@@ -138,7 +138,7 @@ void Tracking::change_camera(const core::RgbdFrame& first) {
   warm_frames_ = 0;
   shared_.notes.note("camera changed (" + from + " to " + size_name(k) + ", fx " + std::to_string(k.fx) + ") for " +
                      std::to_string(shared_.config.trackerd.camera_change_frames) +
-                     " frames in a row: tracking again in session " + slam::session_name(shared_.session.load()) +
+                     " frames in a row: tracking again in session " + core::session_name(shared_.session.load()) +
                      (resized ? "; the pipeline for the new size took " +
                                     std::to_string(thread_allocations() - allocations_before) +
                                     " allocations (not counted as realtime defects: warm-up again)"

@@ -18,16 +18,15 @@
 // The daemons' own sections (trackerd, backendd) and camera are read by the daemons themselves.
 //
 // Kept apart from cvo::config (the file format) so that reading a configuration does not link the
-// modules: this is target cvo::module_parameters.
+// modules: this is target cvo::module_parameters, the tracking side (odometry, datasets); the
+// loop detector's and the back end's (loop_closure.*, loop_verification.*, pose_graph.*) are
+// mapper_parameters.hpp's, target cvo::mapper_parameters, so that cvo-trackerd does not link the
+// back end.
 #include "libcvo/config/config.hpp"
 #include "libcvo/io/tum_dataset.hpp"
-#include "libcvo/loop_closure/loop_verification.hpp"
-#include "libcvo/loop_closure/orb_features.hpp"
 #include "libcvo/odometry/frame_to_frame.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/opencv_odometry.hpp"
-#include "libcvo/slam/backend.hpp"
-#include "libcvo/slam/mapper.hpp"
 
 namespace cvo::config {
 
@@ -38,15 +37,6 @@ odometry::KeyframeOdometryParameters keyframe_odometry_parameters(const Config& 
 /// OpenCV's RGB-D odometry (cvo-run --mode opencv-rgbd, opencv-rgbd-icp): the depth range and the
 /// failure policy; everything else is OpenCV's own.
 odometry::OpenCvOdometryParameters opencv_odometry_parameters(const Config& config, odometry::OpenCvVariant variant);
-
-/// The loop detector's ORB keypoints.
-loop_closure::OrbParameters orb_parameters(const Config& config);
-/// The loop detector: detection, matching, RANSAC, CVO refinement.
-loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& config);
-/// The back end's pose-graph optimisations.
-slam::BackendParameters backend_parameters(const Config& config);
-/// The SLAM back end (cvo-run --mode slam, cvo-backendd): the two above.
-slam::MapperParameters mapper_parameters(const Config& config);
 
 /// Reading TUM-layout folders: the association window (the caller adds intrinsics and max_frames).
 io::TumOptions tum_options(const Config& config);

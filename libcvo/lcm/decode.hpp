@@ -15,16 +15,16 @@
 #include <string>
 #include <vector>
 
-#include "libcvo/lcm/bad_kind.hpp"
+#include "libcvo/core/bad_kind.hpp"
 #include "libcvo/lcm/wire_layout.hpp"
 
 namespace cvo::lcm {
 
 /// Which check refused a buffer (kTooShort, kFingerprint, kBody or kVersion), and why a message
 /// that decoded cannot be used (the from_message conversions: kContent, kNotFinite, ...): both are
-/// the one list of refusal kinds, BadKind, whose values are CVO_STATUS's bad_messages indices.
-using DecodeFailure = BadKind;
-using ContentFailure = BadKind;
+/// the one list of refusal kinds, core::BadKind, whose values are CVO_STATUS's bad_messages indices.
+using DecodeFailure = core::BadKind;
+using ContentFailure = core::BadKind;
 
 namespace detail {
 std::string hex64(std::uint64_t v);

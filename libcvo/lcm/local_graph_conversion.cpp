@@ -5,7 +5,7 @@
 #include <iterator>
 
 #include "libcvo/lcm/pose_conversion.hpp"
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -36,7 +36,7 @@ std::optional<Refusal> add_node(const cvo_lcm::local_graph_node_t& n, odometry::
   return std::nullopt;
 }
 
-// The information is checked as the back end will use it (posegraph/information.hpp), so a graph
+// The information is checked as the back end will use it (core/information.hpp), so a graph
 // that would make its cost unbounded below is refused here, at the door, naming the edge.
 std::optional<Refusal> add_edge(const cvo_lcm::graph_edge_t& e, odometry::LocalGraph& graph) {
   const std::string name = "edge " + std::to_string(e.from) + "->" + std::to_string(e.to);
@@ -47,8 +47,8 @@ std::optional<Refusal> add_edge(const cvo_lcm::graph_edge_t& e, odometry::LocalG
   if (!measurement)
     return Refusal{is_finite(e.measurement) ? ContentFailure::kContent : ContentFailure::kNotFinite, name + ": " + why};
   const core::Matrix6d information = matrix6_from_message(e.information);
-  if (const auto check = posegraph::check_information(information); !check.ok())
-    return Refusal{check.defect == posegraph::InformationDefect::kNotFinite ? ContentFailure::kNotFinite
+  if (const auto check = core::check_information(information); !check.ok())
+    return Refusal{check.defect == core::InformationDefect::kNotFinite ? ContentFailure::kNotFinite
                                                                              : ContentFailure::kInformation,
                    name + ": " + check.why()};
   if (!graph.add_edge({static_cast<std::uint64_t>(e.from), static_cast<std::uint64_t>(e.to), *measurement, information}))

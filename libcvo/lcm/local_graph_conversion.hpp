@@ -15,7 +15,7 @@ cvo_lcm::local_graph_t to_message(const odometry::LocalGraph& graph, std::int64_
                                   std::int64_t utime);
 
 /// Fails on another schema version, an empty graph, a bad pose, an edge naming a frame that is not
-/// a node of the graph, or an information matrix that posegraph::check_information refuses (not
+/// a node of the graph, or an information matrix that core::check_information refuses (not
 /// finite, not symmetric, not positive semi-definite), with a message naming the node or edge.
 /// *failure (when given) says which kind: kNotFinite for a NaN or infinite pose or information,
 /// kInformation for a finite information matrix that is not symmetric positive semi-definite,

@@ -2,15 +2,10 @@
 
 #include <algorithm>
 
+#include "libcvo/lcm/map_check.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
-namespace {
-std::nullopt_t fail(std::string* error, const std::string& what) {
-  if (error != nullptr) *error = "cvo_lcm.map_t: " + what;
-  return std::nullopt;
-}
-}  // namespace
 
 cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t epoch) {
   cvo_lcm::map_t m{};
@@ -39,24 +34,18 @@ cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t
 }
 
 std::optional<slam::Map> from_message(const cvo_lcm::map_t& m, std::string* error) {
-  if (m.version != cvo_lcm::map_t::SCHEMA_VERSION) return fail(error, "schema version " + std::to_string(m.version));
+  if (std::string why = map_error(m); !why.empty()) {
+    if (error != nullptr) *error = std::move(why);
+    return std::nullopt;
+  }
+  // Every pose below converts: map_error checked each.
   slam::Map map;
   map.revision = static_cast<std::uint64_t>(m.revision);
-  std::string why;
-  for (const auto& s : m.sessions) {
-    const auto correction = from_message(s.correction, &why);
-    if (!correction) return fail(error, "session " + std::to_string(s.session) + ": " + why);
+  for (const auto& s : m.sessions)
     map.sessions.push_back({s.session, s.placed != 0, s.piece, static_cast<std::size_t>(std::max(0, s.keyframes)),
-                            s.joined_at_keyframe, *correction});
-  }
-  for (const auto& k : m.keyframes) {
-    const auto pose = from_message(k.pose, &why);
-    if (!pose) return fail(error, "keyframe " + std::to_string(k.id) + " of session " + std::to_string(k.session) + ": " + why);
-    map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *pose});
-  }
+                            s.joined_at_keyframe, *from_message(s.correction, nullptr)});
+  for (const auto& k : m.keyframes) map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *from_message(k.pose, nullptr)});
   for (const auto& l : m.loops) {
-    const auto measurement = from_message(l.edge.measurement, &why);
-    if (!measurement) return fail(error, "loop " + std::to_string(l.edge.from) + " -> " + std::to_string(l.edge.to) + ": " + why);
     slam::MapLoop loop;
     loop.from_session = l.from_session;
     loop.to_session = l.to_session;
@@ -64,7 +53,7 @@ std::optional<slam::Map> from_message(const cvo_lcm::map_t& m, std::string* erro
     loop.to_id = l.edge.to;
     loop.loop.from = l.edge.from;
     loop.loop.to = l.edge.to;
-    loop.loop.measurement = *measurement;
+    loop.loop.measurement = *from_message(l.edge.measurement, nullptr);
     loop.loop.information = matrix6_from_message(l.edge.information);
     map.loops.push_back(loop);
   }

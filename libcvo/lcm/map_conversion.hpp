@@ -1,6 +1,7 @@
 #pragma once
 // slam::Map <-> cvo_lcm::map_t (channel CVO_MAP): sessions with their placement and correction,
-// keyframes by (session, id), loops between sessions.
+// keyframes by (session, id), loops between sessions. Target cvo::lcm_map (it links the back end);
+// the checks a received map passes are map_check.hpp's, in the wire library.
 #include <cstdint>
 #include <optional>
 #include <string>

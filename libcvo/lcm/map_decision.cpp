@@ -6,12 +6,14 @@
 
 #include "cvo_lcm/map_t.hpp"
 #include "libcvo/lcm/decode.hpp"
-#include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/map_check.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/core/units.hpp"
 
 namespace cvo::lcm {
 namespace {
+
+using core::BadKind;
 
 CorrectionDecision refuse(BadKind kind, std::string why) {
   CorrectionDecision d;
@@ -52,13 +54,12 @@ CorrectionDecision decide_map_correction(const void* data, int size, std::int64_
                                   [&](const cvo_lcm::map_session_t& s) { return s.session == session; });
   if (entry == message->sessions.end()) return refuse(BadKind::kForeign, revision + " has no entry for this session");
   if (!is_finite(entry->correction)) return refuse(BadKind::kNotFinite, revision + ": the session's correction is not finite");
-  const auto map = from_message(*message, &error);
-  if (!map) return refuse(BadKind::kContent, error);
+  if (std::string bad = map_error(*message); !bad.empty()) return refuse(BadKind::kContent, bad);
 
   CorrectionDecision d;
   d.correction = {message->epoch, message->revision, session, entry->placed != 0, core::SE3{}};
   if (d.correction.placed) {
-    d.correction.T_map_odom = *from_message(entry->correction, nullptr);  // converted by from_message(map) above
+    d.correction.T_map_odom = *from_message(entry->correction, nullptr);  // a rigid transform: map_error checked it above
     if (last.placed && last.session == session)
       if (std::string bad = implausible_jump(last.T_map_odom, d.correction.T_map_odom, limits); !bad.empty())
         return refuse(BadKind::kImplausible, revision + ": " + bad);

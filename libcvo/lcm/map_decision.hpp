@@ -1,7 +1,7 @@
 #pragma once
 // What a tracker makes of a received CVO_MAP, without LCM or threads: whether it may move the map
 // poses of the tracker's running session, and to what. A map is trusted only when
-//   - it decodes and converts (the checks of decode.hpp and map_conversion.hpp),
+//   - it decodes and every pose in it is a rigid transform (decode.hpp, map_check.hpp),
 //   - it is newer than the last map applied: a newer epoch (a restarted back end, whose revisions
 //     count afresh), or the same epoch and a higher revision (a replayed or reordered map, or one
 //     of an older epoch, is stale: kStale),
@@ -15,7 +15,7 @@
 #include <string>
 
 #include "libcvo/core/se3.hpp"
-#include "libcvo/lcm/bad_kind.hpp"
+#include "libcvo/core/bad_kind.hpp"
 
 namespace cvo::lcm {
 
@@ -36,7 +36,7 @@ struct CorrectionLimits {
 struct CorrectionDecision {
   bool apply = false;
   AppliedCorrection correction;          // when apply: the new state
-  BadKind refusal = BadKind::kContent;   // when refused: CVO_STATUS's bad_messages index
+  core::BadKind refusal = core::BadKind::kContent;  // when refused: CVO_STATUS's bad_messages index
   std::string why;                       // when refused: for the daemon's note
 };
 

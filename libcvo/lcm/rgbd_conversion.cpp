@@ -14,6 +14,7 @@ namespace cvo::lcm {
 namespace {
 
 using Message = cvo_lcm::rgbd_frame_t;
+using core::BadKind;
 
 std::nullopt_t fail(std::string* error, const std::string& what) {
   if (error != nullptr) *error = "CVO_RGBD frame: " + what;

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "cvo_lcm/rgbd_frame_t.hpp"
-#include "libcvo/lcm/bad_kind.hpp"
+#include "libcvo/core/bad_kind.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 
 namespace cvo::lcm {
@@ -52,7 +52,7 @@ std::optional<cvo_lcm::rgbd_frame_t> to_message(const core::RgbdFrame& frame, co
 /// then only the declared format's decoder runs. *kind (when given) says which refusal; kContent
 /// for the others.
 std::optional<core::RgbdFrame> from_message(const cvo_lcm::rgbd_frame_t& message, std::string* error,
-                                            BadKind* kind = nullptr);
+                                            core::BadKind* kind = nullptr);
 
 /// What an image of a CVO_RGBD or CVO_KEYFRAME message must be: its format, and what its header
 /// must say (the message's width and height; 8-bit colour or 16-bit single-channel depth).
@@ -67,6 +67,6 @@ struct ExpectedImage {
 /// bounded scan): "" when `bytes` may go to the declared decoder, otherwise why not, with *kind set
 /// to kImageFormat or kImageSize. Allocates nothing on success.
 std::string check_image_header(const std::uint8_t* bytes, std::size_t size, const ExpectedImage& expected,
-                               BadKind* kind);
+                               core::BadKind* kind);
 
 }  // namespace cvo::lcm

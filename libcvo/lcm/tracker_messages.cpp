@@ -63,7 +63,7 @@ cvo_lcm::status_t status_message(const ProcessStatus& s) {
   m.allocations_after_warmup = s.allocations_after_warmup;
   m.queue_depth = s.queue_depth;
   m.rss_bytes = s.rss_bytes;
-  std::copy(s.bad_messages.begin(), s.bad_messages.end(), m.bad_messages);  // same length (bad_kind.cpp)
+  std::copy(s.bad_messages.begin(), s.bad_messages.end(), m.bad_messages);  // same length (bad_kind_indices.cpp)
   m.unsaved_records = s.unsaved_records;
   m.queue_drops = s.queue_drops;
   m.keyframes_requested = s.keyframes_requested;

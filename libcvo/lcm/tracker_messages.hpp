@@ -2,7 +2,7 @@
 // The messages cvo-trackerd publishes about itself, built from plain values without LCM or threads,
 // so that the daemon's threads only move data and what goes on the wire is unit-tested:
 // CVO_POSE from a tracked frame, CVO_STATUS from the process's counters (and the state they
-// mean). CVO_MAP is map_conversion.hpp's to_message; what a received CVO_MAP does is
+// mean). CVO_MAP is map_conversion.hpp's to_message (cvo::lcm_map); what a received CVO_MAP does is
 // map_decision.hpp's.
 #include <array>
 #include <cstdint>
@@ -11,7 +11,7 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/core/se3.hpp"
-#include "libcvo/lcm/bad_kind.hpp"
+#include "libcvo/core/bad_kind.hpp"
 #include "libcvo/odometry/track_result.hpp"
 
 namespace cvo::lcm {
@@ -59,7 +59,7 @@ struct ProcessStatus {
   std::int64_t allocations_after_warmup = 0;
   std::int32_t queue_depth = 0;
   std::int64_t rss_bytes = 0;
-  std::array<std::int64_t, kNumBadKinds> bad_messages{};  // by BadKind
+  std::array<std::int64_t, core::kNumBadKinds> bad_messages{};  // by core::BadKind
   std::int64_t unsaved_records = 0, queue_drops = 0;
   std::int64_t keyframes_requested = 0, keyframes_recovered = 0, keyframes_lost = 0;
   std::string detail;

@@ -8,7 +8,7 @@
 
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/text_lines.hpp"
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 
 namespace cvo::posegraph {
 namespace {
@@ -57,16 +57,16 @@ Edge parse_edge(const std::vector<std::string>& fields, const std::filesystem::p
 // The repairs of one file (see the header): made edge by edge, reported once at the end.
 struct Repairs {
   G2oRepairs summary;
-  InformationCheck first;  // what was wrong with the first repaired edge
+  core::InformationCheck first;  // what was wrong with the first repaired edge
 
   void repair(Edge& e, std::size_t line) {
-    const InformationCheck check = check_information(e.information);
+    const core::InformationCheck check = core::check_information(e.information);
     if (check.ok()) return;
     if (summary.edges++ == 0) {
       summary.first_line = line;
       first = check;
     }
-    e.information = nearest_information(e.information);
+    e.information = core::nearest_information(e.information);
   }
 
   void warn(std::ostream& out, const std::filesystem::path& name, std::size_t edges) const {

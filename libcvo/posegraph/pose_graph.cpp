@@ -3,7 +3,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 
 namespace cvo::posegraph {
 
@@ -20,7 +20,7 @@ void PoseGraph::add_edge(const Edge& edge) {
   if (!edge.measurement.is_finite()) throw std::invalid_argument(name + " is not finite");
   // A non-symmetric information would make the normal equations non-symmetric, an indefinite one
   // the cost unbounded below (information.hpp): refuse both rather than optimise a wrong problem.
-  if (const auto check = check_information(edge.information); !check.ok())
+  if (const auto check = core::check_information(edge.information); !check.ok())
     throw std::invalid_argument(name + ": " + check.why());
   edges_.push_back(edge);
 }

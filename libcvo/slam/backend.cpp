@@ -5,7 +5,7 @@
 #include <utility>
 
 #include "libcvo/posegraph/cost.hpp"
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 
 namespace cvo::slam {
 namespace {
@@ -25,10 +25,10 @@ core::Matrix6d information_into(const LocalSolution& s, NodeId keyframe, NodeId 
   return into->information;
 }
 
-// Incoming information must pass posegraph::check_information (finite, symmetric, positive
+// Incoming information must pass core::check_information (finite, symmetric, positive
 // semi-definite): one that does not would make the graph's cost unbounded below.
 void require_information(const std::string& edge, const core::Matrix6d& information) {
-  if (const auto check = posegraph::check_information(information); !check.ok())
+  if (const auto check = core::check_information(information); !check.ok())
     throw std::invalid_argument("backend: " + edge + ": " + check.why());
 }
 
@@ -44,18 +44,18 @@ posegraph::OptimizerOptions Backend::optimizer_options() const {
   return options;
 }
 
-void Backend::add_session(SessionId session) {
+void Backend::add_session(core::SessionId session) {
   if (sessions_.contains(session)) return;
   sessions_.emplace(session, SessionState{order_.size(), session, std::nullopt, std::nullopt, {}});
   order_.push_back(session);
 }
 
-SessionId Backend::piece(SessionId session) const {
+core::SessionId Backend::piece(core::SessionId session) const {
   const auto it = sessions_.find(session);
   return it == sessions_.end() ? session : it->second.piece;
 }
 
-bool Backend::placed(SessionId session) const { return !order_.empty() && piece(session) == order_.front(); }
+bool Backend::placed(core::SessionId session) const { return !order_.empty() && piece(session) == order_.front(); }
 
 // The graph's keyframe becomes (or already is) a node of the keyframe graph: a session's first
 // keyframe anchors its piece at its tracker pose; a restart's keyframe is bridged from the end of
@@ -76,10 +76,10 @@ void Backend::join_keyframe(SessionState& session, NodeId keyframe, const LocalF
 }
 
 const LocalSolution& Backend::add_local_graph(NodeId keyframe_id, const odometry::LocalGraph& graph) {
-  return add_local_graph(order_.empty() ? SessionId{0} : order_.front(), keyframe_id, graph);
+  return add_local_graph(order_.empty() ? core::SessionId{0} : order_.front(), keyframe_id, graph);
 }
 
-const LocalSolution& Backend::add_local_graph(SessionId session_id, NodeId keyframe_id, const odometry::LocalGraph& graph) {
+const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId keyframe_id, const odometry::LocalGraph& graph) {
   if (graph.empty()) throw std::invalid_argument("backend: empty local graph");
   if (static_cast<NodeId>(graph.keyframe().frame_index) != keyframe_id)
     throw std::invalid_argument("backend: local graph starts at frame " + std::to_string(graph.keyframe().frame_index) +
@@ -135,9 +135,9 @@ bool Backend::insert_loop(const loop_closure::LoopClosure& loop) {
 
 // The later piece moves rigidly onto the loop: T_piece(to) = T_piece(from) · Z (Z = T_from^to).
 void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
-  const SessionId a = piece(session_of(loop.from)), b = piece(session_of(loop.to));
+  const core::SessionId a = piece(session_of(loop.from)), b = piece(session_of(loop.to));
   const bool move_to_side = sessions_.at(b).ordinal > sessions_.at(a).ordinal;
-  const SessionId keep = move_to_side ? a : b, moved = move_to_side ? b : a;
+  const core::SessionId keep = move_to_side ? a : b, moved = move_to_side ? b : a;
   const core::SE3& from = keyframes_.node(loop.from).pose;
   const core::SE3& to = keyframes_.node(loop.to).pose;
   const core::SE3 move = move_to_side ? from * loop.measurement * to.inverse() : to * loop.measurement.inverse() * from.inverse();
@@ -188,7 +188,7 @@ posegraph::OptimizationReport Backend::optimise_all() {
   return report;
 }
 
-std::map<NodeId, core::StampedPose> Backend::frame_poses(std::optional<SessionId> session) const {
+std::map<NodeId, core::StampedPose> Backend::frame_poses(std::optional<core::SessionId> session) const {
   std::map<NodeId, core::StampedPose> poses;
   for (const auto& g : graphs_) {
     if (session && g.session != *session) continue;
@@ -215,9 +215,9 @@ core::Trajectory to_trajectory(const std::map<NodeId, core::StampedPose>& poses)
 }  // namespace
 
 core::Trajectory Backend::frame_trajectory() const { return to_trajectory(frame_poses(std::nullopt)); }
-core::Trajectory Backend::frame_trajectory(SessionId session) const { return to_trajectory(frame_poses(session)); }
+core::Trajectory Backend::frame_trajectory(core::SessionId session) const { return to_trajectory(frame_poses(session)); }
 
-core::SE3 Backend::odometry_correction(SessionId session) const {
+core::SE3 Backend::odometry_correction(core::SessionId session) const {
   const auto it = sessions_.find(session);
   if (it == sessions_.end() || !it->second.last_node) return {};
   return keyframes_.node(*it->second.last_node).pose * it->second.last_odometry.inverse();

@@ -59,6 +59,7 @@
 
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/loop_closure/loop_verification.hpp"  // LoopClosure
 #include "libcvo/odometry/local_graph.hpp"
@@ -82,29 +83,27 @@ struct LoopState {
   double weight = 1;
 };
 
-using SessionId = std::int64_t;
-
 class Backend {
  public:
   explicit Backend(const BackendParameters& parameters = {});
 
   /// Registers a session (nothing when known); the first one registered defines the map frame.
   /// add_local_graph registers its session itself.
-  void add_session(SessionId session);
+  void add_session(core::SessionId session);
 
   /// Adds a closed local graph of `session` whose keyframe (first node) is node `keyframe_id`;
   /// returns its local solution (valid until the next add_local_graph or optimise_all). Throws
   /// std::invalid_argument when the graph is empty, its first node is not `keyframe_id`, that
   /// keyframe's graph was added already, a node belongs to another session, the graph is
-  /// malformed (local_optimisation.hpp), or an information matrix is one posegraph's
-  /// check_information refuses.
-  const LocalSolution& add_local_graph(SessionId session, posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
+  /// malformed (local_optimisation.hpp), or an information matrix is one
+  /// core::check_information refuses.
+  const LocalSolution& add_local_graph(core::SessionId session, posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
   /// One session (the first registered, else 0).
   const LocalSolution& add_local_graph(posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
 
   /// Adds a loop as a robust edge (or keeps it waiting, see above); true when it entered the
   /// graph now. Throws std::invalid_argument for from == to, a non-finite measurement or an
-  /// information matrix posegraph's check_information refuses.
+  /// information matrix core::check_information refuses.
   bool add_loop(const loop_closure::LoopClosure& loop);
 
   /// Optimises the keyframe graph; does nothing (an empty report) with fewer than two nodes.
@@ -117,22 +116,22 @@ class Backend {
   /// Every frame of every local graph added, in frame order, stamped with its colour timestamp.
   [[nodiscard]] core::Trajectory frame_trajectory() const;
   /// The frames of one session's local graphs.
-  [[nodiscard]] core::Trajectory frame_trajectory(SessionId session) const;
+  [[nodiscard]] core::Trajectory frame_trajectory(core::SessionId session) const;
   /// T_piece_odometry: the correction that maps the session's latest tracker poses into its piece
   /// (the map, once placed), from the last frame of its latest local graph; the identity before
   /// any graph of it.
-  [[nodiscard]] core::SE3 odometry_correction(SessionId session) const;
+  [[nodiscard]] core::SE3 odometry_correction(core::SessionId session) const;
   /// The first session's correction (one-session callers).
   [[nodiscard]] core::SE3 odometry_correction() const;
 
   /// The piece of map a session is in, named by the piece's first session (itself until joined).
-  [[nodiscard]] SessionId piece(SessionId session) const;
+  [[nodiscard]] core::SessionId piece(core::SessionId session) const;
   /// In the map: in the first session's piece.
-  [[nodiscard]] bool placed(SessionId session) const;
+  [[nodiscard]] bool placed(core::SessionId session) const;
   /// The session of a keyframe-graph node.
-  [[nodiscard]] SessionId session_of(posegraph::NodeId node) const { return session_of_node_.at(node); }
+  [[nodiscard]] core::SessionId session_of(posegraph::NodeId node) const { return session_of_node_.at(node); }
   /// Sessions in the order registered.
-  [[nodiscard]] const std::vector<SessionId>& sessions() const { return order_; }
+  [[nodiscard]] const std::vector<core::SessionId>& sessions() const { return order_; }
 
   /// Loops in the graph with their χ² and Cauchy weight at the current poses, in insertion order.
   [[nodiscard]] std::vector<LoopState> loops() const;
@@ -149,13 +148,13 @@ class Backend {
 
  private:
   struct StoredGraph {
-    SessionId session = 0;
+    core::SessionId session = 0;
     posegraph::NodeId keyframe = 0;
     LocalSolution solution;
   };
   struct SessionState {
     std::size_t ordinal = 0;                  // registration order: the earlier piece stays put
-    SessionId piece = 0;                       // see piece()
+    core::SessionId piece = 0;                       // see piece()
     std::optional<posegraph::NodeId> anchor;   // its first keyframe
     std::optional<posegraph::NodeId> last_node;  // last frame of its latest graph
     core::SE3 last_odometry;                     // its tracker pose
@@ -166,7 +165,7 @@ class Backend {
   };
 
   [[nodiscard]] posegraph::OptimizerOptions optimizer_options() const;
-  [[nodiscard]] std::map<posegraph::NodeId, core::StampedPose> frame_poses(std::optional<SessionId> session) const;
+  [[nodiscard]] std::map<posegraph::NodeId, core::StampedPose> frame_poses(std::optional<core::SessionId> session) const;
   void join_keyframe(SessionState& session, posegraph::NodeId keyframe, const LocalFrame& first);
   bool insert_loop(const loop_closure::LoopClosure& loop);
   void join_pieces(const loop_closure::LoopClosure& loop);
@@ -180,9 +179,9 @@ class Backend {
   std::vector<StoredLoop> loops_;
   std::vector<loop_closure::LoopClosure> pending_;
   std::size_t unoptimised_loops_ = 0;
-  std::map<SessionId, SessionState> sessions_;
-  std::vector<SessionId> order_;
-  std::map<posegraph::NodeId, SessionId> session_of_node_;  // keyframe-graph nodes
+  std::map<core::SessionId, SessionState> sessions_;
+  std::vector<core::SessionId> order_;
+  std::map<posegraph::NodeId, core::SessionId> session_of_node_;  // keyframe-graph nodes
   std::uint64_t revision_ = 0;
 };
 

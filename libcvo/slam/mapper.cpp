@@ -1,7 +1,6 @@
 #include "libcvo/slam/mapper.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <tuple>
 #include <utility>
 
@@ -11,8 +10,8 @@ namespace {
 constexpr int kFrameBits = 40;
 constexpr std::int64_t kMaxFrame = std::int64_t{1} << kFrameBits;
 
-std::string name(SessionId session, std::int64_t id) {
-  return "keyframe " + std::to_string(id) + " of session " + session_name(session);
+std::string name(core::SessionId session, std::int64_t id) {
+  return "keyframe " + std::to_string(id) + " of session " + core::session_name(session);
 }
 
 // The graph with its frame indices moved by `offset` (node ids of the Backend).
@@ -37,16 +36,10 @@ bool same_pose(const core::SE3& a, const core::SE3& b) {
 
 }  // namespace
 
-std::string session_name(SessionId session) {
-  char text[19];
-  std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(session));
-  return text;
-}
-
 Mapper::Mapper(loop_closure::Vocabulary vocabulary, const MapperParameters& parameters)
     : detector_(std::move(vocabulary), parameters.detector), backend_(parameters.backend) {}
 
-Mapper::Session& Mapper::session(SessionId id) {
+Mapper::Session& Mapper::session(core::SessionId id) {
   if (const auto it = sessions_.find(id); it != sessions_.end()) return it->second;
   order_.push_back(id);
   backend_.add_session(id);
@@ -58,7 +51,7 @@ Mapper::Session& Mapper::session(SessionId id) {
 
 posegraph::NodeId Mapper::node(const Session& s, std::int64_t frame) const { return (s.ordinal << kFrameBits) | frame; }
 
-bool Mapper::knows(SessionId session, std::int64_t keyframe_id) const {
+bool Mapper::knows(core::SessionId session, std::int64_t keyframe_id) const {
   const auto it = sessions_.find(session);
   return it != sessions_.end() && it->second.keyframes.contains(keyframe_id);
 }
@@ -119,7 +112,7 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   return outcome;
 }
 
-std::vector<SessionId> Mapper::add_local_graph(SessionId session_id, std::int64_t keyframe_id,
+std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
                                                const odometry::LocalGraph& graph) {
   if (graph.empty()) throw MapperError("local graph of " + name(session_id, keyframe_id) + " is empty");
   const auto first = static_cast<std::int64_t>(graph.keyframe().frame_index);
@@ -143,7 +136,7 @@ std::vector<SessionId> Mapper::add_local_graph(SessionId session_id, std::int64_
   return after_change();
 }
 
-std::vector<SessionId> Mapper::after_change() {
+std::vector<core::SessionId> Mapper::after_change() {
   if (backend_.unoptimised_loops() > 0) {  // new loops, or waiting ones that just found their keyframe
     backend_.optimise_keyframes();
     std::map<std::int64_t, loop_closure::PlacedPose> poses;
@@ -151,8 +144,8 @@ std::vector<SessionId> Mapper::after_change() {
       poses.emplace(id, loop_closure::PlacedPose{pose, backend_.piece(backend_.session_of(id))});
     detector_.update_poses(poses);
   }
-  std::vector<SessionId> joined;
-  for (const SessionId id : order_) {
+  std::vector<core::SessionId> joined;
+  for (const core::SessionId id : order_) {
     Session& s = sessions_.at(id);
     if (s.joined_at_keyframe >= 0 || !backend_.placed(id)) continue;
     s.joined_at_keyframe = s.keyframes.empty() ? 0 : s.keyframes.rbegin()->first;
@@ -181,7 +174,7 @@ Map Mapper::map() const {
   Map map;
   map.revision = revision_ + backend_.revision();
   const auto poses = backend_.keyframe_poses();
-  for (const SessionId id : order_) {
+  for (const core::SessionId id : order_) {
     const Session& s = sessions_.at(id);
     const core::SE3 correction = backend_.odometry_correction(id);
     map.sessions.push_back({id, backend_.placed(id), backend_.piece(id), s.keyframes.size(), s.joined_at_keyframe, correction});
@@ -202,6 +195,6 @@ Map Mapper::map() const {
   return map;
 }
 
-core::Trajectory Mapper::frame_trajectory(SessionId session) const { return backend_.frame_trajectory(session); }
+core::Trajectory Mapper::frame_trajectory(core::SessionId session) const { return backend_.frame_trajectory(session); }
 
 }  // namespace cvo::slam

@@ -38,6 +38,7 @@
 
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/loop_closure/loop_detector.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
@@ -52,18 +53,15 @@ class MapperError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-/// From the configuration: config::mapper_parameters (libcvo/config/module_parameters.hpp).
+/// From the configuration: config::mapper_parameters (libcvo/config/mapper_parameters.hpp).
 struct MapperParameters {
   loop_closure::LoopDetectorParameters detector;
   BackendParameters backend;
 };
 
-/// How logs and messages name a session: its 64 bits in hex, "0x0123456789abcdef".
-std::string session_name(SessionId session);
-
 /// A keyframe as the tracker sends it (CVO_KEYFRAME): frame.index is its frame in the session.
 struct SessionKeyframe {
-  SessionId session = 0;
+  core::SessionId session = 0;
   std::int64_t id = 0;
   const core::RgbdFrame& frame;
   core::SE3 odometry;  // T_odom_camera
@@ -71,23 +69,23 @@ struct SessionKeyframe {
 };
 
 struct MapSession {
-  SessionId session = 0;
+  core::SessionId session = 0;
   bool placed = false;               // in the map frame
-  SessionId piece = 0;               // whose odometry frame its poses are in
+  core::SessionId piece = 0;               // whose odometry frame its poses are in
   std::size_t keyframes = 0;
   std::int64_t joined_at_keyframe = -1;  // its newest keyframe id when it joined (first session: 0)
   core::SE3 correction;              // T_piece_odom: piece pose = correction · odometry pose
 };
 
 struct MapKeyframe {
-  SessionId session = 0;
+  core::SessionId session = 0;
   std::int64_t id = 0;
   double timestamp = 0;  // the keyframe's colour image time
   core::SE3 pose;        // T_piece_camera
 };
 
 struct MapLoop {
-  SessionId from_session = 0, to_session = 0;
+  core::SessionId from_session = 0, to_session = 0;
   std::int64_t from_id = 0, to_id = 0;  // keyframe ids in their sessions
   std::int64_t from_frame = 0, to_frame = 0;  // their frame indices in their sessions
   loop_closure::LoopClosure loop;       // node ids as the Backend holds them
@@ -106,7 +104,7 @@ struct KeyframeOutcome {
   bool duplicate = false;                  // the same keyframe again: nothing done
   std::size_t loops_tried = 0;             // candidates verified
   std::vector<MapLoop> loops;              // accepted
-  std::vector<SessionId> joined;           // sessions placed in the map by it
+  std::vector<core::SessionId> joined;           // sessions placed in the map by it
 };
 
 class Mapper {
@@ -123,16 +121,16 @@ class Mapper {
   /// frame when the keyframe is known. Returns the sessions it placed in the map (through loops
   /// that waited for it). Throws MapperError when it cannot be applied (as Backend does; a graph
   /// whose first frame is not its keyframe's).
-  std::vector<SessionId> add_local_graph(SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
+  std::vector<core::SessionId> add_local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
 
   /// The global optimisation of every frame.
   posegraph::OptimizationReport finish();
 
   [[nodiscard]] Map map() const;
   /// The frames of one session (placed or not) in its piece's frame, stamped with their colour time.
-  [[nodiscard]] core::Trajectory frame_trajectory(SessionId session) const;
-  [[nodiscard]] bool placed(SessionId session) const { return backend_.placed(session); }
-  [[nodiscard]] bool knows(SessionId session, std::int64_t keyframe_id) const;
+  [[nodiscard]] core::Trajectory frame_trajectory(core::SessionId session) const;
+  [[nodiscard]] bool placed(core::SessionId session) const { return backend_.placed(session); }
+  [[nodiscard]] bool knows(core::SessionId session, std::int64_t keyframe_id) const;
 
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
@@ -150,16 +148,16 @@ class Mapper {
     std::int64_t joined_at_keyframe = -1;
   };
 
-  Session& session(SessionId id);
+  Session& session(core::SessionId id);
   [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
   [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
-  std::vector<SessionId> after_change();  // optimise after new loops; note joins
+  std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
 
   loop_closure::LoopDetector detector_;
   Backend backend_;
-  std::map<SessionId, Session> sessions_;
-  std::vector<SessionId> order_;
-  std::map<posegraph::NodeId, std::pair<SessionId, std::int64_t>> keyframe_of_node_;
+  std::map<core::SessionId, Session> sessions_;
+  std::vector<core::SessionId> order_;
+  std::map<posegraph::NodeId, std::pair<core::SessionId, std::int64_t>> keyframe_of_node_;
   std::vector<loop_closure::LoopClosure> loops_;
   std::size_t loops_tried_ = 0;
   std::uint64_t revision_ = 0;

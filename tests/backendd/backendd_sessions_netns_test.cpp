@@ -19,6 +19,7 @@
 
 #include <gtest/gtest.h>
 
+#include "libcvo/core/session.hpp"
 #include "libcvo/slam/mapper.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "tests/backendd/netns_support.hpp"
@@ -181,18 +182,18 @@ class BackenddSessions : public ::testing::Test {
     const auto& last = *two.captured.map;
     ASSERT_EQ(last.sessions.size(), 2u) << two.backend_log;
     for (const auto& s : last.sessions)
-      EXPECT_TRUE(s.placed) << slam::session_name(s.session) << " unplaced\n" << two.backend_log;
+      EXPECT_TRUE(s.placed) << core::session_name(s.session) << " unplaced\n" << two.backend_log;
     int across = 0;
     for (const auto& l : last.loops) across += l.from_session != l.to_session;
     EXPECT_GT(across, 0) << two.backend_log;
     std::string missing;
     for (const auto& k : two.captured.keyframes)
-      if (!two.captured.map_holds({k})) missing += " " + std::to_string(k.second) + " of " + slam::session_name(k.first);
+      if (!two.captured.map_holds({k})) missing += " " + std::to_string(k.second) + " of " + core::session_name(k.first);
     EXPECT_TRUE(missing.empty()) << "keyframes the trackers sent are not in the map:" << missing << "\n" << two.backend_log;
     for (const auto session : two.sessions) EXPECT_FALSE(two.captured.keyframes_of(session).empty());
 
     std::smatch join;
-    const std::regex joined("session " + slam::session_name(two.sessions[1]) + " joined the map at [^\n]*");
+    const std::regex joined("session " + core::session_name(two.sessions[1]) + " joined the map at [^\n]*");
     EXPECT_TRUE(std::regex_search(two.backend_log, join, joined)) << two.backend_log;
     std::printf("two sessions: map ATE %.4f m (one session %.4f m), %d loops across sessions of %zu; %s\n", two.ate,
                 one.ate, across, last.loops.size(), join.empty() ? "no join noted" : join.str().c_str());

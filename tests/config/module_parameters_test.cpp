@@ -2,6 +2,7 @@
 // the defaults it gives are exactly the modules' own (so no program's behaviour changed when the
 // hand-written mappings were replaced), and every key reaches its module, through --set as
 // through a file, in cvo-run end to end.
+#include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
 
 #include <functional>

@@ -117,13 +117,13 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
   EXPECT_TRUE(identical(frame.depth, first.depth));
   EXPECT_EQ(frame.intrinsics.fx, 50);
 
-  const std::vector<std::pair<BadInput, std::string>> refused{{BadInput::kTooShort, "shorter than"},
-                                                              {BadInput::kFingerprint, "fingerprint"},
-                                                              {BadInput::kBody, "truncated"},
-                                                              {BadInput::kBody, "trailing bytes"},
-                                                              {BadInput::kVersion, "schema version 3"},
-                                                              {BadInput::kContent, "raw colour needs"},
-                                                              {BadInput::kImageFormat, "not a PNG"}};
+  const std::vector<std::pair<core::BadKind, std::string>> refused{{core::BadKind::kTooShort, "shorter than"},
+                                                              {core::BadKind::kFingerprint, "fingerprint"},
+                                                              {core::BadKind::kBody, "truncated"},
+                                                              {core::BadKind::kBody, "trailing bytes"},
+                                                              {core::BadKind::kVersion, "schema version 3"},
+                                                              {core::BadKind::kContent, "raw colour needs"},
+                                                              {core::BadKind::kImageFormat, "not a PNG"}};
   for (const auto& [kind, words] : refused) {
     r = source->read(frame, milliseconds(2000));
     EXPECT_EQ(r.status, ReadStatus::kBadInput) << words;

@@ -35,8 +35,8 @@ TEST(OpenSource, EachSchemeReachesItsSource) {
 TEST(OpenSource, StatusNames) {
   EXPECT_STREQ(to_string(ReadStatus::kEndOfStream), "end of stream");
   EXPECT_STREQ(to_string(ReadStatus::kDisconnected), "disconnected");
-  EXPECT_STREQ(to_string(BadInput::kFingerprint), "fingerprint");
-  EXPECT_STREQ(to_string(BadInput::kContent), "content");
+  EXPECT_STREQ(to_string(core::BadKind::kFingerprint), "fingerprint");
+  EXPECT_STREQ(to_string(core::BadKind::kContent), "content");
 }
 
 }  // namespace

@@ -60,9 +60,9 @@ class FlakySource final : public FrameSource {
  public:
   explicit FlakySource(int frames) : frames_(frames) {}
   ReadResult read(core::RgbdFrame& frame, milliseconds) override {
-    if (read_ == frames_) return {ReadStatus::kDisconnected, BadInput::kContent, "flaky: unplugged"};
+    if (read_ == frames_) return {ReadStatus::kDisconnected, core::BadKind::kContent, "flaky: unplugged"};
     frame.index = static_cast<std::uint64_t>(read_++);
-    return {ReadStatus::kFrame, BadInput::kContent, {}};
+    return {ReadStatus::kFrame, core::BadKind::kContent, {}};
   }
   [[nodiscard]] std::string describe() const override { return "flaky"; }
   [[nodiscard]] std::uint64_t lost_frames() const override { return 2; }

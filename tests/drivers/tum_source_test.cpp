@@ -122,7 +122,7 @@ TEST(TumSource, CorruptImageIsBadInputAndTheNextReadGoesOn) {
     const auto r = source->read(frame, milliseconds(1000));
     if (k == 2) {
       EXPECT_EQ(r.status, ReadStatus::kBadInput);
-      EXPECT_EQ(r.bad_input, BadInput::kContent);
+      EXPECT_EQ(r.bad_input, core::BadKind::kContent);
       EXPECT_NE(r.message.find(damaged.filename().string()), std::string::npos) << r.message;
       continue;
     }

@@ -187,7 +187,7 @@ class OneFrameSource final : public FrameSource {
  public:
   ReadResult read(core::RgbdFrame& frame, milliseconds) override {
     frame.index = 0;
-    return {ReadStatus::kFrame, BadInput::kContent, {}};
+    return {ReadStatus::kFrame, core::BadKind::kContent, {}};
   }
   [[nodiscard]] std::string describe() const override { return "plugged"; }
 };

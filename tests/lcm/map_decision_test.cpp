@@ -14,6 +14,8 @@
 namespace cvo::lcm {
 namespace {
 
+using core::BadKind;
+
 constexpr std::int64_t kSession = 0x1234'5678'9abc'def0;
 constexpr std::int64_t kOther = 77;
 const CorrectionLimits kLimits{1.0, 30.0};

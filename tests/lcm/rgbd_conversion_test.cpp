@@ -15,6 +15,8 @@
 namespace cvo::lcm {
 namespace {
 
+using core::BadKind;
+
 core::RgbdFrame tum_frame() {
   return io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").read(3);
 }

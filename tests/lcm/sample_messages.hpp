@@ -32,7 +32,7 @@ inline cvo_lcm::graph_edge_t sample_edge(std::int64_t from, std::int64_t to) {
   e.to = to;
   e.measurement = sample_pose(0.1 * static_cast<double>(to));
   // Symmetric and diagonally dominant, so positive definite: an information matrix the back end's
-  // door accepts (posegraph/information.hpp). Entry (r, c) off the diagonal is 0.25 (6 min + max).
+  // door accepts (core/information.hpp). Entry (r, c) off the diagonal is 0.25 (6 min + max).
   for (int i = 0; i < 36; ++i) {
     const int r = i / 6, c = i % 6;
     e.information[i] = r == c ? 100.0 + i : 0.25 * (6 * std::min(r, c) + std::max(r, c));

@@ -70,7 +70,7 @@ TEST(TrackerMessages, StatusMessageHoldsEveryCounter) {
   s.allocations_after_warmup = expected.allocations_after_warmup;
   s.queue_depth = expected.queue_depth;
   s.rss_bytes = expected.rss_bytes;
-  for (int k = 0; k < kNumBadKinds; ++k) s.bad_messages[static_cast<std::size_t>(k)] = expected.bad_messages[k];
+  for (int k = 0; k < core::kNumBadKinds; ++k) s.bad_messages[static_cast<std::size_t>(k)] = expected.bad_messages[k];
   s.unsaved_records = expected.unsaved_records;
   s.queue_drops = expected.queue_drops;
   s.keyframes_requested = expected.keyframes_requested;

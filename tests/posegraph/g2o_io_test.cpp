@@ -7,7 +7,7 @@
 
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/posegraph/cost.hpp"
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
 #include "tests/posegraph/indefinite_graph.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -123,10 +123,10 @@ TEST(G2oIo, IndefiniteInformationIsRepairedWithOneWarningNamingFileAndLine) {
   ASSERT_EQ(graph.edges().size(), test_graphs::kEdges);
   for (std::size_t k = 0; k < 3; ++k) EXPECT_EQ(graph.edges()[k].information, Matrix6d::Identity()) << k;  // untouched
   const Matrix6d& repaired = graph.edges()[3].information;
-  EXPECT_TRUE(check_information(repaired).ok());
+  EXPECT_TRUE(core::check_information(repaired).ok());
   EXPECT_NEAR(repaired(0, 1), 1.1, 1e-8);  // 2.2 along (1, 1)/sqrt2 kept, -0.2 along (1, -1)/sqrt2 gone
   EXPECT_NEAR(repaired(0, 0), 1.1, 1e-8);
-  EXPECT_TRUE(check_information(graph.edges()[4].information).ok());
+  EXPECT_TRUE(core::check_information(graph.edges()[4].information).ok());
 
   // The minimum is the truth, at a cost of ~0, never below 0 (see indefinite_graph.hpp).
   const auto report = optimize(graph);

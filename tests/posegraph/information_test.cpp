@@ -1,5 +1,5 @@
 // The information-matrix invariant (finite, symmetric, positive semi-definite) and its repair.
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 
 #include <cmath>
 #include <limits>
@@ -14,6 +14,10 @@ namespace cvo::posegraph {
 namespace {
 
 using core::Matrix6d;
+using core::check_information;
+using core::InformationDefect;
+using core::kInformationRepairFloor;
+using core::nearest_information;
 
 // Identity but for the translation x-y block [[1, b], [b, 1]]: eigenvalues 1 + b and 1 - b.
 Matrix6d coupled_xy(double b) {

@@ -191,7 +191,7 @@ std::vector<odometry::LocalGraph> as_session(const SyntheticRun& run, std::uint6
   return graphs;
 }
 
-void add_session(Backend& backend, SessionId session, const std::vector<odometry::LocalGraph>& graphs) {
+void add_session(Backend& backend, core::SessionId session, const std::vector<odometry::LocalGraph>& graphs) {
   for (const auto& g : graphs) backend.add_local_graph(session, static_cast<posegraph::NodeId>(g.keyframe().frame_index), g);
 }
 
@@ -284,7 +284,7 @@ TEST(Backend, BadInputIsRefused) {
 }
 
 // An information matrix that is not positive semi-definite would make the keyframe graph's cost
-// unbounded below (posegraph/information.hpp): the loop and the local graph are refused, naming
+// unbounded below (core/information.hpp): the loop and the local graph are refused, naming
 // the edge, and nothing of them enters the graphs.
 TEST(Backend, IndefiniteInformationIsRefused) {
   const SyntheticRun run = make_run(square(), 5, kBias, kInformation);

@@ -38,7 +38,7 @@ std::string refusal(Mapper& mapper, const SessionKeyframe& k) {
 TEST(Mapper, AKeyframeRepeatedWithOtherContentIsRefusedAndTheMapperGoesOn) {
   Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), MapperParameters{});
   const RealKeyframe a = real_keyframe(0), b = real_keyframe(10);
-  constexpr SessionId kSession = 0x5e55;
+  constexpr core::SessionId kSession = 0x5e55;
   EXPECT_FALSE(mapper.add_keyframe({kSession, 0, a.frame, core::SE3(), a.cloud}).duplicate);
   EXPECT_TRUE(mapper.add_keyframe({kSession, 0, a.frame, core::SE3(), a.cloud}).duplicate);  // re-sent
 

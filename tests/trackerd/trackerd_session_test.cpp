@@ -36,7 +36,7 @@ class ScriptedCamera final : public drivers::FrameSource {
     for (int i = 0; i < first; ++i) sample_->read(skipped, 1s);
   }
   drivers::ReadResult read(core::RgbdFrame& frame, std::chrono::milliseconds timeout) override {
-    if (served_ == count_) return {then_, drivers::BadInput::kContent, "scripted camera: unplugged"};
+    if (served_ == count_) return {then_, core::BadKind::kContent, "scripted camera: unplugged"};
     const auto result = sample_->read(frame, timeout);
     served_ += result.status == drivers::ReadStatus::kFrame;
     return result;

@@ -17,6 +17,7 @@
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/trajectory_io.hpp"
@@ -121,7 +122,7 @@ int write_map(const Arguments& a) {
   for (const auto& session : last->sessions) {
     const auto in_session = [&](const slam::MapKeyframe& k) { return k.session == session.session; };
     if (!session.placed) {
-      std::cerr << "cvo-log: session " << slam::session_name(session.session)
+      std::cerr << "cvo-log: session " << core::session_name(session.session)
                 << " not placed in the map: its " << std::count_if(last->keyframes.begin(), last->keyframes.end(), in_session)
                 << " keyframes left out\n";
       continue;
@@ -173,7 +174,7 @@ void print_status_text(const std::string& process, const program::Json& status) 
   for (const auto& [key, value] : status.items()) {
     std::cout << "  " << key << ":";
     if (key == "session")
-      std::cout << " " << slam::session_name(value.get<std::int64_t>());
+      std::cout << " " << core::session_name(value.get<std::int64_t>());
     else if (value.is_array())
       for (const auto& count : value) std::cout << " " << count.dump();
     else

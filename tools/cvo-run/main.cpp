@@ -253,7 +253,7 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
   std::vector<core::Trajectory> odometry(sequences.size());
   report.slam = tools::SlamReport{};
   for (std::size_t k = 0; k < sequences.size(); ++k) {
-    const auto session = static_cast<slam::SessionId>(k + 1);
+    const auto session = static_cast<core::SessionId>(k + 1);
     const auto& camera = sequences[k].intrinsics();
     pipeline.begin_session(session, camera.width, camera.height);
     tools::SessionEntry entry{args.sequences[k].string(), session, report.frames, 0, false, std::nullopt};

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <utility>
 
+#include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/units.hpp"
 
@@ -15,9 +16,9 @@ using core::ms_since;
 }  // namespace
 
 struct SlamPipeline::Session {
-  Session(slam::SessionId session, int width, int height, const config::Config& config)
+  Session(core::SessionId session, int width, int height, const config::Config& config)
       : id(session), tracker(width, height, config::keyframe_odometry_parameters(config)) {}
-  slam::SessionId id;
+  core::SessionId id;
   odometry::KeyframeOdometry tracker;
 };
 
@@ -26,7 +27,7 @@ SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabular
 
 SlamPipeline::~SlamPipeline() = default;
 
-void SlamPipeline::begin_session(slam::SessionId session, int width, int height) {
+void SlamPipeline::begin_session(core::SessionId session, int width, int height) {
   end_session();
   session_ = std::make_unique<Session>(session, width, height, config_);
 }

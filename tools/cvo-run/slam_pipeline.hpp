@@ -36,7 +36,7 @@ class SlamPipeline {
   ~SlamPipeline();
 
   /// Starts session `session` with frames of width x height (ends the previous one first).
-  void begin_session(slam::SessionId session, int width, int height);
+  void begin_session(core::SessionId session, int width, int height);
   /// Tracks the frame, then does the back end's share of work for it (see above).
   odometry::TrackResult track(const core::RgbdFrame& frame);
   /// Hands the session's open local graph to the mapper (nothing when none is open).

@@ -97,7 +97,7 @@ struct PoseGraph3dErrorTerm {
 };
 
 // A square root S (S^T S = Omega) that exists for every information the graph holds, semi-definite
-// ones too (information.hpp), which have no Cholesky factor: V sqrt(Lambda) V^T, with round-off
+// ones too (core/information.hpp), which have no Cholesky factor: V sqrt(Lambda) V^T, with round-off
 // below zero clamped.
 Eigen::Matrix<double, 6, 6> square_root(const Eigen::Matrix<double, 6, 6>& omega) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(omega);

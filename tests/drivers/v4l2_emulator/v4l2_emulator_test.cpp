@@ -220,7 +220,7 @@ TEST(EmulatedV4l2, FrameTheDriverMarksCorruptIsBadInputAndStreamingGoesOn) {
     if (r.status == ReadStatus::kFrame) ++frames;
     if (r.status != ReadStatus::kBadInput) continue;
     ++corrupt;
-    EXPECT_EQ(r.bad_input, BadInput::kContent);
+    EXPECT_EQ(r.bad_input, core::BadKind::kContent);
     EXPECT_NE(r.message.find(node(kCorrupt, 0) + ": the driver marks the frame corrupt"), std::string::npos) << r.message;
   }
   EXPECT_GE(frames, 6);

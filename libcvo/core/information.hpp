@@ -1,7 +1,8 @@
 #pragma once
 // What an edge's information matrix must be, checked in this one place by every way into a pose
-// graph: PoseGraph::add_edge, the g2o reader (g2o_io.hpp), slam::Backend and the back end's door
-// for CVO_LOCAL_GRAPH (lcm/local_graph_conversion.hpp); and the repair the g2o reader applies.
+// graph: PoseGraph::add_edge, the g2o reader (posegraph/g2o_io.hpp), slam::Backend and the back
+// end's door for CVO_LOCAL_GRAPH (lcm/local_graph_conversion.hpp); and the repair the g2o reader
+// applies. In core, not posegraph: the wire library checks it too, and must not link the solver.
 //
 // An edge costs 1/2 e^T Omega e (pose_graph.hpp). That is a cost, never negative, only when Omega
 // is symmetric positive semi-definite: an eigenvalue lambda < 0 with eigenvector v makes an error
@@ -24,7 +25,7 @@
 
 #include "libcvo/core/se3.hpp"
 
-namespace cvo::posegraph {
+namespace cvo::core {
 
 inline constexpr double kInformationTolerance = 1e-9;    // relative: asymmetry and negative eigenvalues
 inline constexpr double kInformationRepairFloor = 1e-9;  // relative: smallest eigenvalue after a repair
@@ -54,4 +55,4 @@ InformationCheck check_information(const core::Matrix6d& omega);
 /// std::invalid_argument when omega is not finite (there is nothing to repair towards).
 core::Matrix6d nearest_information(const core::Matrix6d& omega);
 
-}  // namespace cvo::posegraph
+}  // namespace cvo::core

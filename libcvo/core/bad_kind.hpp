@@ -2,11 +2,12 @@
 // Why a received message (or one of its images, or a frame from a driver) was refused: the one
 // list of refusal kinds, shared by the decoders (decode.hpp, the from_message conversions), the
 // frame sources (drivers/frame_source.hpp) and CVO_STATUS, whose bad_messages array it indexes.
-// Free of the generated headers so that the drivers' interface can use it; bad_kind.cpp checks
-// each value against cvo_lcm::status_t's BAD_* constant by static_assert.
+// In core, free of the generated headers, so that the drivers' interface and every daemon can use
+// it without the wire library; libcvo/lcm/tracker_messages.cpp checks each value against
+// cvo_lcm::status_t's BAD_* constant by static_assert.
 #include <cstdint>
 
-namespace cvo::lcm {
+namespace cvo::core {
 
 enum class BadKind : std::int32_t {
   kTooShort = 0,          // shorter than the 8-byte fingerprint
@@ -29,4 +30,4 @@ inline constexpr int kNumBadKinds = 14;
 /// "too short", "fingerprint", ..., as cvo-log and the daemons' notes name them.
 const char* to_string(BadKind kind);
 
-}  // namespace cvo::lcm
+}  // namespace cvo::core

@@ -1,10 +1,12 @@
-#include "libcvo/lcm/bad_kind.hpp"
-
+// core::BadKind's values are CVO_STATUS's bad_messages indices (cvo_lcm::status_t's BAD_*): checked
+// here, in the wire library, because core does not see the generated headers.
 #include "cvo_lcm/status_t.hpp"
+#include "libcvo/core/bad_kind.hpp"
 
 namespace cvo::lcm {
 namespace {
 
+using core::BadKind;
 using S = cvo_lcm::status_t;
 constexpr bool same(BadKind kind, std::int32_t index) { return static_cast<std::int32_t>(kind) == index; }
 
@@ -16,28 +18,8 @@ static_assert(same(BadKind::kTooShort, S::BAD_TOO_SHORT) && same(BadKind::kFinge
               same(BadKind::kInformation, S::BAD_INFORMATION) && same(BadKind::kImageFormat, S::BAD_IMAGE_FORMAT) &&
               same(BadKind::kImageSize, S::BAD_IMAGE_SIZE) && same(BadKind::kStale, S::BAD_STALE) &&
               same(BadKind::kForeign, S::BAD_FOREIGN) && same(BadKind::kImplausible, S::BAD_IMPLAUSIBLE));
-static_assert(kNumBadKinds == S::NUM_BAD_KINDS && sizeof(S{}.bad_messages) / sizeof(std::int64_t) == kNumBadKinds);
+static_assert(core::kNumBadKinds == S::NUM_BAD_KINDS &&
+              sizeof(S{}.bad_messages) / sizeof(std::int64_t) == core::kNumBadKinds);
 
 }  // namespace
-
-const char* to_string(BadKind kind) {
-  switch (kind) {
-    case BadKind::kTooShort: return "too short";
-    case BadKind::kFingerprint: return "fingerprint";
-    case BadKind::kBody: return "body";
-    case BadKind::kVersion: return "version";
-    case BadKind::kContent: return "content";
-    case BadKind::kConflict: return "conflict";
-    case BadKind::kUnknownKeyframe: return "unknown keyframe";
-    case BadKind::kNotFinite: return "not finite";
-    case BadKind::kInformation: return "information";
-    case BadKind::kImageFormat: return "image format";
-    case BadKind::kImageSize: return "image size";
-    case BadKind::kStale: return "stale";
-    case BadKind::kForeign: return "foreign";
-    case BadKind::kImplausible: return "implausible";
-  }
-  return "?";
-}
-
 }  // namespace cvo::lcm

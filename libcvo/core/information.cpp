@@ -1,4 +1,4 @@
-#include "libcvo/posegraph/information.hpp"
+#include "libcvo/core/information.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
-namespace cvo::posegraph {
+namespace cvo::core {
 namespace {
 
 std::string number(double v) {
@@ -59,4 +59,4 @@ core::Matrix6d nearest_information(const core::Matrix6d& omega) {
   return 0.5 * (repaired + repaired.transpose());  // exactly symmetric, as add_edge checks
 }
 
-}  // namespace cvo::posegraph
+}  // namespace cvo::core
