@@ -116,11 +116,12 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
   EXPECT_TRUE(identical(frame.depth, first.depth));
   EXPECT_EQ(frame.intrinsics.fx, 50);
 
+  const std::string next_version = std::to_string(cvo_lcm::rgbd_frame_t::SCHEMA_VERSION + 1);
   const std::vector<std::pair<BadInput, std::string>> refused{{BadInput::kTooShort, "shorter than"},
                                                               {BadInput::kFingerprint, "fingerprint"},
                                                               {BadInput::kBody, "truncated"},
                                                               {BadInput::kBody, "trailing bytes"},
-                                                              {BadInput::kVersion, "schema version 3"},
+                                                              {BadInput::kVersion, "schema version " + next_version},
                                                               {BadInput::kContent, "raw colour needs"},
                                                               {BadInput::kImageFormat, "not a PNG"}};
   for (const auto& [kind, words] : refused) {
