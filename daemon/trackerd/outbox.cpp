@@ -8,9 +8,13 @@ namespace cvo::daemon::trackerd {
 
 namespace {
 
+// Written once now: with lock_memory (MCL_ONFAULT) their pages are then resident and locked before
+// the tracking thread first copies a keyframe into them.
 void create_images(KeyframeSlot& k, int width, int height) {
   k.frame.bgr.create(height, width, CV_8UC3);
   k.frame.depth.create(height, width, CV_16UC1);
+  k.frame.bgr.setTo(0);
+  k.frame.depth.setTo(0);
 }
 
 }  // namespace

@@ -28,9 +28,15 @@ struct LocalGraphEdge {
 
 class LocalGraph {
  public:
+  // Filled and emptied once, so that its pages are touched now: in a process that locks its
+  // working set (mlockall with MCL_ONFAULT) they are then resident and locked before the tracking
+  // thread writes into them, and filling the graph never takes a page fault there.
   explicit LocalGraph(std::size_t capacity = 0) {
-    nodes_.reserve(capacity);
+    nodes_.reserve(capacity);  // exactly: full() compares against the capacity
     edges_.reserve(2 * capacity);
+    nodes_.resize(capacity);
+    edges_.resize(2 * capacity);
+    clear();
   }
 
   void clear() {

@@ -117,11 +117,12 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
   EXPECT_TRUE(identical(frame.depth, first.depth));
   EXPECT_EQ(frame.intrinsics.fx, 50);
 
+  const std::string next_version = std::to_string(cvo_lcm::rgbd_frame_t::SCHEMA_VERSION + 1);
   const std::vector<std::pair<core::BadKind, std::string>> refused{{core::BadKind::kTooShort, "shorter than"},
                                                               {core::BadKind::kFingerprint, "fingerprint"},
                                                               {core::BadKind::kBody, "truncated"},
                                                               {core::BadKind::kBody, "trailing bytes"},
-                                                              {core::BadKind::kVersion, "schema version 3"},
+                                                              {core::BadKind::kVersion, "schema version " + next_version},
                                                               {core::BadKind::kContent, "raw colour needs"},
                                                               {core::BadKind::kImageFormat, "not a PNG"}};
   for (const auto& [kind, words] : refused) {
