@@ -2,8 +2,9 @@
 
 #include <cmath>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "libcvo/image/jpeg.hpp"
 
 namespace cvo::drivers {
 namespace {
@@ -33,20 +34,11 @@ std::string yuyv_to_bgr(std::span<const std::uint8_t> data, int width, int heigh
 
 std::string mjpeg_to_bgr(std::span<const std::uint8_t> data, int width, int height, cv::Mat& bgr) {
   if (data.empty()) return "MJPEG: empty frame";
-  const cv::Mat bytes(1, static_cast<int>(data.size()), CV_8UC1, const_cast<std::uint8_t*>(data.data()));
-  // A new image each time: decoding into `bgr` would leave its old pixels there on some failures,
-  // and libjpeg allocates per frame anyway.
-  cv::Mat decoded;
-  try {
-    decoded = cv::imdecode(bytes, cv::IMREAD_COLOR);
-  } catch (const cv::Exception& e) {  // OpenCV reports some corrupt streams by exception
-    return "MJPEG: frame does not decode: " + e.msg;
-  }
-  if (decoded.empty()) return "MJPEG: frame does not decode (corrupt or truncated)";
-  if (decoded.cols != width || decoded.rows != height)
-    return "MJPEG: frame is " + std::to_string(decoded.cols) + "x" + std::to_string(decoded.rows) + ", the stream's " +
-           std::to_string(width) + "x" + std::to_string(height);
-  bgr = decoded;
+  // Straight into `bgr` (kept at the stream's size: no allocation). On failure its pixels are
+  // partly written, and the caller drops it. Warnings are accepted as OpenCV accepted them
+  // (jpeg.hpp): the driver flags the frames it knows are incomplete.
+  if (auto bad = image::decode_jpeg(data, bgr, {width, height}, image::JpegWarnings::kAccept); !bad.empty())
+    return "MJPEG: frame does not decode (" + bad + ")";
   return {};
 }
 

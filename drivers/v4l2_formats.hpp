@@ -2,7 +2,7 @@
 // The pixel formats of V4L2 RGB-D cameras, converted into core::RgbdFrame's images. Pure
 // functions: no device involved, so they are tested with known pixel values.
 //
-// Each writes into the given Mat (YUYV and Z16 reallocate it only when its size or type differs)
+// Each writes into the given Mat (reallocating it only when its size or type differs)
 // and returns an empty string, or why the buffer is unusable (too short, does not decode).
 #include <cstdint>
 #include <span>
@@ -16,8 +16,8 @@ namespace cvo::drivers {
 /// send it) to BGR CV_8UC3. bytes_per_line >= 2 * width (V4L2 rows may be padded).
 std::string yuyv_to_bgr(std::span<const std::uint8_t> data, int width, int height, int bytes_per_line, cv::Mat& bgr);
 
-/// One Motion-JPEG frame to BGR CV_8UC3; it must decode to width x height. (libjpeg-turbo supplies
-/// the standard Huffman tables that MJPEG frames usually leave out.)
+/// One Motion-JPEG frame to BGR CV_8UC3 (libcvo/image's TurboJPEG); its header must say width x
+/// height. (libjpeg-turbo supplies the standard Huffman tables that MJPEG frames usually leave out.)
 std::string mjpeg_to_bgr(std::span<const std::uint8_t> data, int width, int height, cv::Mat& bgr);
 
 /// Z16 (16-bit little-endian depth, 0 = no measurement) to CV_16UC1, each value times `scale`,

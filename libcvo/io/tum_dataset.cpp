@@ -8,8 +8,9 @@
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
+#include "libcvo/image/decode.hpp"
+#include "libcvo/image/png.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/text_lines.hpp"
 #include "libcvo/io/trajectory_io.hpp"
@@ -58,17 +59,36 @@ std::vector<double> stamps(const std::vector<IndexEntry>& entries) {
   return t;
 }
 
-cv::Mat read_image(std::size_t frame, const std::filesystem::path& file, int flags) {
+std::vector<std::uint8_t> read_file(std::size_t frame, const std::filesystem::path& file) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(file, ec)) throw FrameError(frame, file, "image not found");
-  cv::Mat image;
-  try {
-    image = cv::imread(file.string(), flags);
-  } catch (const cv::Exception& e) {
-    throw FrameError(frame, file, "cannot decode image: " + e.msg);
-  }
-  if (image.empty()) throw FrameError(frame, file, "cannot decode image (corrupt, truncated or unsupported format)");
-  return image;
+  std::ifstream in(file, std::ios::binary);
+  std::vector<std::uint8_t> bytes(std::filesystem::file_size(file, ec));
+  if (ec || !in || !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
+    throw FrameError(frame, file, "cannot read image");
+  return bytes;
+}
+
+// 8-bit BGR whatever the file holds (PNG, JPEG or WebP).
+cv::Mat read_colour(std::size_t frame, const std::filesystem::path& file) {
+  cv::Mat bgr;
+  if (const auto bad = image::decode_colour(read_file(frame, file), bgr); !bad.empty())
+    throw FrameError(frame, file, "cannot decode image: " + bad);
+  return bgr;
+}
+
+// Only a 16-bit single-channel PNG holds depth; its header says so before anything is decoded.
+cv::Mat read_depth(std::size_t frame, const std::filesystem::path& file) {
+  const auto bytes = read_file(frame, file);
+  image::ImageHeader header;
+  if (image::read_png_header(bytes, header).empty() && (header.bit_depth != 16 || header.channels != 1))
+    throw FrameError(frame, file,
+                     "depth must be a 16-bit single-channel image, got " + std::to_string(header.bit_depth) +
+                         "-bit with " + std::to_string(header.channels) + " channel(s)");
+  cv::Mat depth;
+  if (const auto bad = image::decode_png(bytes, image::PngPixels::kGrey16, depth); !bad.empty())
+    throw FrameError(frame, file, "cannot decode image: " + bad);
+  return depth;
 }
 
 std::string size_text(const cv::Size& s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
@@ -127,7 +147,7 @@ TumSequence TumSequence::open(const std::filesystem::path& dir, const TumOptions
     seq.groundtruth_ = read_tum_trajectory(gt);
 
   if (seq.intrinsics_.width == 0 && seq.intrinsics_.height == 0) {
-    const auto size = read_image(0, seq.frames_.front().rgb, cv::IMREAD_COLOR).size();
+    const auto size = read_colour(0, seq.frames_.front().rgb).size();
     seq.intrinsics_.width = size.width;
     seq.intrinsics_.height = size.height;
   }
@@ -149,14 +169,8 @@ core::RgbdFrame TumSequence::read(std::size_t i) const {
   frame.timestamp = files.timestamp;
   frame.depth_timestamp = files.depth_timestamp;
   frame.intrinsics = intrinsics_;
-  frame.bgr = read_image(i, files.rgb, cv::IMREAD_COLOR);  // 8-bit BGR whatever the file holds
-  frame.depth = read_image(i, files.depth, cv::IMREAD_UNCHANGED);
-
-  if (frame.depth.type() != CV_16UC1)
-    throw FrameError(i, files.depth,
-                     "depth must be a 16-bit single-channel image, got " +
-                         std::to_string(8 * frame.depth.elemSize1()) + "-bit with " +
-                         std::to_string(frame.depth.channels()) + " channel(s)");
+  frame.bgr = read_colour(i, files.rgb);
+  frame.depth = read_depth(i, files.depth);
   if (frame.depth.size() != frame.bgr.size())
     throw FrameError(i, files.depth, "depth image is " + size_text(frame.depth.size()) + " but its colour image " +
                                          size_text(frame.bgr.size()));

@@ -2,9 +2,9 @@
 // A TUM RGB-D benchmark recording, read as a stream of frames.
 //
 // Layout: rgb.txt and depth.txt ("timestamp relative/path" per line, '#' comments), optional
-// groundtruth.txt (a TUM trajectory), images next to them. Colour is anything cv::imread decodes
-// (PNG, WebP, JPEG; returned as BGR CV_8UC3), depth a 16-bit single-channel PNG. Colour and depth
-// are paired as TUM's associate.py does (core::associate).
+// groundtruth.txt (a TUM trajectory), images next to them. Colour is PNG, JPEG or WebP, told by
+// its signature (libcvo/image/decode.hpp; returned as BGR CV_8UC3), depth a 16-bit single-channel
+// PNG. Colour and depth are paired as TUM's associate.py does (core::associate).
 //
 // Only the index (timestamps and paths) is held in memory; each frame's images are read when it
 // is asked for, so a sequence of any length costs one frame of memory.

@@ -6,8 +6,9 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
+#include "libcvo/image/jpeg.hpp"
+#include "libcvo/image/png.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
@@ -29,25 +30,6 @@ bool refuse(std::string* error, const std::string& what) {
   return false;
 }
 
-// OpenCV reports some encoder and decoder failures by exception, others by an empty result.
-bool encode_image(const char* ext, const cv::Mat& image, const std::vector<int>& params, std::vector<std::uint8_t>& out) {
-  try {
-    return cv::imencode(ext, image, out, params) && !out.empty();
-  } catch (const cv::Exception&) {
-    return false;
-  }
-}
-
-cv::Mat decode_image(const std::vector<std::uint8_t>& bytes, int flags) {
-  if (bytes.empty()) return {};
-  try {
-    return cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<std::uint8_t*>(bytes.data())),
-                        flags);
-  } catch (const cv::Exception&) {
-    return {};
-  }
-}
-
 bool encode_colour(const cv::Mat& bgr, const RgbdEncoding& encoding, Message& m, std::string* error) {
   switch (encoding.colour) {
     case ColourEncoding::kRawBgr8: {
@@ -57,11 +39,13 @@ bool encode_colour(const cv::Mat& bgr, const RgbdEncoding& encoding, Message& m,
       return true;
     }
     case ColourEncoding::kJpeg:
-      if (encode_image(".jpg", bgr, {cv::IMWRITE_JPEG_QUALITY, encoding.jpeg_quality}, m.colour)) return true;
-      return refuse(error, "JPEG encoding of the colour image failed");
+      if (const auto bad = image::encode_jpeg(bgr, encoding.jpeg_quality, m.colour); !bad.empty())
+        return refuse(error, "JPEG encoding of the colour image failed: " + bad);
+      return true;
     case ColourEncoding::kPng:
-      if (encode_image(".png", bgr, {cv::IMWRITE_PNG_COMPRESSION, encoding.png_compression}, m.colour)) return true;
-      return refuse(error, "PNG encoding of the colour image failed");
+      if (const auto bad = image::encode_png(bgr, image::PngPixels::kBgr8, encoding.png_compression, m.colour); !bad.empty())
+        return refuse(error, "PNG encoding of the colour image failed: " + bad);
+      return true;
   }
   return refuse(error, "unknown colour encoding " + std::to_string(static_cast<int>(encoding.colour)));
 }
@@ -81,8 +65,9 @@ bool encode_depth(const cv::Mat& depth, const RgbdEncoding& encoding, Message& m
       return true;
     }
     case DepthEncoding::kPng:
-      if (encode_image(".png", depth, {cv::IMWRITE_PNG_COMPRESSION, encoding.png_compression}, m.depth)) return true;
-      return refuse(error, "PNG encoding of the depth image failed");
+      if (const auto bad = image::encode_png(depth, image::PngPixels::kGrey16, encoding.png_compression, m.depth); !bad.empty())
+        return refuse(error, "PNG encoding of the depth image failed: " + bad);
+      return true;
   }
   return refuse(error, "unknown depth encoding " + std::to_string(static_cast<int>(encoding.depth)));
 }
@@ -226,8 +211,8 @@ namespace {
 
 // A JPEG or PNG image of the message, decoded only once its header says it is the declared format
 // with the message's size: a decompression bomb or a file of another format (HDR, ...) never
-// reaches a decoder. Then only that format's decoder runs (imdecode picks it by the signature just
-// checked), with the flags of what the image must become.
+// reaches a decoder. Then only that format's decoder runs (libcvo/image: libpng or TurboJPEG), into
+// what the image must become.
 cv::Mat decode_checked(const std::vector<std::uint8_t>& bytes, const ExpectedImage& expected, const char* what,
                        std::string* error, BadKind* kind) {
   BadKind why = BadKind::kContent;
@@ -235,15 +220,19 @@ cv::Mat decode_checked(const std::vector<std::uint8_t>& bytes, const ExpectedIma
     fail(error, kind, why, std::string(what) + " image: " + bad);
     return {};
   }
-  cv::Mat image = decode_image(bytes, expected.depth16 ? cv::IMREAD_ANYDEPTH : cv::IMREAD_COLOR);
-  const int type = expected.depth16 ? CV_16UC1 : CV_8UC3;
-  if (image.empty() || image.type() != type || image.cols != expected.width || image.rows != expected.height) {
+  cv::Mat decoded;
+  const cv::Size size(expected.width, expected.height);
+  const std::string bad =
+      expected.format == ImageFormat::kJpeg
+          ? image::decode_jpeg(bytes, decoded, size)
+          : image::decode_png(bytes, expected.depth16 ? image::PngPixels::kGrey16 : image::PngPixels::kBgr8, decoded, size);
+  if (!bad.empty()) {
     fail(error, kind, BadKind::kContent,
          std::string(what) + " image does not decode to " + (expected.depth16 ? "16-bit depth of " : "8-bit colour of ") +
-             std::to_string(expected.width) + "x" + std::to_string(expected.height));
+             std::to_string(expected.width) + "x" + std::to_string(expected.height) + ": " + bad);
     return {};
   }
-  return image;
+  return decoded;
 }
 
 std::string raw_size_error(const char* what, std::size_t needed, int w, int h, std::size_t has) {

@@ -244,5 +244,21 @@ TEST(RgbdConversion, EncodingNames) {
   EXPECT_STREQ(to_string(ColourEncoding::kRawBgr8), "raw");
 }
 
+// A JPEG whose scan is cut short keeps a sound header, so it reaches the decoder; libjpeg would fill
+// the missing rows with grey (cv::imdecode returned that image), and the frame is refused instead.
+TEST(RgbdConversion, JpegWithATruncatedScanIsRefused) {
+  std::string error;
+  auto m = to_message(tum_frame(), {.colour = ColourEncoding::kJpeg, .depth = DepthEncoding::kPng}, &error);
+  ASSERT_TRUE(m) << error;
+  m->colour.resize(m->colour.size() / 2);
+  m->colour_size = static_cast<std::int32_t>(m->colour.size());
+  BadKind kind = BadKind::kBody;
+  EXPECT_FALSE(from_message(*m, &error, &kind));
+  EXPECT_NE(error.find("colour image does not decode to 8-bit colour of 640x480: JPEG: Premature end of JPEG file"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(kind, BadKind::kContent);
+}
+
 }  // namespace
 }  // namespace cvo::lcm
