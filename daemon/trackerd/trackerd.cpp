@@ -108,7 +108,7 @@ std::optional<core::Matrix6d> keyframe_covariance(const odometry::KeyframeOdomet
 std::size_t max_keyframe_bytes(int width, int height, const odometry::KeyframeOdometryParameters& parameters) {
   const auto pixels = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   const std::size_t images = pixels * (3 + 2);  // BGR8 and 16-bit depth
-  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.max_points * (3 + 5) * sizeof(float) +
+  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.odometry.max_points * (3 + 5) * sizeof(float) +
          images + images / 8;
 }
 
@@ -121,7 +121,7 @@ std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& pa
   graph.num_edges = 1;
   graph.edges.resize(1);
   const auto edge = static_cast<std::size_t>(graph.getEncodedSize()) - empty - node;
-  return empty + parameters.local_graph_capacity * (node + 2 * edge);
+  return empty + parameters.tracking.local_graph_capacity * (node + 2 * edge);
 }
 
 // Frames of the same camera: every intrinsic, the size included. A camera change needs a new
@@ -171,7 +171,7 @@ struct Trackerd::Pipeline {
   Pipeline(const core::Intrinsics& k, const odometry::KeyframeOdometryParameters& p, std::size_t history_keyframes)
       : parameters(p),
         tracking(std::make_unique<Tracking>(k, p)),
-        outbox(kOutboxEvents, kPoolSlots, k.width, k.height, p.max_points, p.local_graph_capacity),
+        outbox(kOutboxEvents, kPoolSlots, k.width, k.height, p.odometry.max_points, p.tracking.local_graph_capacity),
         history(history_keyframes, max_keyframe_bytes(k.width, k.height, p), max_local_graph_bytes(p)) {}
   const odometry::KeyframeOdometryParameters parameters;
   std::unique_ptr<Tracking> tracking;

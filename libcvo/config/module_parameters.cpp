@@ -2,12 +2,13 @@
 
 namespace cvo::config {
 
+// Structs, never fields: a module holds the core structs whole (libcvo/core/parameters.hpp).
+
 odometry::FrameToFrameParameters frame_to_frame_parameters(const Config& config) {
   odometry::FrameToFrameParameters p;
   p.selection = config.selection;
   p.cvo = config.cvo;
-  p.max_points = config.odometry.max_points;
-  p.restart_after_failures = config.odometry.restart_after_failures;
+  p.odometry = config.odometry;
   return p;
 }
 
@@ -16,60 +17,30 @@ odometry::KeyframeOdometryParameters keyframe_odometry_parameters(const Config& 
   p.selection = config.selection;
   p.cvo = config.cvo;
   p.keyframe = config.keyframe;
-  p.max_points = config.odometry.max_points;
-  p.local_graph_capacity = config.keyframe_tracking.local_graph_capacity;
-  p.gamma_ell = config.keyframe_tracking.gamma_ell;
-  p.gamma_sigma = config.keyframe_tracking.gamma_sigma;
-  p.gamma_stride = config.keyframe_tracking.gamma_stride;
-  p.chain_weight = config.keyframe_tracking.chain_weight;
-  p.chain_full_weight_deg = config.keyframe_tracking.chain_full_weight_deg;
+  p.tracking = config.keyframe_tracking;
+  p.odometry = config.odometry;
   return p;
 }
 
 odometry::OpenCvOdometryParameters opencv_odometry_parameters(const Config& config, odometry::OpenCvVariant variant) {
   odometry::OpenCvOdometryParameters p;
   p.variant = variant;
-  p.min_depth_m = config.selection.min_depth_m;
-  p.max_depth_m = config.selection.max_depth_m;
-  p.restart_after_failures = config.odometry.restart_after_failures;
-  return p;
-}
-
-loop_closure::OrbParameters orb_parameters(const Config& config) {
-  const auto& v = config.loop_verification;
-  loop_closure::OrbParameters p;
-  p.features = v.orb_features;
-  p.scale_factor = static_cast<float>(v.orb_scale_factor);
-  p.levels = v.orb_levels;
-  p.edge_threshold = v.orb_edge_threshold;
-  p.fast_threshold = v.orb_fast_threshold;
+  p.selection = config.selection;
+  p.odometry = config.odometry;
   return p;
 }
 
 loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& config) {
-  const auto& v = config.loop_verification;
   loop_closure::LoopDetectorParameters p;
   p.loop = config.loop_closure;
+  p.verification = config.loop_verification;
   p.cvo = config.cvo;
-  p.orb = orb_parameters(config);
-  p.ransac_iterations = v.ransac_iterations;
-  p.ransac_inlier_m = v.ransac_inlier_m;
-  p.min_inliers = v.min_inliers;
-  p.min_inlier_retention = v.min_inlier_retention;
-  p.max_refinements = v.max_refinements;
-  p.max_points = config.odometry.max_points;
   p.selection = config.selection;
-  p.ransac_seed = v.ransac_seed;
+  p.odometry = config.odometry;
   return p;
 }
 
-slam::BackendParameters backend_parameters(const Config& config) {
-  slam::BackendParameters p;
-  p.cauchy_delta = config.pose_graph.cauchy_delta;
-  p.bridge_information = config.pose_graph.bridge_information;
-  p.max_iterations = config.pose_graph.max_iterations;
-  return p;
-}
+slam::BackendParameters backend_parameters(const Config& config) { return config.pose_graph; }
 
 slam::MapperParameters mapper_parameters(const Config& config) {
   return {loop_detector_parameters(config), backend_parameters(config)};
@@ -77,7 +48,7 @@ slam::MapperParameters mapper_parameters(const Config& config) {
 
 io::TumOptions tum_options(const Config& config) {
   io::TumOptions options;
-  options.max_association_dt = config.dataset.max_association_dt;
+  options.dataset = config.dataset;
   return options;
 }
 

@@ -2,9 +2,9 @@
 // The one place the configuration becomes each module's parameters. cvo-run, cvo-trackerd,
 // cvo-backendd and the benchmarks build their trackers, loop detector and back end from these
 // functions and nowhere else, so a key of the table (config.cpp) reaches every program the same
-// way. A new tunable: a field in libcvo/core/parameters.hpp (its default), a row in config.cpp's
-// table (its key, range and doc), the line below that hands it to its module, and default.yaml
-// regenerated.
+// way. Each module's parameter struct holds the core structs whole, so these functions copy
+// structs, not fields: a new tunable is a field in libcvo/core/parameters.hpp (its default) and a
+// row in config.cpp's table (its key, range and doc), with default.yaml regenerated; nothing here.
 //
 // Which keys go where:
 //   selection.*, cvo.*                   every CVO tracker and the loop detector's refinement
@@ -22,7 +22,6 @@
 #include "libcvo/config/config.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/loop_closure/loop_verification.hpp"
-#include "libcvo/loop_closure/orb_features.hpp"
 #include "libcvo/odometry/frame_to_frame.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/opencv_odometry.hpp"
@@ -39,8 +38,6 @@ odometry::KeyframeOdometryParameters keyframe_odometry_parameters(const Config& 
 /// failure policy; everything else is OpenCV's own.
 odometry::OpenCvOdometryParameters opencv_odometry_parameters(const Config& config, odometry::OpenCvVariant variant);
 
-/// The loop detector's ORB keypoints.
-loop_closure::OrbParameters orb_parameters(const Config& config);
 /// The loop detector: detection, matching, RANSAC, CVO refinement.
 loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& config);
 /// The back end's pose-graph optimisations.
