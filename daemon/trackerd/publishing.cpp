@@ -35,7 +35,7 @@ using namespace std::chrono_literals;
 std::size_t max_keyframe_bytes(std::uint64_t camera_size, const odometry::KeyframeOdometryParameters& parameters) {
   const auto pixels = (camera_size >> 32) * (camera_size & 0xffffffffU);
   const std::size_t images = pixels * (3 + 2);  // BGR8 and 16-bit depth
-  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.max_points * (3 + 5) * sizeof(float) +
+  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.odometry.max_points * (3 + 5) * sizeof(float) +
          images + images / 8;
 }
 
@@ -48,7 +48,7 @@ std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& pa
   graph.num_edges = 1;
   graph.edges.resize(1);
   const auto edge = static_cast<std::size_t>(graph.getEncodedSize()) - empty - node;
-  return empty + parameters.local_graph_capacity * (node + 2 * edge);
+  return empty + parameters.tracking.local_graph_capacity * (node + 2 * edge);
 }
 
 std::string id_list(const std::vector<std::int64_t>& ids) {

@@ -82,7 +82,7 @@ bool Tracking::start(const core::RgbdFrame& first) {
   camera_ = k;
   tracker_ = std::make_unique<odometry::KeyframeOdometry>(k.width, k.height, p);
   shared_.out.outbox =
-      std::make_unique<Outbox>(kOutboxEvents, kPoolSlots, k.width, k.height, p.max_points, p.local_graph_capacity);
+      std::make_unique<Outbox>(kOutboxEvents, kPoolSlots, k.width, k.height, p.odometry.max_points, p.tracking.local_graph_capacity);
   outbox_ = shared_.out.outbox.get();
   shared_.out.camera_size = packed_size(k.width, k.height);
   shared_.out.ready = true;

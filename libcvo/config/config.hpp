@@ -12,7 +12,8 @@
 // LoopVerificationParameters). libcvo/config/default.yaml is dump_config(Config{}), every key
 // with a comment. One table in config.cpp lists every key with its member and its valid range;
 // loading, overrides, dumping and comparing all walk it, so a new parameter is one new row (and
-// one line in module_parameters.cpp, which hands every section to the modules).
+// its field in libcvo/core/parameters.hpp; module_parameters.cpp hands the sections to the modules
+// whole).
 #include <filesystem>
 #include <string>
 #include <string_view>

@@ -4,14 +4,11 @@
 // Target cvo::mapper_parameters: it links loop closure and the back end, which the tracker does not.
 #include "libcvo/config/config.hpp"
 #include "libcvo/loop_closure/loop_verification.hpp"
-#include "libcvo/loop_closure/orb_features.hpp"
 #include "libcvo/slam/backend.hpp"
 #include "libcvo/slam/mapper.hpp"
 
 namespace cvo::config {
 
-/// The loop detector's ORB keypoints.
-loop_closure::OrbParameters orb_parameters(const Config& config);
 /// The loop detector: detection, matching, RANSAC, CVO refinement.
 loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& config);
 /// The back end's pose-graph optimisations.

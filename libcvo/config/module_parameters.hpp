@@ -2,9 +2,9 @@
 // The one place the configuration becomes each module's parameters. cvo-run, cvo-trackerd,
 // cvo-backendd and the benchmarks build their trackers, loop detector and back end from these
 // functions and nowhere else, so a key of the table (config.cpp) reaches every program the same
-// way. A new tunable: a field in libcvo/core/parameters.hpp (its default), a row in config.cpp's
-// table (its key, range and doc), the line below that hands it to its module, and default.yaml
-// regenerated.
+// way. Each module's parameter struct holds the core structs whole, so these functions copy
+// structs, not fields: a new tunable is a field in libcvo/core/parameters.hpp (its default) and a
+// row in config.cpp's table (its key, range and doc), with default.yaml regenerated; nothing here.
 //
 // Which keys go where:
 //   selection.*, cvo.*                   every CVO tracker and the loop detector's refinement

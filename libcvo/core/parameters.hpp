@@ -1,11 +1,17 @@
 #pragma once
 // Every tunable of the method, grouped as the paper groups them. Defaults are the paper's
 // Table 1 (tab:parameters) where it gives a value; the others are marked with where they come from.
+// How the tuned values were chosen, with the measurements: bench/odometry-tuning.md.
+//
+// The rule: a tunable lives in two places, its field here (its default and its why) and its row
+// in the configuration's table (libcvo/config/config.cpp: its key, range and doc). Modules take
+// these structs whole (odometry::KeyframeOdometryParameters holds a KeyframeTrackingParameters,
+// not copies of its fields), so libcvo/config/module_parameters.cpp copies structs, not fields,
+// and no module re-declares a tunable or its default. tests/config/module_parameters_test.cpp
+// holds every module's parameter struct to it, member by member.
+//
 // These are plain values: libcvo/config reads them from YAML (one section per struct, or two
-// structs sharing one section where noted) and libcvo/config/module_parameters.hpp maps them onto
-// each module's parameters. The defaults here are the only ones: a module's own parameter struct
-// takes its defaults from these. How the tuned values were chosen, with the measurements:
-// bench/odometry-tuning.md.
+// structs sharing one section where noted); equality is member by member, doubles exactly.
 #include <cstddef>
 #include <cstdint>
 
@@ -27,6 +33,8 @@ struct SelectionParameters {
   // Frames whose two stamps are equal (rendered frames, synchronised sensors) are taken as
   // simultaneous and left as they are.
   double depth_time_offset_s = -0.010;
+
+  bool operator==(const SelectionParameters&) const = default;
 };
 
 /// The RKHS inner product and the CVO solver (paper section 3, eq. 5-6; Table 1).
@@ -54,6 +62,8 @@ struct CvoParameters {
   double min_step = 1e-4;                      // converged at ℓ_min when |Δρ| + |Δφ| < this (m + rad)
   int threads = 1;                             // the tracker runs single-threaded by default
   bool mutual_visibility = true;               // align() sums only what both views see (registration.hpp)
+
+  bool operator==(const CvoParameters&) const = default;
 };
 
 /// What every tracker keeps besides the paper's values (libcvo/odometry); YAML section `odometry`.
@@ -64,6 +74,8 @@ struct OdometryParameters {
   // Frame-to-frame trackers (cvo, opencv-*): failed registrations in a row against one reference
   // after which the failed frame becomes the reference (frame_to_frame.hpp). Not from the paper.
   int restart_after_failures = 3;
+
+  bool operator==(const OdometryParameters&) const = default;
 };
 
 /// Keyframe selection (paper section 4, eq. 9-10; Table 1).
@@ -71,6 +83,8 @@ struct KeyframeParameters {
   double inner_product_ratio_threshold = 0.7;  // γ_thres
   double translation_threshold_m = 0.15;       // t_thres
   double rotation_threshold_deg = 30.0;        // θ_thres
+
+  bool operator==(const KeyframeParameters&) const = default;
 };
 
 /// KF-CVO's own settings beyond Table 1 (libcvo/odometry/keyframe_odometry.hpp has the maths);
@@ -91,6 +105,8 @@ struct KeyframeTrackingParameters {
   // ramp reaches full weight early; exact rendered data would rather have it later.
   double chain_weight = 2.0;           // 0: the keyframe edge alone
   double chain_full_weight_deg = 3.0;  // 0: full weight at every rotation
+
+  bool operator==(const KeyframeTrackingParameters&) const = default;
 };
 
 /// Loop closure (paper section 5; Table 1).
@@ -98,6 +114,8 @@ struct LoopClosureParameters {
   double similarity_threshold = 0.3;  // η_thres, normalised bag-of-words score
   double match_ratio = 0.7;           // best / second-best descriptor distance
   int min_matches = 5;
+
+  bool operator==(const LoopClosureParameters&) const = default;
 };
 
 /// Loop verification beyond Table 1 (libcvo/loop_closure/loop_verification.hpp has the steps);
@@ -118,6 +136,8 @@ struct LoopVerificationParameters {
   int orb_levels = 8;                  // pyramid levels
   int orb_edge_threshold = 31;         // border without features, pixels (>= patch size: descriptors fit)
   int orb_fast_threshold = 20;         // FAST intensity threshold
+
+  bool operator==(const LoopVerificationParameters&) const = default;
 };
 
 /// Robust pose graph (paper section 5; Table 1) and the back end's optimisation (libcvo/slam/backend.hpp).
@@ -127,11 +147,15 @@ struct PoseGraphParameters {
   // local graph, per unit (σ ~ 1 m, 1 rad): a guess, weak so that any loop overrides it.
   double bridge_information = 1.0;
   int max_iterations = 100;  // of each Levenberg-Marquardt run
+
+  bool operator==(const PoseGraphParameters&) const = default;
 };
 
 /// Reading TUM-layout recordings.
 struct DatasetParameters {
   double max_association_dt = 0.02;  // s, colour-depth timestamp association (TUM's default)
+
+  bool operator==(const DatasetParameters&) const = default;
 };
 
 }  // namespace cvo::core

@@ -123,8 +123,8 @@ std::optional<std::string> guess_camera_preset(const std::filesystem::path& dir)
 }
 
 TumSequence TumSequence::open(const std::filesystem::path& dir, const TumOptions& options) {
-  if (!(std::isfinite(options.max_association_dt) && options.max_association_dt > 0))
-    throw std::invalid_argument("TumOptions::max_association_dt must be a positive number of seconds");
+  if (!(std::isfinite(options.dataset.max_association_dt) && options.dataset.max_association_dt > 0))
+    throw std::invalid_argument("TumOptions::dataset.max_association_dt must be a positive number of seconds");
   std::error_code ec;
   if (!std::filesystem::exists(dir, ec)) throw InputError(dir, "no such dataset folder");
   if (!std::filesystem::is_directory(dir, ec)) throw InputError(dir, "not a folder");
@@ -135,13 +135,13 @@ TumSequence TumSequence::open(const std::filesystem::path& dir, const TumOptions
 
   const auto rgb = read_index(dir / "rgb.txt");
   const auto depth = read_index(dir / "depth.txt");
-  for (const auto& [i, j] : core::associate(stamps(rgb), stamps(depth), options.max_association_dt)) {
+  for (const auto& [i, j] : core::associate(stamps(rgb), stamps(depth), options.dataset.max_association_dt)) {
     if (options.max_frames != 0 && seq.frames_.size() == options.max_frames) break;
     seq.frames_.push_back({rgb[i].timestamp, rgb[i].file, depth[j].timestamp, depth[j].file});
   }
   if (seq.frames_.empty())
     throw InputError(dir, "no colour image of rgb.txt has a depth image of depth.txt within " +
-                              std::to_string(options.max_association_dt) + " s");
+                              std::to_string(options.dataset.max_association_dt) + " s");
 
   if (const auto gt = dir / "groundtruth.txt"; std::filesystem::exists(gt, ec))
     seq.groundtruth_ = read_tum_trajectory(gt);

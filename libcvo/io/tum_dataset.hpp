@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "libcvo/core/camera.hpp"
+#include "libcvo/core/parameters.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/io/input_error.hpp"
@@ -34,7 +35,7 @@ class FrameError : public InputError {
 };
 
 struct TumOptions {
-  double max_association_dt = 0.02;  // s; core::DatasetParameters::max_association_dt
+  core::DatasetParameters dataset;  // max_association_dt (libcvo/core/parameters.hpp)
   // nullopt: the folder's own camera.yaml when it has one, else the preset guessed from the
   // folder name (guess_camera_preset). A width and height
   // of 0 (an ETH3D calibration) are taken from the first colour image.

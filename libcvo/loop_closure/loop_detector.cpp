@@ -8,7 +8,7 @@ namespace cvo::loop_closure {
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, const LoopDetectorParameters& parameters)
     : vocabulary_(std::move(vocabulary)), parameters_(parameters),
-      registration_(registration::Capacities{parameters.max_points}, parameters.cvo) {}
+      registration_(registration::Capacities{parameters.odometry.max_points}, parameters.cvo) {}
 
 std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
                                                     const registration::PointCloud& cloud, const core::SE3& pose) {
@@ -24,7 +24,7 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
   if (keyframes_.contains(id))
     throw std::invalid_argument("LoopDetector::add_keyframe: keyframe " + std::to_string(id) + " is stored already");
   attempts_.clear();
-  const OrbFeatures features = extract_orb(frame.bgr, parameters_.orb);
+  const OrbFeatures features = extract_orb(frame.bgr, parameters_.verification);
   LoopKeyframe keyframe = make_loop_keyframe(id, features, frame, cloud, placement.pose, parameters_);
   keyframe.piece = placement.piece;
   BowVector bow = vocabulary_.transform(features.descriptors);
@@ -33,9 +33,10 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
   if (placement.previous && database_.contains(*placement.previous)) {
     const auto candidates =
         database_.candidates(id, bow, *placement.previous, parameters_.loop.similarity_threshold);
+    const int max_refinements = parameters_.verification.max_refinements;
     int refinements = 0;
     for (const auto& c : candidates) {  // best η first
-      if (parameters_.max_refinements > 0 && refinements == parameters_.max_refinements) break;
+      if (max_refinements > 0 && refinements == max_refinements) break;
       auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
       if (v.refinement.iterations > 0) ++refinements;
       v.attempt.eta = c.eta;

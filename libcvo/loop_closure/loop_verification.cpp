@@ -27,7 +27,7 @@ LoopKeyframe make_loop_keyframe(std::int64_t id, const OrbFeatures& features, co
                                 const registration::PointCloud& cloud, const core::SE3& pose,
                                 const LoopDetectorParameters& p) {
   return {id, keypoints_with_depth(features, frame, p.selection.min_depth_m, p.selection.max_depth_m),
-          copy_cloud(cloud, p.max_points), pose};
+          copy_cloud(cloud, p.odometry.max_points), pose};
 }
 
 double AlphaInnerProducts::alpha() const { return cvo - std::max({identity, initial, estimate}); }
@@ -53,9 +53,7 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
   }
 
   // 2. Initial pose T_ji^0: p_j ≈ T_ji^0 p_i.
-  const RansacParameters ransac{p.ransac_iterations, p.ransac_inlier_m,
-                                static_cast<std::size_t>(std::max(p.min_inliers, 0)), p.ransac_seed};
-  const RigidFit fit = ransac_rigid(src, dst, ransac);
+  const RigidFit fit = ransac_rigid(src, dst, p.verification);
   v.attempt.inliers = static_cast<int>(fit.inliers.size());
   if (!fit.found) {
     v.attempt.verdict = "RANSAC failed";
@@ -75,8 +73,8 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
   // inner product) moves the inliers far off. α alone cannot tell, see the header.
   const core::SE3 refined_ji = v.refinement.transform.inverse();
   for (const std::size_t k : fit.inliers)
-    if ((dst[k] - refined_ji * src[k]).norm() < p.ransac_inlier_m) ++v.attempt.inliers_kept;
-  if (v.attempt.inliers_kept < p.min_inlier_retention * static_cast<double>(fit.inliers.size())) {
+    if ((dst[k] - refined_ji * src[k]).norm() < p.verification.ransac_inlier_m) ++v.attempt.inliers_kept;
+  if (v.attempt.inliers_kept < p.verification.min_inlier_retention * static_cast<double>(fit.inliers.size())) {
     v.attempt.verdict = "CVO left the matches";
     return v;
   }

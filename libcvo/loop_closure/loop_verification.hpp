@@ -50,19 +50,14 @@
 
 namespace cvo::loop_closure {
 
+/// The core structs whole (libcvo/core/parameters.hpp). From the configuration:
+/// config::loop_detector_parameters (libcvo/config/module_parameters.hpp).
 struct LoopDetectorParameters {
-  core::LoopClosureParameters loop;  // η_thres, ratio, min_matches (Table 1)
-  core::CvoParameters cvo;           // of the refinement
-  OrbParameters orb;
-  // The rest as core::LoopVerificationParameters (whose defaults these are) says.
-  int ransac_iterations = core::LoopVerificationParameters{}.ransac_iterations;
-  double ransac_inlier_m = core::LoopVerificationParameters{}.ransac_inlier_m;  // 3-D inlier distance (m)
-  int min_inliers = core::LoopVerificationParameters{}.min_inliers;  // fewer after RANSAC: no loop
-  double min_inlier_retention = core::LoopVerificationParameters{}.min_inlier_retention;  // step 3b
-  int max_refinements = core::LoopVerificationParameters{}.max_refinements;  // per new keyframe; 0: no limit
-  std::size_t max_points = core::OdometryParameters{}.max_points;  // capacity of the stored clouds
+  core::LoopClosureParameters loop;               // η_thres, ratio, min_matches (Table 1)
+  core::LoopVerificationParameters verification;  // refinements, RANSAC, step 3b, ORB
+  core::CvoParameters cvo;                        // of the refinement
   core::SelectionParameters selection;  // min_depth_m / max_depth_m: the keypoints' depth range
-  std::uint32_t ransac_seed = core::LoopVerificationParameters{}.ransac_seed;  // RANSAC's std::mt19937
+  core::OdometryParameters odometry;    // max_points: capacity of the stored clouds
 };
 
 /// An accepted loop: an edge of the keyframe pose graph, in posegraph::Edge's convention.

@@ -12,16 +12,6 @@
 
 namespace cvo::loop_closure {
 
-/// cv::ORB's settings; the defaults (core::LoopVerificationParameters' orb_*) are ORB-SLAM2's
-/// feature count with OpenCV's other defaults.
-struct OrbParameters {
-  int features = core::LoopVerificationParameters{}.orb_features;  // at most this many, strongest first
-  float scale_factor = static_cast<float>(core::LoopVerificationParameters{}.orb_scale_factor);  // between levels
-  int levels = core::LoopVerificationParameters{}.orb_levels;                  // pyramid levels
-  int edge_threshold = core::LoopVerificationParameters{}.orb_edge_threshold;  // border without features, pixels
-  int fast_threshold = core::LoopVerificationParameters{}.orb_fast_threshold;  // FAST intensity threshold
-};
-
 /// Keypoints with one descriptor row each: descriptors is CV_8UC1, keypoints.size() x 32 (256
 /// bits), also when there are no keypoints (0 x 32).
 struct OrbFeatures {
@@ -29,8 +19,10 @@ struct OrbFeatures {
   cv::Mat descriptors;
 };
 
-/// The ORB features of a BGR (CV_8UC3) or grey (CV_8UC1) image. Throws std::invalid_argument on
-/// another image type or bad parameters. An image without texture gives no features, not an error.
-OrbFeatures extract_orb(const cv::Mat& image, const OrbParameters& parameters = {});
+/// The ORB features of a BGR (CV_8UC3) or grey (CV_8UC1) image, with cv::ORB's settings from the
+/// orb_* members of `parameters` (the rest is loop verification's; the defaults are ORB-SLAM2's
+/// feature count with OpenCV's other defaults). Throws std::invalid_argument on another image type
+/// or bad parameters. An image without texture gives no features, not an error.
+OrbFeatures extract_orb(const cv::Mat& image, const core::LoopVerificationParameters& parameters = {});
 
 }  // namespace cvo::loop_closure

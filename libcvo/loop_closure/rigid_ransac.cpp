@@ -54,18 +54,18 @@ std::optional<core::SE3> fit_rigid(const std::vector<Eigen::Vector3d>& src, cons
 }
 
 RigidFit ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
-                      const RansacParameters& p) {
+                      const core::LoopVerificationParameters& p) {
   RigidFit best;
   const std::size_t n = src.size();
   if (dst.size() != n || n < 3) return best;
-  const std::size_t needed = std::max<std::size_t>(3, p.min_inliers);
-  const double consistency = 2.0 * p.inlier_threshold_m;
+  const std::size_t needed = std::max<std::size_t>(3, static_cast<std::size_t>(std::max(p.min_inliers, 0)));
+  const double consistency = 2.0 * p.ransac_inlier_m;
 
   // rng() % n rather than std::uniform_int_distribution: the latter's algorithm is left to the
   // standard library, mt19937's output is not, so the draws are the same everywhere.
-  std::mt19937 rng(p.seed);
+  std::mt19937 rng(p.ransac_seed);
   std::vector<std::size_t> sample(3);
-  for (int it = 0; it < p.iterations; ++it) {
+  for (int it = 0; it < p.ransac_iterations; ++it) {
     sample[0] = rng() % n;
     do sample[1] = rng() % n;
     while (sample[1] == sample[0]);
@@ -83,7 +83,7 @@ RigidFit ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector
 
     const auto T = fit_rigid(src, dst, sample);
     if (!T) continue;
-    auto inliers = inliers_of(src, dst, *T, p.inlier_threshold_m);
+    auto inliers = inliers_of(src, dst, *T, p.ransac_inlier_m);
     if (inliers.size() > best.inliers.size()) {
       best.transform = *T;
       best.inliers = std::move(inliers);
@@ -97,7 +97,7 @@ RigidFit ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector
     if (!T) return RigidFit{};
     best.transform = *T;
     if (round == 0) {
-      auto inliers = inliers_of(src, dst, best.transform, p.inlier_threshold_m);
+      auto inliers = inliers_of(src, dst, best.transform, p.ransac_inlier_m);
       if (inliers.size() < needed) return RigidFit{};
       best.inliers = std::move(inliers);
     }

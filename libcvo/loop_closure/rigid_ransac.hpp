@@ -6,11 +6,11 @@
 //   T* = argmin_{R, t} Σ_{k in S} |dst_k - (R src_k + t)|²,
 // in closed form by the SVD of the cross-covariance (Umeyama 1991 without scale; Eigen::umeyama).
 //
-// RANSAC: `iterations` minimal sets of 3 correspondences, drawn from a std::mt19937 seeded with
-// `seed` (so the result is a pure function of the input); a set is skipped when its triangle is
-// degenerate in either cloud or its pairwise distances disagree by more than 2 inlier thresholds
-// (a rigid motion preserves them, so such a set holds an outlier). Each fit counts the inliers,
-// |dst_k - T src_k| < inlier_threshold_m; the first fit with the most inliers wins. The winner is
+// RANSAC: `ransac_iterations` minimal sets of 3 correspondences, drawn from a std::mt19937 seeded
+// with `ransac_seed` (so the result is a pure function of the input); a set is skipped when its
+// triangle is degenerate in either cloud or its pairwise distances disagree by more than 2 inlier
+// thresholds (a rigid motion preserves them, so such a set holds an outlier). Each fit counts the inliers,
+// |dst_k - T src_k| < ransac_inlier_m; the first fit with the most inliers wins. The winner is
 // refitted on its inliers, the inliers are recounted with the refit, and refitted once more:
 // a least-squares estimate from all the inliers, not from 3 noisy points.
 #include <cstddef>
@@ -20,16 +20,11 @@
 
 #include <Eigen/Core>
 
+#include "libcvo/core/parameters.hpp"
 #include "libcvo/core/se3.hpp"
 
 namespace cvo::loop_closure {
 
-struct RansacParameters {
-  int iterations = 300;
-  double inlier_threshold_m = 0.03;
-  std::size_t min_inliers = 12;  // fewer: no transform
-  std::uint32_t seed = 0;
-};
 
 struct RigidFit {
   bool found = false;
@@ -43,9 +38,10 @@ struct RigidFit {
 std::optional<core::SE3> fit_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
                                    const std::vector<std::size_t>& subset = {});
 
-/// RANSAC + refit as above. found is false when src and dst differ in size, there are fewer than
+/// RANSAC + refit as above, with the ransac_* and min_inliers members of `parameters` (the rest is
+/// the loop verification's). found is false when src and dst differ in size, there are fewer than
 /// 3 correspondences, or no model reaches max(3, min_inliers) inliers.
 RigidFit ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
-                      const RansacParameters& parameters);
+                      const core::LoopVerificationParameters& parameters);
 
 }  // namespace cvo::loop_closure

@@ -21,9 +21,10 @@ bool selection_usable(registration::SelectionStatus s) {
 FrameToFrameOdometry::FrameToFrameOdometry(int width, int height, const FrameToFrameParameters& parameters)
     : parameters_(parameters),
       selector_(width, height, parameters.selection),
-      registration_(registration::Capacities{parameters.max_points}, parameters.cvo),
-      clouds_{registration::PointCloud(parameters.max_points), registration::PointCloud(parameters.max_points)},
-      motion_(parameters.initial_pose, parameters.restart_after_failures) {}
+      registration_(registration::Capacities{parameters.odometry.max_points}, parameters.cvo),
+      clouds_{registration::PointCloud(parameters.odometry.max_points),
+              registration::PointCloud(parameters.odometry.max_points)},
+      motion_(parameters.initial_pose, parameters.odometry.restart_after_failures) {}
 
 TrackResult FrameToFrameOdometry::track(const core::RgbdFrame& frame) {
   TrackResult result;

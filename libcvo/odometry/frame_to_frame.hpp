@@ -36,12 +36,13 @@
 
 namespace cvo::odometry {
 
+/// The core structs whole (libcvo/core/parameters.hpp). From the configuration:
+/// config::frame_to_frame_parameters (libcvo/config/module_parameters.hpp).
 struct FrameToFrameParameters {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
-  core::SE3 initial_pose;         // P of the first usable frame
-  std::size_t max_points = core::OdometryParameters{}.max_points;  // capacity of each cloud
-  int restart_after_failures = core::OdometryParameters{}.restart_after_failures;  // see above
+  core::OdometryParameters odometry;  // max_points (each cloud's capacity), restart_after_failures (above)
+  core::SE3 initial_pose;             // P of the first usable frame
 };
 
 class FrameToFrameOdometry {

@@ -26,7 +26,7 @@ bool usable(registration::SelectionStatus s) {
 // `gamma_sigma` (σ² = 0.1: pairs count above 0.083) it sums ~100k pairs and is smooth.
 core::CvoParameters gamma_parameters(const KeyframeOdometryParameters& p) {
   core::CvoParameters c = p.cvo;
-  c.sigma = p.gamma_sigma;
+  c.sigma = p.tracking.gamma_sigma;
   return c;
 }
 
@@ -56,11 +56,13 @@ const char* to_string(KeyframeReason reason) {
 KeyframeOdometry::KeyframeOdometry(int width, int height, const KeyframeOdometryParameters& parameters)
     : parameters_(parameters),
       selector_(width, height, parameters.selection),
-      registration_(registration::Capacities{parameters.max_points}, parameters.cvo),
-      gamma_registration_(registration::Capacities{parameters.max_points, 0}, gamma_parameters(parameters)),
-      clouds_{registration::PointCloud(parameters.max_points), registration::PointCloud(parameters.max_points),
-              registration::PointCloud(parameters.max_points)},
-      graphs_{LocalGraph(parameters.local_graph_capacity), LocalGraph(parameters.local_graph_capacity)} {}
+      registration_(registration::Capacities{parameters.odometry.max_points}, parameters.cvo),
+      gamma_registration_(registration::Capacities{parameters.odometry.max_points, 0}, gamma_parameters(parameters)),
+      clouds_{registration::PointCloud(parameters.odometry.max_points),
+              registration::PointCloud(parameters.odometry.max_points),
+              registration::PointCloud(parameters.odometry.max_points)},
+      graphs_{LocalGraph(parameters.tracking.local_graph_capacity),
+              LocalGraph(parameters.tracking.local_graph_capacity)} {}
 
 void KeyframeOdometry::reset() {
   for (auto& graph : graphs_) graph.clear();
@@ -112,8 +114,8 @@ void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double tim
 }
 
 double KeyframeOdometry::gamma_inner_product(const registration::PointCloud& keyframe, const core::SE3& T_mn) {
-  return gamma_registration_.inner_product(keyframe, clouds_[current_], T_mn, parameters_.gamma_ell,
-                                           parameters_.gamma_stride);
+  return gamma_registration_.inner_product(keyframe, clouds_[current_], T_mn, parameters_.tracking.gamma_ell,
+                                           parameters_.tracking.gamma_stride);
 }
 
 // The one-node local graph: minimise |log(T T_kf^-1)|²_{H_kf} + w |log(T C^-1)|²_{H_c} over T, with
@@ -124,9 +126,9 @@ double KeyframeOdometry::gamma_inner_product(const registration::PointCloud& key
 // algebra: no allocation.
 core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResult& kf,
                                             const registration::RegistrationResult& f2f, const core::SE3& chain) const {
-  double w = parameters_.chain_weight;
-  if (parameters_.chain_full_weight_deg > 0) {
-    const double ramp = core::degrees(chain.angle()) / parameters_.chain_full_weight_deg;
+  double w = parameters_.tracking.chain_weight;
+  if (parameters_.tracking.chain_full_weight_deg > 0) {
+    const double ramp = core::degrees(chain.angle()) / parameters_.tracking.chain_full_weight_deg;
     w *= std::min(1.0, ramp * ramp);
   }
   if (!(w > 0)) return kf.transform;

@@ -52,23 +52,16 @@
 
 namespace cvo::odometry {
 
-/// Defaults and the why of each value: core::OdometryParameters and core::KeyframeTrackingParameters
-/// (libcvo/core/parameters.hpp). From the configuration: config::keyframe_odometry_parameters
+/// The core structs whole (libcvo/core/parameters.hpp has the defaults and the why of each
+/// value). From the configuration: config::keyframe_odometry_parameters
 /// (libcvo/config/module_parameters.hpp).
 struct KeyframeOdometryParameters {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
-  core::KeyframeParameters keyframe;
-  core::SE3 initial_pose;  // P of the first usable frame
-  std::size_t max_points = core::OdometryParameters{}.max_points;  // capacity of each cloud
-  // Frames per keyframe before one is forced.
-  std::size_t local_graph_capacity = core::KeyframeTrackingParameters{}.local_graph_capacity;
-  double gamma_ell = core::KeyframeTrackingParameters{}.gamma_ell;      // length-scale of γ's inner products
-  double gamma_sigma = core::KeyframeTrackingParameters{}.gamma_sigma;  // spatial signal of γ's inner products
-  std::size_t gamma_stride = core::KeyframeTrackingParameters{}.gamma_stride;  // γ sums every stride-th point
-  double chain_weight = core::KeyframeTrackingParameters{}.chain_weight;  // chain edge's scale; 0: keyframe edge alone
-  // Rotation from the keyframe at which the chain weight is full (0: always full).
-  double chain_full_weight_deg = core::KeyframeTrackingParameters{}.chain_full_weight_deg;
+  core::KeyframeParameters keyframe;           // the paper's thresholds
+  core::KeyframeTrackingParameters tracking;   // γ's kernel, the local graph's capacity, the fusion
+  core::OdometryParameters odometry;           // max_points: capacity of each cloud
+  core::SE3 initial_pose;                      // P of the first usable frame
 };
 
 /// Why a frame made a new keyframe.

@@ -94,14 +94,15 @@ registration::SelectionStatus OpenCvOdometry::State::prepare(const core::RgbdFra
 }
 
 OpenCvOdometry::OpenCvOdometry(const core::Intrinsics& camera, const OpenCvOdometryParameters& parameters)
-    : state_(std::make_unique<State>(State{parameters, camera, {}, {}, MotionModel(parameters.initial_pose,
-                                                                                     parameters.restart_after_failures)})) {
+    : state_(std::make_unique<State>(State{parameters, camera, {}, {},
+                                           MotionModel(parameters.initial_pose,
+                                                       parameters.odometry.restart_after_failures)})) {
   State& s = *state_;
   // CV_32FC1 as OpenCV's own sample: RgbdICPOdometry compares it with its normals computer's K.
   const cv::Mat k = (cv::Mat_<float>(3, 3) << static_cast<float>(camera.fx), 0.f, static_cast<float>(camera.cx), 0.f,
                      static_cast<float>(camera.fy), static_cast<float>(camera.cy), 0.f, 0.f, 1.f);
-  const auto min_depth = static_cast<float>(parameters.min_depth_m);
-  const auto max_depth = static_cast<float>(parameters.max_depth_m);
+  const auto min_depth = static_cast<float>(parameters.selection.min_depth_m);
+  const auto max_depth = static_cast<float>(parameters.selection.max_depth_m);
   if (parameters.variant == OpenCvVariant::rgbd)
     s.odometry = cv::rgbd::RgbdOdometry::create(k, min_depth, max_depth);
   else

@@ -38,11 +38,12 @@ const char* to_string(OpenCvVariant variant);
 
 struct OpenCvOdometryParameters {
   OpenCvVariant variant = OpenCvVariant::rgbd;
-  // Valid depth range, as core::SelectionParameters (OpenCV's own defaults: 0 and 4).
-  double min_depth_m = core::SelectionParameters{}.min_depth_m;
-  double max_depth_m = core::SelectionParameters{}.max_depth_m;
+  // Of the core structs (libcvo/core/parameters.hpp) only selection's min_depth_m and max_depth_m,
+  // the valid depth range (OpenCV's own defaults: 0 and 4), and odometry's restart_after_failures
+  // (as FrameToFrameParameters) apply. From the configuration: config::opencv_odometry_parameters.
+  core::SelectionParameters selection;
+  core::OdometryParameters odometry;
   core::SE3 initial_pose;  // P of the first usable frame
-  int restart_after_failures = core::OdometryParameters{}.restart_after_failures;  // as FrameToFrameParameters
   // Everything else is OpenCV's default: 4 pyramid levels with 7/7/7/10 iterations, gradient
   // magnitude >= 10, max depth difference 0.07 m, 7% of the pixels, max step 0.15 m and 15 deg.
 };

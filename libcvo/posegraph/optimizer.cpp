@@ -373,7 +373,7 @@ class LevenbergMarquardt {
   LevenbergMarquardt(const OptimizerOptions& options, Problem& problem, NormalEquations& equations,
                      detail::Cholmod& cholmod, OptimizationReport& report)
       : options_(options),
-        kernel_{options.cauchy_delta},
+        kernel_{options.pose_graph.cauchy_delta},
         problem_(problem),
         equations_(equations),
         cholmod_(cholmod),
@@ -494,7 +494,7 @@ LevenbergMarquardt::Outcome LevenbergMarquardt::iterate(IterationRecord& record)
 
 std::pair<std::string, bool> LevenbergMarquardt::run() {
   lambda_ = options_.initial_lambda;
-  for (int it = 0; it < options_.max_iterations; ++it) {
+  for (int it = 0; it < options_.pose_graph.max_iterations; ++it) {
     if (cost_ == 0.0) return {"zero cost", true};
     equations_.assemble(problem_, problem_.poses, kernel_);
     IterationRecord record;
@@ -518,7 +518,7 @@ OptimizationReport Optimizer::optimize(PoseGraph& graph) {
   const auto start = std::chrono::steady_clock::now();
   Problem problem = make_problem(graph);
   OptimizationReport report;
-  report.initial_cost = report.final_cost = problem_cost(problem, problem.poses, RobustKernel{options_.cauchy_delta});
+  report.initial_cost = report.final_cost = problem_cost(problem, problem.poses, RobustKernel{options_.pose_graph.cauchy_delta});
   const auto finish = [&](std::string reason, bool converged) {
     for (std::size_t k = 0; const auto& kv : graph.nodes()) graph.set_pose(kv.first, problem.poses[k++]);
     report.stop_reason = std::move(reason);

@@ -79,7 +79,7 @@ struct RegistrationResult {
 };
 
 struct Capacities {
-  std::size_t max_points = 8192;  // per cloud
+  std::size_t max_points;  // per cloud: the caller's core::OdometryParameters::max_points
   // Candidate pairs kept per moving point on average (align(); see above); 0: none, every
   // iteration searches the cells in full.
   std::size_t candidates_per_point = 32;

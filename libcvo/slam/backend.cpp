@@ -39,8 +39,7 @@ Backend::Backend(const BackendParameters& parameters)
 
 posegraph::OptimizerOptions Backend::optimizer_options() const {
   posegraph::OptimizerOptions options;
-  options.cauchy_delta = parameters_.cauchy_delta;
-  options.max_iterations = parameters_.max_iterations;
+  options.pose_graph = parameters_;
   return options;
 }
 

@@ -69,12 +69,10 @@
 
 namespace cvo::slam {
 
-struct BackendParameters {
-  double cauchy_delta = core::PoseGraphParameters{}.cauchy_delta;  // δ of the loop edges' kernel
-  // Of a restart's bridge edge, per unit (σ ~ 1 m, 1 rad): a guess.
-  double bridge_information = core::PoseGraphParameters{}.bridge_information;
-  int max_iterations = core::PoseGraphParameters{}.max_iterations;  // of each Levenberg-Marquardt run
-};
+/// The pose graph's core struct whole: cauchy_delta (δ of the loop edges' kernel), bridge_information
+/// (of a restart's bridge edge) and max_iterations (of each Levenberg-Marquardt run). From the
+/// configuration: config::backend_parameters (libcvo/config/module_parameters.hpp).
+using BackendParameters = core::PoseGraphParameters;
 
 /// A loop edge at the current poses: its χ² s = eᵀΩe and its Cauchy weight ρ'(s) = 1/(1 + s/δ²).
 struct LoopState {

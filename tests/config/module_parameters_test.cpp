@@ -1,12 +1,20 @@
 // The one mapping from the configuration to every module's parameters (module_parameters.hpp):
-// the defaults it gives are exactly the modules' own (so no program's behaviour changed when the
-// hand-written mappings were replaced), and every key reaches its module, through --set as
+// every module's parameter struct holds the core structs whole and nothing tunable besides (a
+// tunable lives in its core struct field and its config table row only, libcvo/core/parameters.hpp),
+// the mapping hands each section over whole, and every key reaches its module, through --set as
 // through a file, in cvo-run end to end.
 #include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
 
+#include <filesystem>
+#include <fstream>
 #include <functional>
+#include <regex>
+#include <set>
+#include <sstream>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -17,111 +25,187 @@
 namespace cvo::config {
 namespace {
 
-// Field by field, doubles exactly: "the same results bit for bit" needs the same values.
-void expect_same(const core::SelectionParameters& a, const core::SelectionParameters& b) {
-  EXPECT_EQ(a.target_points, b.target_points);
-  EXPECT_EQ(a.min_depth_m, b.min_depth_m);
-  EXPECT_EQ(a.max_depth_m, b.max_depth_m);
-  EXPECT_EQ(a.gradient_weight, b.gradient_weight);
-  EXPECT_EQ(a.depth_time_offset_s, b.depth_time_offset_s);
+// The members of an aggregate, as a type list: the count by aggregate initialisation from
+// "anything" (one initialiser per member: the member types all convert from it, so no brace
+// elision), the types by a structured binding of that many names.
+template <class... T>
+struct Types {};
+
+struct AnyMember {
+  template <class T>
+  operator T() const;  // never defined: used in unevaluated operands only
+};
+
+template <class S, class... A>
+consteval std::size_t member_count() {
+  if constexpr (requires { S{A{}..., AnyMember{}}; })
+    return member_count<S, A..., AnyMember>();
+  else
+    return sizeof...(A);
 }
 
-void expect_same(const core::CvoParameters& a, const core::CvoParameters& b) {
-  EXPECT_EQ(a.ell_init, b.ell_init);
-  EXPECT_EQ(a.ell_min, b.ell_min);
-  EXPECT_EQ(a.ell_decay, b.ell_decay);
-  EXPECT_EQ(a.sigma, b.sigma);
-  EXPECT_EQ(a.ell_color, b.ell_color);
-  EXPECT_EQ(a.sigma_color, b.sigma_color);
-  EXPECT_EQ(a.sparsification_threshold, b.sparsification_threshold);
-  EXPECT_EQ(a.max_iterations, b.max_iterations);
-  EXPECT_EQ(a.min_step, b.min_step);
-  EXPECT_EQ(a.threads, b.threads);
+template <class S>
+auto member_types(const S& s) {
+  constexpr std::size_t n = member_count<S>();
+  static_assert(n >= 1 && n <= 7, "member_types: add a case");
+#define CVO_T(x) std::remove_cvref_t<decltype(x)>
+  if constexpr (n == 1) {
+    const auto& [a] = s;
+    return Types<CVO_T(a)>{};
+  } else if constexpr (n == 2) {
+    const auto& [a, b] = s;
+    return Types<CVO_T(a), CVO_T(b)>{};
+  } else if constexpr (n == 3) {
+    const auto& [a, b, c] = s;
+    return Types<CVO_T(a), CVO_T(b), CVO_T(c)>{};
+  } else if constexpr (n == 4) {
+    const auto& [a, b, c, d] = s;
+    return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d)>{};
+  } else if constexpr (n == 5) {
+    const auto& [a, b, c, d, e] = s;
+    return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d), CVO_T(e)>{};
+  } else if constexpr (n == 6) {
+    const auto& [a, b, c, d, e, f] = s;
+    return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d), CVO_T(e), CVO_T(f)>{};
+  } else {
+    const auto& [a, b, c, d, e, f, g] = s;
+    return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d), CVO_T(e), CVO_T(f), CVO_T(g)>{};
+  }
+#undef CVO_T
 }
 
-TEST(ConfigModuleParameters, DefaultsAreTheModulesOwn) {
-  const Config c;
+template <class S, class... Expected>
+constexpr bool holds_exactly = std::is_same_v<decltype(member_types(std::declval<const S&>())), Types<Expected...>>;
+
+// Each module's parameter struct is the core structs whole, plus what no configuration key sets
+// (a start pose, a variant, solver internals). A field that re-declared a tunable (gamma_ell
+// beside KeyframeTrackingParameters, say) changes the member list: this file stops compiling.
+static_assert(holds_exactly<odometry::FrameToFrameParameters, core::SelectionParameters, core::CvoParameters,
+                            core::OdometryParameters, core::SE3>);
+static_assert(holds_exactly<odometry::KeyframeOdometryParameters, core::SelectionParameters, core::CvoParameters,
+                            core::KeyframeParameters, core::KeyframeTrackingParameters, core::OdometryParameters,
+                            core::SE3>);
+static_assert(holds_exactly<odometry::OpenCvOdometryParameters, odometry::OpenCvVariant, core::SelectionParameters,
+                            core::OdometryParameters, core::SE3>);
+static_assert(holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters,
+                            core::LoopVerificationParameters, core::CvoParameters, core::SelectionParameters,
+                            core::OdometryParameters>);
+static_assert(std::is_same_v<slam::BackendParameters, core::PoseGraphParameters>);
+static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters>);
+static_assert(holds_exactly<posegraph::OptimizerOptions, core::PoseGraphParameters, double, double, double, bool>);
+
+// A member declaration of one of `names`: a plain type, the name, maybe a default, a semicolon
+// (so not a function's argument). The name is group 4.
+std::regex member_declaration(const std::vector<std::string>& names) {
+  std::string alternatives;
+  for (const auto& name : names) alternatives += (alternatives.empty() ? "" : "|") + name;
+  return std::regex(R"((^|\n)[ \t]*(const[ \t]+)?(double|float|int|bool|unsigned|std::size_t|std::uint32_t|std::string)[ \t]+()" +
+                    alternatives + R"()[ \t]*(=[^;\n]*[^;)\n]|\{[^;\n]*\})?[ \t]*;)");
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The guard beyond the structs above, for any module, new ones included: no header outside
+// libcvo/core/parameters.hpp and libcvo/config/config.hpp (the daemons' own sections) declares
+// a member named as a key of the table, whether its default is copied from the core struct or
+// written again.
+TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
+  const std::filesystem::path root = CVO_SOURCE_DIR;
+  // Same name, another quantity.
+  const std::set<std::pair<std::string, std::string>> other_quantities{
+      {"libcvo/loop_closure/vocabulary.hpp", "max_iterations"},  // k-medians iterations of training
+      {"libcvo/registration/registration.hpp", "max_points"},  // Capacities: no default, every caller's max_points
+      {"drivers/usb_cameras.hpp", "source"},                   // where a camera's USB ids are published
+  };
+  std::set<std::string> names;
+  for (const auto& key : config_keys()) names.insert(key.substr(key.find('.') + 1));
+  const std::regex member = member_declaration({names.begin(), names.end()});
+  const std::set<std::filesystem::path> owners{root / "libcvo/core/parameters.hpp", root / "libcvo/config/config.hpp"};
+  std::size_t headers = 0;
+  for (const char* folder : {"libcvo", "daemon", "drivers", "tools"}) {
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(root / folder)) {
+      if (entry.path().extension() != ".hpp" || owners.contains(entry.path())) continue;
+      ++headers;
+      const std::string text = read_text(entry.path());
+      const auto relative = entry.path().lexically_relative(root).generic_string();
+      for (auto m = std::sregex_iterator(text.begin(), text.end(), member); m != std::sregex_iterator(); ++m) {
+        const std::string name = (*m)[4];
+        EXPECT_TRUE(other_quantities.contains({relative, name}))
+            << relative << " declares `" << name << "`, a key of the configuration table: hold its core struct "
+            << "whole instead (libcvo/core/parameters.hpp)";
+      }
+    }
+  }
+  EXPECT_GT(headers, 100u) << "the scan found too few headers under " << root;
+}
+
+// The scan above matches what it must: the declarations this rule replaced, and nothing else.
+TEST(ConfigModuleParameters, TheScanRecognisesARedeclaredTunable) {
+  const std::regex member = member_declaration({"gamma_ell", "max_points"});
+  EXPECT_TRUE(std::regex_search("struct P {\n  double gamma_ell = core::KeyframeTrackingParameters{}.gamma_ell;\n", member));
+  EXPECT_TRUE(std::regex_search("  std::size_t max_points = 8192;  // capacity\n", member));
+  EXPECT_TRUE(std::regex_search("  double gamma_ell;\n", member));
+  EXPECT_TRUE(std::regex_search("  double gamma_ell{0.1};\n", member));
+  EXPECT_FALSE(std::regex_search("  f(int a,\n    double gamma_ell = 0.1);\n", member));  // an argument
+  EXPECT_FALSE(std::regex_search("  double gamma_ellipse = 1;\n", member));
+  EXPECT_FALSE(std::regex_search("  return parameters.gamma_ell;\n", member));
+}
+
+TEST(ConfigModuleParameters, EveryModuleGetsTheConfigurationsStructsWhole) {
+  Config c;
+  for (const char* assignment : {"selection.target_points=1500", "cvo.ell_init=0.15", "odometry.max_points=4096",
+                                 "keyframe.rotation_threshold_deg=20", "keyframe.gamma_ell=0.2",
+                                 "loop_closure.similarity_threshold=0.4", "loop_closure.orb_levels=4",
+                                 "pose_graph.cauchy_delta=1.5", "dataset.max_association_dt=0.01"})
+    apply_override(c, assignment);
 
   const auto f2f = frame_to_frame_parameters(c);
-  const odometry::FrameToFrameParameters f2f_default;
-  expect_same(f2f.selection, f2f_default.selection);
-  expect_same(f2f.cvo, f2f_default.cvo);
-  EXPECT_EQ(f2f.max_points, 8192u);
-  EXPECT_EQ(f2f.max_points, f2f_default.max_points);
-  EXPECT_EQ(f2f.restart_after_failures, 3);
-  EXPECT_EQ(f2f.restart_after_failures, f2f_default.restart_after_failures);
+  EXPECT_EQ(f2f.selection, c.selection);
+  EXPECT_EQ(f2f.cvo, c.cvo);
+  EXPECT_EQ(f2f.odometry, c.odometry);
 
   const auto kf = keyframe_odometry_parameters(c);
-  const odometry::KeyframeOdometryParameters kf_default;
-  expect_same(kf.selection, kf_default.selection);
-  expect_same(kf.cvo, kf_default.cvo);
-  EXPECT_EQ(kf.keyframe.inner_product_ratio_threshold, kf_default.keyframe.inner_product_ratio_threshold);
-  EXPECT_EQ(kf.keyframe.translation_threshold_m, kf_default.keyframe.translation_threshold_m);
-  EXPECT_EQ(kf.keyframe.rotation_threshold_deg, kf_default.keyframe.rotation_threshold_deg);
-  EXPECT_EQ(kf.max_points, 8192u);
-  EXPECT_EQ(kf.local_graph_capacity, 300u);
-  EXPECT_EQ(kf.gamma_ell, 0.1);
-  EXPECT_EQ(kf.gamma_sigma, 0.316);
-  EXPECT_EQ(kf.gamma_stride, 4u);
-  EXPECT_EQ(kf.chain_weight, 2.0);
-  EXPECT_EQ(kf.chain_full_weight_deg, 3.0);
-  EXPECT_EQ(kf.max_points, kf_default.max_points);
-  EXPECT_EQ(kf.local_graph_capacity, kf_default.local_graph_capacity);
-  EXPECT_EQ(kf.gamma_ell, kf_default.gamma_ell);
-  EXPECT_EQ(kf.gamma_sigma, kf_default.gamma_sigma);
-  EXPECT_EQ(kf.gamma_stride, kf_default.gamma_stride);
-  EXPECT_EQ(kf.chain_weight, kf_default.chain_weight);
-  EXPECT_EQ(kf.chain_full_weight_deg, kf_default.chain_full_weight_deg);
+  EXPECT_EQ(kf.selection, c.selection);
+  EXPECT_EQ(kf.cvo, c.cvo);
+  EXPECT_EQ(kf.keyframe, c.keyframe);
+  EXPECT_EQ(kf.tracking, c.keyframe_tracking);
+  EXPECT_EQ(kf.odometry, c.odometry);
 
-  const auto cv = opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd_icp);
-  const odometry::OpenCvOdometryParameters cv_default;
-  EXPECT_EQ(cv.variant, odometry::OpenCvVariant::rgbd_icp);
-  EXPECT_EQ(opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).variant, odometry::OpenCvVariant::rgbd);
-  EXPECT_EQ(cv.min_depth_m, cv_default.min_depth_m);
-  EXPECT_EQ(cv.max_depth_m, cv_default.max_depth_m);
-  EXPECT_EQ(cv.restart_after_failures, cv_default.restart_after_failures);
-
-  const auto orb = orb_parameters(c);
-  EXPECT_EQ(orb.features, 1000);
-  EXPECT_EQ(orb.scale_factor, 1.2f);  // the float the module had before, to the bit
-  EXPECT_EQ(orb.levels, 8);
-  EXPECT_EQ(orb.edge_threshold, 31);
-  EXPECT_EQ(orb.fast_threshold, 20);
-  const loop_closure::OrbParameters orb_default;
-  EXPECT_EQ(orb.scale_factor, orb_default.scale_factor);
-
-  const auto loop = loop_detector_parameters(c);
-  const loop_closure::LoopDetectorParameters loop_default;
-  EXPECT_EQ(loop.loop.similarity_threshold, loop_default.loop.similarity_threshold);
-  EXPECT_EQ(loop.loop.match_ratio, loop_default.loop.match_ratio);
-  EXPECT_EQ(loop.loop.min_matches, loop_default.loop.min_matches);
-  expect_same(loop.cvo, loop_default.cvo);
-  expect_same(loop.selection, loop_default.selection);
-  EXPECT_EQ(loop.ransac_iterations, 300);
-  EXPECT_EQ(loop.ransac_inlier_m, 0.03);
-  EXPECT_EQ(loop.min_inliers, 12);
-  EXPECT_EQ(loop.min_inlier_retention, 0.5);
-  EXPECT_EQ(loop.max_refinements, 3);
-  EXPECT_EQ(loop.max_points, 8192u);
-  EXPECT_EQ(loop.ransac_seed, 0u);
-  EXPECT_EQ(loop.ransac_iterations, loop_default.ransac_iterations);
-  EXPECT_EQ(loop.max_refinements, loop_default.max_refinements);
-  EXPECT_EQ(loop.orb.features, loop_default.orb.features);
-
-  const auto backend = backend_parameters(c);
-  const slam::BackendParameters backend_default;
-  EXPECT_EQ(backend.cauchy_delta, 2.0);
-  EXPECT_EQ(backend.bridge_information, 1.0);
-  EXPECT_EQ(backend.max_iterations, 100);
-  EXPECT_EQ(backend.cauchy_delta, backend_default.cauchy_delta);
-  EXPECT_EQ(backend.bridge_information, backend_default.bridge_information);
-  EXPECT_EQ(backend.max_iterations, backend_default.max_iterations);
+  for (const auto variant : {odometry::OpenCvVariant::rgbd, odometry::OpenCvVariant::rgbd_icp}) {
+    const auto cv = opencv_odometry_parameters(c, variant);
+    EXPECT_EQ(cv.variant, variant);
+    EXPECT_EQ(cv.selection, c.selection);
+    EXPECT_EQ(cv.odometry, c.odometry);
+  }
 
   const auto mapper = mapper_parameters(c);
-  EXPECT_EQ(mapper.detector.max_refinements, loop.max_refinements);
-  EXPECT_EQ(mapper.backend.bridge_information, backend.bridge_information);
+  EXPECT_EQ(mapper.detector.loop, c.loop_closure);
+  EXPECT_EQ(mapper.detector.verification, c.loop_verification);
+  EXPECT_EQ(mapper.detector.cvo, c.cvo);
+  EXPECT_EQ(mapper.detector.selection, c.selection);
+  EXPECT_EQ(mapper.detector.odometry, c.odometry);
+  EXPECT_EQ(mapper.backend, c.pose_graph);
 
-  EXPECT_EQ(tum_options(c).max_association_dt, io::TumOptions{}.max_association_dt);
+  EXPECT_EQ(tum_options(c).dataset, c.dataset);
+}
+
+// The modules' defaults are the configuration's: a module built without a configuration behaves
+// as one built from the defaults.
+TEST(ConfigModuleParameters, DefaultsAreTheModulesOwn) {
+  const Config c;
+  const odometry::KeyframeOdometryParameters kf_default;
+  EXPECT_EQ(keyframe_odometry_parameters(c).tracking, kf_default.tracking);
+  EXPECT_EQ(keyframe_odometry_parameters(c).odometry, kf_default.odometry);
+  const loop_closure::LoopDetectorParameters loop_default;
+  EXPECT_EQ(loop_detector_parameters(c).verification, loop_default.verification);
+  EXPECT_EQ(backend_parameters(c), slam::BackendParameters{});
+  EXPECT_EQ(posegraph::OptimizerOptions{}.pose_graph, c.pose_graph);
+  EXPECT_EQ(tum_options(c).dataset, io::TumOptions{}.dataset);
 }
 
 // One key set away from its default, and where it must then show in the modules' parameters.
@@ -140,12 +224,12 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
        }},
       {"selection.max_depth_m=3.5",
        [](const Config& c) {
-         return opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).max_depth_m == 3.5 &&
+         return opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).selection.max_depth_m == 3.5 &&
                 loop_detector_parameters(c).selection.max_depth_m == 3.5 &&
                 keyframe_odometry_parameters(c).selection.max_depth_m == 3.5;
        }},
       {"selection.min_depth_m=0.3",
-       [](const Config& c) { return opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).min_depth_m == 0.3; }},
+       [](const Config& c) { return opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).selection.min_depth_m == 0.3; }},
       {"cvo.ell_init=0.15",
        [](const Config& c) {
          return frame_to_frame_parameters(c).cvo.ell_init == 0.15 && keyframe_odometry_parameters(c).cvo.ell_init == 0.15 &&
@@ -153,50 +237,51 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
        }},
       {"odometry.max_points=4096",
        [](const Config& c) {
-         return frame_to_frame_parameters(c).max_points == 4096 && keyframe_odometry_parameters(c).max_points == 4096 &&
-                loop_detector_parameters(c).max_points == 4096;
+         return frame_to_frame_parameters(c).odometry.max_points == 4096 &&
+                keyframe_odometry_parameters(c).odometry.max_points == 4096 &&
+                loop_detector_parameters(c).odometry.max_points == 4096;
        }},
       {"odometry.restart_after_failures=5",
        [](const Config& c) {
-         return frame_to_frame_parameters(c).restart_after_failures == 5 &&
-                opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd_icp).restart_after_failures == 5;
+         return frame_to_frame_parameters(c).odometry.restart_after_failures == 5 &&
+                opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd_icp).odometry.restart_after_failures == 5;
        }},
       {"keyframe.rotation_threshold_deg=20",
        [](const Config& c) { return keyframe_odometry_parameters(c).keyframe.rotation_threshold_deg == 20; }},
       {"keyframe.local_graph_capacity=2",
-       [](const Config& c) { return keyframe_odometry_parameters(c).local_graph_capacity == 2; }},
-      {"keyframe.gamma_ell=0.2", [](const Config& c) { return keyframe_odometry_parameters(c).gamma_ell == 0.2; }},
-      {"keyframe.gamma_sigma=0.1", [](const Config& c) { return keyframe_odometry_parameters(c).gamma_sigma == 0.1; }},
-      {"keyframe.gamma_stride=1", [](const Config& c) { return keyframe_odometry_parameters(c).gamma_stride == 1; }},
-      {"keyframe.chain_weight=0", [](const Config& c) { return keyframe_odometry_parameters(c).chain_weight == 0; }},
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.local_graph_capacity == 2; }},
+      {"keyframe.gamma_ell=0.2", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_ell == 0.2; }},
+      {"keyframe.gamma_sigma=0.1", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_sigma == 0.1; }},
+      {"keyframe.gamma_stride=1", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_stride == 1; }},
+      {"keyframe.chain_weight=0", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_weight == 0; }},
       {"keyframe.chain_full_weight_deg=10",
-       [](const Config& c) { return keyframe_odometry_parameters(c).chain_full_weight_deg == 10; }},
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_full_weight_deg == 10; }},
       {"loop_closure.similarity_threshold=0.4",
        [](const Config& c) { return mapper_parameters(c).detector.loop.similarity_threshold == 0.4; }},
       {"loop_closure.max_refinements=0",
-       [](const Config& c) { return mapper_parameters(c).detector.max_refinements == 0; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.max_refinements == 0; }},
       {"loop_closure.ransac_iterations=50",
-       [](const Config& c) { return mapper_parameters(c).detector.ransac_iterations == 50; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.ransac_iterations == 50; }},
       {"loop_closure.ransac_inlier_m=0.05",
-       [](const Config& c) { return mapper_parameters(c).detector.ransac_inlier_m == 0.05; }},
-      {"loop_closure.min_inliers=20", [](const Config& c) { return mapper_parameters(c).detector.min_inliers == 20; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.ransac_inlier_m == 0.05; }},
+      {"loop_closure.min_inliers=20", [](const Config& c) { return mapper_parameters(c).detector.verification.min_inliers == 20; }},
       {"loop_closure.min_inlier_retention=0.8",
-       [](const Config& c) { return mapper_parameters(c).detector.min_inlier_retention == 0.8; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.min_inlier_retention == 0.8; }},
       {"loop_closure.ransac_seed=4294967295",
-       [](const Config& c) { return mapper_parameters(c).detector.ransac_seed == 4294967295u; }},
-      {"loop_closure.orb_features=500", [](const Config& c) { return mapper_parameters(c).detector.orb.features == 500; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.ransac_seed == 4294967295u; }},
+      {"loop_closure.orb_features=500", [](const Config& c) { return mapper_parameters(c).detector.verification.orb_features == 500; }},
       {"loop_closure.orb_scale_factor=1.5",
-       [](const Config& c) { return mapper_parameters(c).detector.orb.scale_factor == 1.5f; }},
-      {"loop_closure.orb_levels=4", [](const Config& c) { return mapper_parameters(c).detector.orb.levels == 4; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.orb_scale_factor == 1.5; }},
+      {"loop_closure.orb_levels=4", [](const Config& c) { return mapper_parameters(c).detector.verification.orb_levels == 4; }},
       {"loop_closure.orb_edge_threshold=40",
-       [](const Config& c) { return mapper_parameters(c).detector.orb.edge_threshold == 40; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.orb_edge_threshold == 40; }},
       {"loop_closure.orb_fast_threshold=10",
-       [](const Config& c) { return mapper_parameters(c).detector.orb.fast_threshold == 10; }},
+       [](const Config& c) { return mapper_parameters(c).detector.verification.orb_fast_threshold == 10; }},
       {"pose_graph.cauchy_delta=1.5", [](const Config& c) { return mapper_parameters(c).backend.cauchy_delta == 1.5; }},
       {"pose_graph.bridge_information=0.25",
        [](const Config& c) { return mapper_parameters(c).backend.bridge_information == 0.25; }},
       {"pose_graph.max_iterations=20", [](const Config& c) { return mapper_parameters(c).backend.max_iterations == 20; }},
-      {"dataset.max_association_dt=0.01", [](const Config& c) { return tum_options(c).max_association_dt == 0.01; }},
+      {"dataset.max_association_dt=0.01", [](const Config& c) { return tum_options(c).dataset.max_association_dt == 0.01; }},
   };
   for (const auto& r : reaches) {
     EXPECT_FALSE(r.reached(Config{})) << r.assignment << ": already the default";

@@ -74,14 +74,14 @@ TEST(TumDataset, OptionsLimitFramesAndAssociation) {
   EXPECT_EQ(seq.size(), 5u);
   EXPECT_DOUBLE_EQ(seq.intrinsics().fx, 535.4);  // the caller's camera wins over the folder name
 
-  options.max_association_dt = 1e-6;  // the sample's pairs are ~36 µs apart at best
+  options.dataset.max_association_dt = 1e-6;  // the sample's pairs are ~36 µs apart at best
   try {
     TumSequence::open(kSample, options);
     FAIL();
   } catch (const InputError& e) {
     EXPECT_TRUE(contains(e, "no colour image")) << e.what();
   }
-  options.max_association_dt = -1;
+  options.dataset.max_association_dt = -1;
   EXPECT_THROW(TumSequence::open(kSample, options), std::invalid_argument);
 }
 

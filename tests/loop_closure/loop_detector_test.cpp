@@ -144,7 +144,7 @@ TEST_F(LoopDetectorTest, RefinesAtMostMaxRefinementsCandidatesBestEtaFirst) {
   };
   const auto run = [&](int max_refinements) {
     LoopDetectorParameters parameters;
-    parameters.max_refinements = max_refinements;
+    parameters.verification.max_refinements = max_refinements;
     LoopDetector d(Vocabulary::load(CVO_DEFAULT_VOCABULARY), parameters);
     for (std::size_t n = 0; n < k.size(); ++n) d.add_keyframe(static_cast<std::int64_t>(n), k[n].frame, k[n].cloud, k[n].truth);
     print_attempts(static_cast<std::int64_t>(k.size() - 1), d);

@@ -75,7 +75,7 @@ inline TestKeyframe rendered_keyframe(double seconds) {
 
 inline LoopKeyframe loop_keyframe(std::int64_t id, const TestKeyframe& k, const core::SE3& pose,
                                   const LoopDetectorParameters& parameters = {}) {
-  return make_loop_keyframe(id, extract_orb(k.frame.bgr, parameters.orb), k.frame, k.cloud, pose, parameters);
+  return make_loop_keyframe(id, extract_orb(k.frame.bgr, parameters.verification), k.frame, k.cloud, pose, parameters);
 }
 
 /// Odometry-like drift: the true pose moved by exp(s ξ) in the world, ξ = 5 cm and 3° in total.

@@ -21,7 +21,7 @@ namespace {
 using testing::deg;
 
 registration::Registration make_registration(const LoopDetectorParameters& p = {}) {
-  return registration::Registration(registration::Capacities{p.max_points}, p.cvo);
+  return registration::Registration(registration::Capacities{p.odometry.max_points}, p.cvo);
 }
 
 // Keyframe j at frame a, keyframe i at frame b, their estimates the truth with 0 and 1 units of
@@ -162,7 +162,7 @@ TEST(LoopVerification, ACvoPoseThatLeavesTheMatchesIsRefused) {
   EXPECT_LT(wrong.attempt.inliers_kept, wrong.attempt.inliers / 2);
   // Without step 3b the loop would have gone in: CVO found the clouds' pose, and α was positive.
   LoopDetectorParameters unguarded = parameters;
-  unguarded.min_inlier_retention = 0;
+  unguarded.verification.min_inlier_retention = 0;
   const auto accepted = verify_loop(p.i, p.j, unguarded, registration);
   ASSERT_TRUE(accepted.closure.has_value()) << accepted.attempt.verdict;
   const auto error = testing::pose_error(accepted.closure->measurement, S * p.truth);

@@ -20,7 +20,7 @@ TEST(OrbFeatures, RealFrameGivesUpToTheRequestedNumberOf256BitDescriptors) {
   EXPECT_EQ(f.descriptors.cols, 32);
   EXPECT_EQ(static_cast<std::size_t>(f.descriptors.rows), f.keypoints.size());
 
-  const OrbFeatures few = extract_orb(bgr, {.features = 100});
+  const OrbFeatures few = extract_orb(bgr, {.orb_features = 100});
   EXPECT_LE(few.keypoints.size(), 100u);
   EXPECT_GT(few.keypoints.size(), 50u);
 }
@@ -45,8 +45,8 @@ TEST(OrbFeatures, TexturelessImageGivesAnEmpty0x32Matrix) {
 TEST(OrbFeatures, RejectsOtherImageTypesAndBadParameters) {
   EXPECT_THROW(extract_orb(cv::Mat(48, 64, CV_32FC1, cv::Scalar(0.5))), std::invalid_argument);
   EXPECT_THROW(extract_orb(cv::Mat()), std::invalid_argument);
-  EXPECT_THROW(extract_orb(cv::Mat(48, 64, CV_8UC3), {.features = 0}), std::invalid_argument);
-  EXPECT_THROW(extract_orb(cv::Mat(48, 64, CV_8UC3), {.scale_factor = 1.0f}), std::invalid_argument);
+  EXPECT_THROW(extract_orb(cv::Mat(48, 64, CV_8UC3), {.orb_features = 0}), std::invalid_argument);
+  EXPECT_THROW(extract_orb(cv::Mat(48, 64, CV_8UC3), {.orb_scale_factor = 1.0}), std::invalid_argument);
 }
 
 }  // namespace

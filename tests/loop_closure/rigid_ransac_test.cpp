@@ -59,7 +59,7 @@ TEST(RigidRansac, RecoversATransformFromCorrespondencesWithFortyPercentOutliers)
   const auto plain = kTruth.inverse() * *fit_rigid(c.src, c.dst);
   EXPECT_GT(plain.translation().norm() + plain.angle(), 0.1);
 
-  const RigidFit fit = ransac_rigid(c.src, c.dst, RansacParameters{});
+  const RigidFit fit = ransac_rigid(c.src, c.dst, core::LoopVerificationParameters{});
   ASSERT_TRUE(fit.found);
   const auto e = kTruth.inverse() * fit.transform;
   std::printf("true inliers %zu, found %zu; error %.2f mm, %.3f deg; rms %.2f mm\n", true_inliers, fit.inliers.size(),
@@ -76,8 +76,8 @@ TEST(RigidRansac, RecoversATransformFromCorrespondencesWithFortyPercentOutliers)
 
 TEST(RigidRansac, IsDeterministicForAGivenSeed) {
   const auto c = make_correspondences(kTruth, 100, 0.4, 0.004, 3);
-  const RigidFit a = ransac_rigid(c.src, c.dst, RansacParameters{});
-  const RigidFit b = ransac_rigid(c.src, c.dst, RansacParameters{});
+  const RigidFit a = ransac_rigid(c.src, c.dst, core::LoopVerificationParameters{});
+  const RigidFit b = ransac_rigid(c.src, c.dst, core::LoopVerificationParameters{});
   ASSERT_TRUE(a.found);
   EXPECT_EQ(a.inliers, b.inliers);
   EXPECT_EQ(a.transform.matrix(), b.transform.matrix());
@@ -86,20 +86,20 @@ TEST(RigidRansac, IsDeterministicForAGivenSeed) {
 TEST(RigidRansac, RefusesUnrelatedPointsAndTooFewCorrespondences) {
   // Only outliers: no 3-point model gathers 12 inliers within 3 cm in a 12 m³ box.
   const auto c = make_correspondences(kTruth, 200, 1.0, 0.0, 5);
-  const RigidFit fit = ransac_rigid(c.src, c.dst, RansacParameters{});
+  const RigidFit fit = ransac_rigid(c.src, c.dst, core::LoopVerificationParameters{});
   EXPECT_FALSE(fit.found);
   EXPECT_TRUE(fit.inliers.empty());
 
   const auto few = make_correspondences(kTruth, 2, 0.0, 0.0, 6);
-  EXPECT_FALSE(ransac_rigid(few.src, few.dst, RansacParameters{.min_inliers = 0}).found);
+  EXPECT_FALSE(ransac_rigid(few.src, few.dst, core::LoopVerificationParameters{.min_inliers = 0}).found);
   // Clean but fewer than min_inliers.
   const auto some = make_correspondences(kTruth, 10, 0.0, 0.001, 8);
-  EXPECT_FALSE(ransac_rigid(some.src, some.dst, RansacParameters{}).found);
-  EXPECT_TRUE(ransac_rigid(some.src, some.dst, RansacParameters{.min_inliers = 8}).found);
+  EXPECT_FALSE(ransac_rigid(some.src, some.dst, core::LoopVerificationParameters{}).found);
+  EXPECT_TRUE(ransac_rigid(some.src, some.dst, core::LoopVerificationParameters{.min_inliers = 8}).found);
   // Mismatched sizes.
   auto bad = some;
   bad.dst.pop_back();
-  EXPECT_FALSE(ransac_rigid(bad.src, bad.dst, RansacParameters{.min_inliers = 3}).found);
+  EXPECT_FALSE(ransac_rigid(bad.src, bad.dst, core::LoopVerificationParameters{.min_inliers = 3}).found);
 }
 
 }  // namespace

@@ -246,7 +246,7 @@ TEST(KeyframeOdometry, ChainFusionStaysAccurateAndZeroWeightPublishesTheKeyframe
   const auto frames = constant_motion(step, 12);
   for (const double weight : {0.0, 2.0}) {
     auto p = only(0.0, 1.0, 180.0);
-    p.chain_weight = weight;
+    p.tracking.chain_weight = weight;
     KeyframeOdometry odometry(320, 240, p);
     core::SE3 first;
     std::vector<core::SE3> poses;

@@ -43,7 +43,7 @@ struct Arguments {
   fs::path file;               // OUT.voc or FILE.voc
   std::vector<fs::path> inputs;
   loop_closure::VocabularyParameters vocabulary;
-  loop_closure::OrbParameters orb;
+  core::LoopVerificationParameters orb;  // its orb_* (extract_orb)
   std::size_t every = 1;
 };
 
@@ -65,7 +65,7 @@ void add_train(CLI::App& app, Arguments& args) {
   add_count(*train, "--levels", args.vocabulary.levels, "depth of the tree: at most K^L words", 1, 16);
   add_count<std::size_t>(*train, "--every", args.every, "take every N-th image of each folder, from the first", 1,
                          1'000'000);
-  add_count(*train, "--features", args.orb.features, "ORB features per image", 1, 1'000'000);
+  add_count(*train, "--features", args.orb.orb_features, "ORB features per image", 1, 1'000'000);
   train->add_option("--seed", args.vocabulary.seed, "seed of the k-means++ seeding, unsigned 64-bit")
       ->transform(program::kDecimal);
 }

@@ -107,7 +107,7 @@ Eigen::Matrix<double, 6, 6> square_root(const Eigen::Matrix<double, 6, 6>& omega
 
 Result run_ours(PoseGraph graph, const Options& options) {
   cvo::posegraph::OptimizerOptions o;
-  o.max_iterations = options.max_iterations;
+  o.pose_graph.max_iterations = options.max_iterations;
   const auto report = cvo::posegraph::optimize(graph, o);
   return {"cvo",
           report.initial_cost,
