@@ -49,8 +49,8 @@ void print_table(const std::vector<Stage>& stages, const std::vector<double>& it
   for (const auto& s : stages)
     std::printf("| %s | %.2f | %.2f | %.2f | %.0f %% |\n", s.name, percentile(s.ms, 50), percentile(s.ms, 99),
                 mean(s.ms), total > 0 ? 100.0 * mean(s.ms) / total : 0.0);
-  std::printf("\nsolver iterations per frame (both registrations): median %.0f, p99 %.0f\n",
-              percentile(iterations, 50), percentile(iterations, 99));
+  std::printf("\nsolver iterations per frame (both registrations): median %.0f, p99 %.0f\n", percentile(iterations, 50),
+              percentile(iterations, 99));
 }
 
 int run(const fs::path& sequence_dir, std::size_t max_frames, const std::vector<std::string>& settings,
@@ -66,9 +66,9 @@ int run(const fs::path& sequence_dir, std::size_t max_frames, const std::vector<
 
   const auto& camera = sequence.intrinsics();
   odometry::KeyframeOdometry tracker(camera.width, camera.height, config::keyframe_odometry_parameters(config));
-  std::vector<Stage> stages{{"point selection", {}},      {"frame-to-frame registration", {}},
+  std::vector<Stage> stages{{"point selection", {}},       {"frame-to-frame registration", {}},
                             {"keyframe registration", {}}, {"γ inner products", {}},
-                            {"rest of track()", {}},        {"whole frame", {}}};
+                            {"rest of track()", {}},       {"whole frame", {}}};
   std::vector<double> iterations;
   std::size_t keyframes = 0;
   std::map<std::string, std::size_t> reasons;
@@ -82,8 +82,8 @@ int run(const fs::path& sequence_dir, std::size_t max_frames, const std::vector<
     if (r.keyframe) ++reasons[odometry::to_string(r.reason)];
     if (r.status != odometry::TrackStatus::kOk) continue;  // first frames and failures: not the steady state
     const double parts = r.selection_ms + r.frame_registration_ms + r.keyframe_registration_ms + r.gamma_ms;
-    const double values[] = {r.selection_ms, r.frame_registration_ms, r.keyframe_registration_ms, r.gamma_ms,
-                             std::max(0.0, whole - parts), whole};
+    const double values[] = {r.selection_ms, r.frame_registration_ms,      r.keyframe_registration_ms,
+                             r.gamma_ms,     std::max(0.0, whole - parts), whole};
     for (std::size_t i = 0; i < stages.size(); ++i) stages[i].ms.push_back(values[i]);
     iterations.push_back(r.iterations);
   }

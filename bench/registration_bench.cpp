@@ -82,7 +82,8 @@ void BM_Align(benchmark::State& state) {
   core::CvoParameters parameters;
   parameters.threads = static_cast<int>(state.range(1));
   if (state.range(2) == 1) parameters.sigma = std::sqrt(0.1);
-  registration::Registration reg(registration::Capacities{8192, static_cast<std::size_t>(state.range(3))}, parameters, isa);
+  registration::Registration reg(registration::Capacities{8192, static_cast<std::size_t>(state.range(3))}, parameters,
+                                 isa);
   std::size_t i = 0;
   double iterations = 0, pairs = 0;
   for (auto _ : state) {

@@ -57,10 +57,12 @@ void DepthRegistration::apply(const cv::Mat& depth, cv::Mat& registered) const {
     throw std::invalid_argument("depth registration: depth image is not " + std::to_string(d.width) + "x" +
                                 std::to_string(d.height) + " 16-bit");
   registered.create(colour_.height, colour_.width, CV_16UC1);  // no allocation when already so
-  for (int y = 0; y < registered.rows; ++y)  // not setTo(0): that allocates
+  for (int y = 0; y < registered.rows; ++y)                    // not setTo(0): that allocates
     std::fill_n(registered.ptr<std::uint16_t>(y), registered.cols, std::uint16_t{0});
   const auto to_metres = static_cast<float>(1.0 / d.depth_scale), to_raw = static_cast<float>(colour_.depth_scale);
-  const auto corner = [&](int u, int v) { return corners_.data() + 3 * (static_cast<std::size_t>(v) * (d.width + 1) + u); };
+  const auto corner = [&](int u, int v) {
+    return corners_.data() + 3 * (static_cast<std::size_t>(v) * (d.width + 1) + u);
+  };
   for (int v = 0; v < d.height; ++v) {
     const auto* row = depth.ptr<std::uint16_t>(v);
     for (int u = 0; u < d.width; ++u) {

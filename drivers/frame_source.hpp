@@ -13,11 +13,11 @@
 #include <string>
 #include <string_view>
 
+#include "libcvo/core/bad_kind.hpp"
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/depth_sensor.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/io/input_error.hpp"
-#include "libcvo/core/bad_kind.hpp"
 
 namespace cvo::drivers {
 
@@ -38,7 +38,7 @@ struct ReadResult {
 };
 
 struct SourceOptions {
-  bool realtime = true;               // tum: pace frames at their recorded rate (else as fast as possible)
+  bool realtime = true;  // tum: pace frames at their recorded rate (else as fast as possible)
   std::string lcm_channel = "CVO_RGBD";
   // Intrinsics for sources that do not carry them (v4l2; TUM folders without camera.yaml and
   // with an unrecognised name). nullopt: the source's own, or its best guess.

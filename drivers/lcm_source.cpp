@@ -28,7 +28,8 @@ class LcmSource final : public FrameSource {
   LcmSource(std::string url, const SourceOptions& options)
       : url_(std::move(url)), channel_(options.lcm_channel), is_log_(url_.starts_with("file://")), lcm_(url_) {
     if (!lcm_.good())
-      throw SourceError("lcm:" + url_, "LCM cannot open this provider (a bad URL, or a log file that is missing or empty)");
+      throw SourceError("lcm:" + url_,
+                        "LCM cannot open this provider (a bad URL, or a log file that is missing or empty)");
     ::lcm::Subscription* subscription = lcm_.subscribe(channel_, &LcmSource::on_message, this);
     if (subscription == nullptr) throw SourceError("lcm:" + url_, "cannot subscribe to channel " + channel_);
     subscription->setQueueCapacity(kQueueCapacity);
@@ -74,7 +75,8 @@ class LcmSource final : public FrameSource {
     }
     if (buffer->data_size > static_cast<std::uint32_t>(INT_MAX)) {
       gaps_.unreadable();
-      result_ = bad_input(core::BadKind::kBody, "CVO_RGBD: a message of " + std::to_string(buffer->data_size) + " bytes");
+      result_ =
+          bad_input(core::BadKind::kBody, "CVO_RGBD: a message of " + std::to_string(buffer->data_size) + " bytes");
       return;
     }
     std::string error;

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
-#include <chrono>
 #include <cctype>
+#include <chrono>
 #include <climits>
 #include <cmath>
 #include <optional>
@@ -68,8 +68,9 @@ openni::VideoMode find_mode(const openni::VideoStream& stream, openni::PixelForm
     if (m.getResolutionX() == o.width && m.getResolutionY() == o.height && m.getFps() == o.fps) return m;
     offered += (offered.empty() ? "" : ", ") + mode_text(m);
   }
-  throw SourceError(spec, std::string(what) + " has no mode " + std::to_string(o.width) + "x" + std::to_string(o.height) +
-                              "@" + std::to_string(o.fps) + " (offers: " + (offered.empty() ? "none" : offered) + ")");
+  throw SourceError(spec, std::string(what) + " has no mode " + std::to_string(o.width) + "x" +
+                              std::to_string(o.height) + "@" + std::to_string(o.fps) +
+                              " (offers: " + (offered.empty() ? "none" : offered) + ")");
 }
 
 // The device's own camera model when it gives one (the cvo-virtual driver does), else from the
@@ -204,10 +205,12 @@ class OpenNi2Source final : public FrameSource {
     if (const auto bad = intrinsics_.validate(); !bad.empty()) throw SourceError(spec_, "intrinsics: " + bad);
     if (intrinsics_.width != width_ || intrinsics_.height != height_)
       throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
-                                   std::to_string(intrinsics_.height) + " but the streams are " + mode_text(colour_mode));
+                                   std::to_string(intrinsics_.height) + " but the streams are " +
+                                   mode_text(colour_mode));
 
     if (depth_.start() != openni::STATUS_OK) throw SourceError(spec_, "depth stream does not start: " + openni_error());
-    if (colour_.start() != openni::STATUS_OK) throw SourceError(spec_, "colour stream does not start: " + openni_error());
+    if (colour_.start() != openni::STATUS_OK)
+      throw SourceError(spec_, "colour stream does not start: " + openni_error());
   }
 
   ~OpenNi2Source() override {
@@ -292,8 +295,8 @@ class OpenNi2Source final : public FrameSource {
     const auto& colour = frames_[1];
     if (depth.getWidth() != width_ || depth.getHeight() != height_ || colour.getWidth() != width_ ||
         colour.getHeight() != height_)
-      return bad_input(core::BadKind::kContent, spec_ + ": a frame of another size than the stream's " + std::to_string(width_) + "x" +
-                  std::to_string(height_));
+      return bad_input(core::BadKind::kContent, spec_ + ": a frame of another size than the stream's " +
+                                                    std::to_string(width_) + "x" + std::to_string(height_));
     // OpenNI's buffers are only borrowed: wrap them, convert or copy into the caller's images.
     const cv::Mat rgb(height_, width_, CV_8UC3, const_cast<void*>(colour.getData()),
                       static_cast<std::size_t>(colour.getStrideInBytes()));
@@ -319,7 +322,7 @@ class OpenNi2Source final : public FrameSource {
   UnplugWatch watch_;
   openni::Device device_;  // declared first: the streams are destroyed before it closes
   openni::VideoStream depth_, colour_;
-  openni::Recorder recorder_;  // after the streams: destroyed before them
+  openni::Recorder recorder_;                    // after the streams: destroyed before them
   std::array<openni::VideoFrameRef, 2> frames_;  // [0] depth, [1] colour, as in read()'s stream list
   std::array<bool, 2> fresh_{false, false};      // frames_[s] not yet returned
   std::array<int, 2> last_index_{0, 0};

@@ -33,7 +33,10 @@ ReconnectingSource::ReconnectingSource(std::string name, Opener open, Backoff ba
 
 ReconnectingSource::ReconnectingSource(std::string name, Opener open, Backoff backoff,
                                        std::function<std::string()> identify)
-    : name_(std::move(name)), open_(std::move(open)), backoff_(backoff), identify_(std::move(identify)),
+    : name_(std::move(name)),
+      open_(std::move(open)),
+      backoff_(backoff),
+      identify_(std::move(identify)),
       wait_(backoff.initial) {}
 
 ReconnectingSource::~ReconnectingSource() { watch_.reset(); }  // no arrival after this
@@ -58,8 +61,8 @@ ReadResult ReconnectingSource::read(core::RgbdFrame& frame, std::chrono::millise
   if (!source_) {
     if (auto not_open = try_open(deadline)) return *not_open;
   }
-  const auto left = std::max(std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()),
-                             std::chrono::milliseconds(0));
+  const auto left =
+      std::max(std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()), std::chrono::milliseconds(0));
   ReadResult outcome = source_->read(frame, left);
   if (outcome.status == ReadStatus::kDisconnected) {
     lost_before_ += source_->lost_frames();
@@ -72,7 +75,7 @@ ReadResult ReconnectingSource::read(core::RgbdFrame& frame, std::chrono::millise
 // What read() returns when the source is still not open; nullopt once it is.
 std::optional<ReadResult> ReconnectingSource::try_open(Clock::time_point deadline) {
   if (wait_for_arrival(std::min(next_attempt_, deadline))) {
-    wait_ = backoff_.initial;  // plugged in: try now, and soon again if it is not ready yet
+    wait_ = backoff_.initial;             // plugged in: try now, and soon again if it is not ready yet
   } else if (next_attempt_ > deadline) {  // not due within this read
     return result(ReadStatus::kTimeout, last_error_);
   }
@@ -112,9 +115,7 @@ std::string ReconnectingSource::describe() const {
   return name_ + " (disconnected" + (last_error_.empty() ? "" : ": " + last_error_) + ")";
 }
 
-std::uint64_t ReconnectingSource::lost_frames() const {
-  return lost_before_ + (source_ ? source_->lost_frames() : 0);
-}
+std::uint64_t ReconnectingSource::lost_frames() const { return lost_before_ + (source_ ? source_->lost_frames() : 0); }
 
 std::chrono::steady_clock::duration ReconnectingSource::disconnected_time() const {
   auto total = closed_gaps_time_;

@@ -5,9 +5,9 @@
 //
 // read() never waits past its timeout for the back-off: when the next attempt is due later, it
 // waits out the timeout and returns kTimeout; when it is due sooner, it waits for it, tries once
-// and returns. Only an open attempt itself cannot be cut short (a device may take a moment to open). The first failure of each gap is returned as kDisconnected
-// with the error; the reads that retry while the source stays away return kTimeout with the latest
-// error as the message. kEndOfStream, kBadInput and frames pass through unchanged.
+// and returns. Only an open attempt itself cannot be cut short (a device may take a moment to open). The first failure
+// of each gap is returned as kDisconnected with the error; the reads that retry while the source stays away return
+// kTimeout with the latest error as the message. kEndOfStream, kBadInput and frames pass through unchanged.
 //
 // Opened by spec, it also listens for libusb hot-plug arrivals of the cameras that spec's scheme
 // opens (cameras.tsv): an arrival makes the next attempt due at once (a waiting read wakes for it)

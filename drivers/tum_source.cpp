@@ -28,7 +28,7 @@ class TumSource final : public FrameSource {
       std::this_thread::sleep_until(due);
     }
     try {
-      frame = *sequence_.next();  // position < size, so there is a next frame
+      frame = *sequence_.next();         // position < size, so there is a next frame
     } catch (const io::FrameError& e) {  // next() has moved past it: the following read goes on
       return bad_input(core::BadKind::kContent, e.what());
     }

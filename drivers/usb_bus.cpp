@@ -175,8 +175,7 @@ std::string usb_open_hint(std::string_view spec) {
     }
   }
   try {
-    return explain_open_failure(spec, enumerate_cameras(CameraTable::load()), named,
-                                current_user());
+    return explain_open_failure(spec, enumerate_cameras(CameraTable::load()), named, current_user());
   } catch (const std::exception& e) {
     return std::string("libusb cannot tell more: ") + e.what();
   }

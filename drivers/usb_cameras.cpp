@@ -72,8 +72,8 @@ bool in_group(const UserIds& user, gid_t gid) {
 }
 
 std::string usb_rule_match(UsbIds ids) {
-  return "SUBSYSTEM==\"usb\", ATTR{idVendor}==\"" + hex4(ids.vendor) + "\", ATTR{idProduct}==\"" +
-         hex4(ids.product) + "\"";
+  return "SUBSYSTEM==\"usb\", ATTR{idVendor}==\"" + hex4(ids.vendor) + "\", ATTR{idProduct}==\"" + hex4(ids.product) +
+         "\"";
 }
 
 }  // namespace
@@ -95,7 +95,7 @@ std::optional<UsbSpeed> parse_usb_speed(std::string_view name) {
 std::string to_string(UsbIds ids) { return hex4(ids.vendor) + ":" + hex4(ids.product); }
 
 CameraTable CameraTable::parse(std::string_view text, const std::filesystem::path& file) {
-  static constexpr std::array<std::string_view, 7> kHeader{"vendor", "product", "name", "scheme",
+  static constexpr std::array<std::string_view, 7> kHeader{"vendor", "product", "name",  "scheme",
                                                            "speed",  "spec",    "source"};
   std::vector<KnownCamera> cameras;
   bool header = false;
@@ -106,8 +106,9 @@ CameraTable CameraTable::parse(std::string_view text, const std::filesystem::pat
     if (line.empty() || line.front() == '#') continue;
     const auto f = split(line, '\t');
     if (f.size() != kHeader.size())
-      throw io::InputError(file, number, "expected " + std::to_string(kHeader.size()) +
-                                             " tab-separated columns, found " + std::to_string(f.size()));
+      throw io::InputError(
+          file, number,
+          "expected " + std::to_string(kHeader.size()) + " tab-separated columns, found " + std::to_string(f.size()));
     if (!header) {
       if (!std::equal(f.begin(), f.end(), kHeader.begin()))
         throw io::InputError(file, number, "expected the header: vendor product name scheme speed spec source");
@@ -198,7 +199,8 @@ std::string diagnose_node(const NodeAccess& node, const UserIds& user, std::stri
            ", then log in again)";
   return why + "add a udev rule (e.g. /etc/udev/rules.d/99-cvo-cameras.rules: " + std::string(rule_match) +
          ", MODE=\"0660\", GROUP=\"plugdev\"; then sudo udevadm control --reload-rules, replug) and add the user to "
-         "group plugdev (sudo usermod -aG plugdev " + user.name + ")";
+         "group plugdev (sudo usermod -aG plugdev " +
+         user.name + ")";
 }
 
 std::string diagnose(const FoundCamera& camera, const UserIds& user) {

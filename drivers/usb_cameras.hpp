@@ -101,8 +101,8 @@ struct FoundCamera {
   std::uint8_t bus = 0, address = 0;
   std::vector<std::uint8_t> ports;  // the port path from the root hub
   UsbSpeed speed = UsbSpeed::kUnknown;
-  std::string serial;      // empty when the device cannot be opened to read it
-  NodeAccess node;         // /dev/bus/usb/BBB/DDD
+  std::string serial;                    // empty when the device cannot be opened to read it
+  NodeAccess node;                       // /dev/bus/usb/BBB/DDD
   std::vector<std::string> video_nodes;  // /dev/videoN of its interfaces (V4L2 cameras), from sysfs
 };
 

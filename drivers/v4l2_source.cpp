@@ -105,15 +105,15 @@ class V4l2Node {
       f.fmt.pix.pixelformat = fourcc;
       f.fmt.pix.field = V4L2_FIELD_NONE;
       if (xioctl(fd_.get(), VIDIOC_S_FMT, &f) == 0 && f.fmt.pix.pixelformat == fourcc &&
-          f.fmt.pix.width == static_cast<std::uint32_t>(width) && f.fmt.pix.height == static_cast<std::uint32_t>(height)) {
+          f.fmt.pix.width == static_cast<std::uint32_t>(width) &&
+          f.fmt.pix.height == static_cast<std::uint32_t>(height)) {
         fourcc_ = fourcc;
         bytes_per_line_ = static_cast<int>(std::max(f.fmt.pix.bytesperline, f.fmt.pix.width * 2));
         break;
       }
       tried += (tried.empty() ? "" : ", ") + fourcc_text(fourcc);
     }
-    if (fourcc_ == 0)
-      fail("does not stream " + tried + " at " + std::to_string(width) + "x" + std::to_string(height));
+    if (fourcc_ == 0) fail("does not stream " + tried + " at " + std::to_string(width) + "x" + std::to_string(height));
     // A request: some drivers have fixed rates, and the pairing only needs the real one.
     v4l2_streamparm parm{};
     parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -323,9 +323,7 @@ class V4l2Source final : public FrameSource {
     return result(ReadStatus::kFrame);
   }
 
-  static ReadResult disconnected(std::string why) {
-    return result(ReadStatus::kDisconnected, std::move(why));
-  }
+  static ReadResult disconnected(std::string why) { return result(ReadStatus::kDisconnected, std::move(why)); }
 
   V4l2Node colour_, depth_;
   const core::Intrinsics intrinsics_;

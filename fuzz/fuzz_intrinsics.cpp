@@ -11,6 +11,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   // What was accepted, written as cvo-render writes camera.yaml, must read again: outside the
   // refusal filter, so a refusal here is a finding. Not for a calibration.txt without an image
   // size (width = height = 0): the YAML form requires one.
-  if (intrinsics && intrinsics->width > 0) (void)cvo::io::parse_intrinsics(cvo::io::format_intrinsics_yaml(*intrinsics, "fuzz"), "<formatted>");
+  if (intrinsics && intrinsics->width > 0)
+    (void)cvo::io::parse_intrinsics(cvo::io::format_intrinsics_yaml(*intrinsics, "fuzz"), "<formatted>");
   return 0;
 }

@@ -71,7 +71,9 @@ int main(int argc, char** argv) try {
   const auto frame = small_frame();
   write(out / "rgbd/raw", encode(cvo::test::sample_rgbd()));
   const std::pair<const char*, cvo::lcm::RgbdEncoding> encodings[] = {
-      {"png", {Colour::kPng, Depth::kPng}}, {"jpeg", {Colour::kJpeg, Depth::kPng}}, {"raw-8x6", {Colour::kRawBgr8, Depth::kRawU16Le}}};
+      {"png", {Colour::kPng, Depth::kPng}},
+      {"jpeg", {Colour::kJpeg, Depth::kPng}},
+      {"raw-8x6", {Colour::kRawBgr8, Depth::kRawU16Le}}};
   for (const auto& [name, encoding] : encodings)
     write(out / "rgbd" / name, encode(checked(cvo::lcm::to_message(frame, encoding, &error), error)));
 

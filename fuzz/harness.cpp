@@ -23,9 +23,9 @@ struct Scratch {
   std::filesystem::path dir;
   Scratch() {
     const char* tmpdir = std::getenv("TMPDIR");
-    std::string base = tmpdir != nullptr && *tmpdir != '\0' ? tmpdir
+    std::string base = tmpdir != nullptr && *tmpdir != '\0'        ? tmpdir
                        : std::filesystem::is_directory("/dev/shm") ? "/dev/shm"
-                                                                    : "/tmp";
+                                                                   : "/tmp";
     std::string pattern = base + "/cvo-fuzz-XXXXXX";
     if (mkdtemp(pattern.data()) == nullptr) fail("cannot create a scratch folder under " + base);
     dir = pattern;

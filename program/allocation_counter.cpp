@@ -7,7 +7,7 @@
 
 namespace {
 thread_local std::int64_t t_allocations = 0;  // trivially initialised: safe before any constructor runs
-std::atomic<std::int64_t> g_allocations{0};     // constant-initialised: likewise
+std::atomic<std::int64_t> g_allocations{0};   // constant-initialised: likewise
 
 // nullptr when out of memory (the nothrow forms return it, the others throw).
 void* counted_allocation(std::size_t size, std::size_t alignment) noexcept {
@@ -34,7 +34,9 @@ std::int64_t cvo::program::process_allocations() { return g_allocations.load(std
 void* operator new(std::size_t size) { return counted_or_throw(size, alignof(std::max_align_t)); }
 void* operator new[](std::size_t size) { return counted_or_throw(size, alignof(std::max_align_t)); }
 void* operator new(std::size_t size, std::align_val_t a) { return counted_or_throw(size, static_cast<std::size_t>(a)); }
-void* operator new[](std::size_t size, std::align_val_t a) { return counted_or_throw(size, static_cast<std::size_t>(a)); }
+void* operator new[](std::size_t size, std::align_val_t a) {
+  return counted_or_throw(size, static_cast<std::size_t>(a));
+}
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
   return counted_allocation(size, alignof(std::max_align_t));
 }

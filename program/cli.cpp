@@ -27,8 +27,10 @@ class Formatter : public CLI::Formatter {
     std::ostringstream out;
     std::string description = app->get_description();
     while (!description.empty() && description.back() == '\n') description.pop_back();
-    out << make_usage(app, name) << "\n" << description << "\n" << make_positionals(app)
-        << make_groups(app, mode) << make_subcommands(app, mode) << "\n" << make_footer(app);
+    out << make_usage(app, name) << "\n"
+        << description << "\n"
+        << make_positionals(app) << make_groups(app, mode) << make_subcommands(app, mode) << "\n"
+        << make_footer(app);
     return out.str();
   }
 
@@ -56,8 +58,8 @@ std::string usage_line(const CLI::App& app) {
 }
 
 int usage_error(const CLI::App& app, const std::string& message) {
-  std::cerr << app.get_name() << ": " << message << "\n" << usage_line(app) << "run '" << app.get_name()
-            << " --help' for every option\n";
+  std::cerr << app.get_name() << ": " << message << "\n"
+            << usage_line(app) << "run '" << app.get_name() << " --help' for every option\n";
   return 2;
 }
 
@@ -110,7 +112,8 @@ const CLI::Validator kAssignment(
     "", "assignment");
 
 CLI::Option* add_set_option(CLI::App& app, std::vector<std::string>& assignments, const std::string& example) {
-  return app.add_option("--set", assignments, "override one configuration key, e.g. --set " + example + " (repeatable)")
+  return app
+      .add_option("--set", assignments, "override one configuration key, e.g. --set " + example + " (repeatable)")
       ->type_name("KEY=VALUE")
       ->allow_extra_args(false)
       ->check(kAssignment);

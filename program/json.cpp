@@ -10,7 +10,10 @@ std::string one_line(const Json& value) {
   if (!value.is_object()) return value.dump(-1, ' ', false, kReplace);
   std::string out = "{";
   for (const auto& [key, item] : value.items())
-    out.append(out.size() > 1 ? ", " : "").append(Json(key).dump(-1, ' ', false, kReplace)).append(": ").append(one_line(item));
+    out.append(out.size() > 1 ? ", " : "")
+        .append(Json(key).dump(-1, ' ', false, kReplace))
+        .append(": ")
+        .append(one_line(item));
   return out + "}";
 }
 

@@ -57,7 +57,9 @@ std::string fixed(double value, int digits) {
 
 // Where CVO_MAP and CVO_STATUS go: the input's provider unless told otherwise (a file:// log that
 // is read cannot take them).
-std::string publish_url(const config::BackenddParameters& b) { return b.publish_url == "lcm_url" ? b.lcm_url : b.publish_url; }
+std::string publish_url(const config::BackenddParameters& b) {
+  return b.publish_url == "lcm_url" ? b.lcm_url : b.publish_url;
+}
 
 bool is_log(const std::string& url) { return url.starts_with("file://"); }
 
@@ -85,15 +87,16 @@ MapSummary summarise(const slam::Map& map) {
 }
 
 std::string text(const MapSummary& s) {
-  return std::to_string(s.sessions) + " sessions (" + std::to_string(s.placed) + " placed), " + std::to_string(s.keyframes) +
-         " keyframes, " + std::to_string(s.loops) + " loops (" + std::to_string(s.loops_across) +
-         " across sessions), map revision " + std::to_string(s.revision);
+  return std::to_string(s.sessions) + " sessions (" + std::to_string(s.placed) + " placed), " +
+         std::to_string(s.keyframes) + " keyframes, " + std::to_string(s.loops) + " loops (" +
+         std::to_string(s.loops_across) + " across sessions), map revision " + std::to_string(s.revision);
 }
 
 // How long a new session took to find its place in the map, after its first keyframe: in sensor
 // time (what the robot had to see) and on this machine (what the back end took, with its queue).
 std::string join_text(const slam::Map& map, core::SessionId session, std::optional<Clock::time_point> first_arrival) {
-  const auto s = std::find_if(map.sessions.begin(), map.sessions.end(), [&](const auto& m) { return m.session == session; });
+  const auto s =
+      std::find_if(map.sessions.begin(), map.sessions.end(), [&](const auto& m) { return m.session == session; });
   const std::int64_t at = s != map.sessions.end() ? s->joined_at_keyframe : -1;
   double first = std::numeric_limits<double>::quiet_NaN(), joined = first;
   for (const auto& k : map.keyframes) {
@@ -101,8 +104,8 @@ std::string join_text(const slam::Map& map, core::SessionId session, std::option
     if (std::isnan(first)) first = k.timestamp;  // by id: the session's first keyframe
     if (k.id == at) joined = k.timestamp;
   }
-  std::string out = "session " + core::session_name(session) + " joined the map at its keyframe " +
-                    std::to_string(at) + " (" + fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
+  std::string out = "session " + core::session_name(session) + " joined the map at its keyframe " + std::to_string(at) +
+                    " (" + fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
   if (!first_arrival) return out + "its first keyframe replayed from the store)";
   return out + fixed(std::chrono::duration<double>(Clock::now() - *first_arrival).count(), 2) +
          " s after its first keyframe arrived)";
@@ -156,7 +159,7 @@ int Backendd::run() {
   const auto recovered = recovered_.size();
   let_in_recovered(std::exchange(recovered_, {}));
   notes_.note("store " + store_->file().string() + " (" + std::to_string(recovered) + " records recovered), LCM " +
-       config_.backendd.lcm_url);
+              config_.backendd.lcm_url);
   std::thread receive([this] { receive_loop(); });
   std::thread work([this] { work_loop(); });
   systemd_.ready();
@@ -265,8 +268,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       case Admission::kConflict:
         return refuse(cvo_lcm::status_t::BAD_CONFLICT,
                       describe(key) + " repeats an existing one with other content: refused");
-      case Admission::kNew:
-        break;
+      case Admission::kNew: break;
     }
     auto value = usable(*message, &error, &bad);
     if (!value) return refuse(bad, "skipped " + channel + ": " + error);
@@ -285,14 +287,14 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     if (!room && !to_store) {
       ++queue_drops_;
       return notes_.note_limited("queue full", describe(key) + " refused: " + std::to_string(queue_.size()) +
-                                            " records wait for the back end already");
+                                                   " records wait for the back end already");
     }
     // Used in any case; what the store cannot write now it holds and writes later, within a bound.
     RecordRef where;
     const auto appended = store_->append(kind, std::vector<std::uint8_t>(data, data + size), &where);
     if (appended == Appended::kNotDurable)
       notes_.note_limited("not stored", "warning: " + describe(key) + " used but not stored (lost on restart): " +
-                                     describe(store_->health()) + " (backendd.unsaved_records_max)");
+                                            describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
     door_.admit(key, crc);
     gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
@@ -303,8 +305,9 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
       queued.content = where;
       ++waiting_in_store_;
       ++waited_in_store_;
-      notes_.note_limited("waiting in the store", describe(key) + " waits in the store: " + std::to_string(queue_.size()) +
-                                               " records wait for the back end already");
+      notes_.note_limited("waiting in the store", describe(key) +
+                                                      " waits in the store: " + std::to_string(queue_.size()) +
+                                                      " records wait for the back end already");
     }
     queue_.push(std::move(queued));
   } catch (const std::exception& e) {  // out of memory, most likely: this message is lost, not the daemon
@@ -349,21 +352,23 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
     std::string ids;
     for (const auto id : request.ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
     notes_.note_limited("keyframe request", "asking session " + core::session_name(request.session) +
-                                         " again for keyframes " + ids + " (lost in transport)");
+                                                " again for keyframes " + ids + " (lost in transport)");
   }
   for (const auto& g : round.given_up) {
     const std::string which = g.first == g.last ? "keyframe " + std::to_string(g.first)
                                                 : "keyframes " + std::to_string(g.first) + "-" + std::to_string(g.last);
-    notes_.note_limited("keyframes lost", "gave up on " + which + " of session " + core::session_name(g.session) + ": never came (lost)");
+    notes_.note_limited("keyframes lost",
+                        "gave up on " + which + " of session " + core::session_name(g.session) + ": never came (lost)");
   }
   if (gaps_.recovered() > keyframes_recovered_)
-    notes_.note_limited("keyframes recovered", std::to_string(gaps_.recovered()) + " keyframes recovered after a loss in transport");
+    notes_.note_limited("keyframes recovered",
+                        std::to_string(gaps_.recovered()) + " keyframes recovered after a loss in transport");
   keyframes_requested_ = gaps_.requested();
   keyframes_recovered_ = gaps_.recovered();
   keyframes_lost_ = gaps_.lost();
   if (stopping && gaps_.requested() + gaps_.lost() > 0)
     notes_.note("keyframes lost in transport: " + std::to_string(gaps_.requested()) + " asked for again, " +
-         std::to_string(gaps_.recovered()) + " recovered, " + std::to_string(gaps_.lost()) + " lost");
+                std::to_string(gaps_.recovered()) + " recovered, " + std::to_string(gaps_.lost()) + " lost");
 }
 
 // The store's state after an append or a retry, noted when it changes (cvo-receive).
@@ -371,10 +376,11 @@ void Backendd::note_store_change() {
   const auto health = store_->health();
   if (health.failing && !store_failing_)
     notes_.note("warning: " + describe(health) + ": accepted records are used and held in memory (at most " +
-         std::to_string(config_.backendd.unsaved_records_max) + "), and stored in order when the store works again");
+                std::to_string(config_.backendd.unsaved_records_max) +
+                "), and stored in order when the store works again");
   else if (!health.failing && store_failing_)
     notes_.note("store " + store_->file().string() + " works again: every held record is stored (" +
-         std::to_string(store_->records()) + " records)");
+                std::to_string(store_->records()) + " records)");
   store_failing_ = health.failing;
 }
 
@@ -400,8 +406,10 @@ void Backendd::work_loop() {
     work_heartbeat_.beat();
     const bool receiver_done = receiver_done_;  // read first: it pushes nothing after setting it
     auto queued = queue_.pop(50ms);
-    if (queued) process(*queued);
-    else if (receiver_done && queue_.size() == 0) break;
+    if (queued)
+      process(*queued);
+    else if (receiver_done && queue_.size() == 0)
+      break;
     if (Clock::now() - work_->last_status >= status_period)
       publish_status(work_->summary.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT
                                                    : cvo_lcm::status_t::STATE_RUNNING);
@@ -416,8 +424,10 @@ void Backendd::process(QueuedRecord& queued) {
     std::string error;
     const auto value = value_of(queued, &error);
     if (!value) return notes_.note_limited("unreadable", error);
-    if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value)) apply_keyframe(*keyframe, queued.arrived);
-    else apply_local_graph(std::get<LocalGraphRecord>(*value));
+    if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
+      apply_keyframe(*keyframe, queued.arrived);
+    else
+      apply_local_graph(std::get<LocalGraphRecord>(*value));
   } catch (const slam::MapperError& e) {
     notes_.note_limited("not applied", std::string("not applied: ") + e.what());
   } catch (const std::exception& e) {
@@ -454,7 +464,7 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_
   w.first_arrival.try_emplace(k.session, arrived);
   for (const auto& loop : outcome.loops)
     notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
-         keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
+                keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
   publish_map(outcome.joined);
 }
 
@@ -509,19 +519,20 @@ void Backendd::finish() {
     if (w.mapper.backend().local_graphs() > 0) {  // nothing to optimise before a local graph
       const auto report = w.mapper.finish();
       notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
-           std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
+                  std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
     }
     publish_map({});
   } catch (const std::exception& e) {
     notes_.note(std::string("final optimisation failed, the last map stands: ") + e.what());
   }
   notes_.note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
-       std::to_string(w.mapper.loops_accepted()) + " loops accepted of " + std::to_string(w.mapper.loops_tried()) +
-       " tried");
+              std::to_string(w.mapper.loops_accepted()) + " loops accepted of " +
+              std::to_string(w.mapper.loops_tried()) + " tried");
   for (const auto& join : w.joins) notes_.note(join);
   if (const auto waited = waited_in_store_.load(); waited > 0)
-    notes_.note(std::to_string(waited) + " records waited in the store while the back end was behind (backendd.queue_max " +
-         std::to_string(queue_.capacity()) + ")");
+    notes_.note(std::to_string(waited) +
+                " records waited in the store while the back end was behind (backendd.queue_max " +
+                std::to_string(queue_.capacity()) + ")");
   publish_status(cvo_lcm::status_t::STATE_STOPPING);
 }
 

@@ -101,9 +101,9 @@ class Backendd {
   // last retried.
   bool store_failing_ = false;
   std::chrono::steady_clock::time_point store_retried_{};
-  MessageDoor door_;            // cvo-receive only (filled from the store before it starts)
+  MessageDoor door_;                        // cvo-receive only (filled from the store before it starts)
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
-  std::unique_ptr<Work> work_;  // the mapper and what the daemon reports of it; cvo-backend only
+  std::unique_ptr<Work> work_;              // the mapper and what the daemon reports of it; cvo-backend only
 
   WorkQueue<QueuedRecord> queue_;  // cvo-receive -> cvo-backend
   std::atomic<bool> stop_{false}, receiver_done_{false};

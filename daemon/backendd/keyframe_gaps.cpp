@@ -32,15 +32,19 @@ void KeyframeGaps::seen(Seen what, std::int64_t session_id, std::int64_t id, Clo
     case Seen::kKeyframe: {
       const bool late = id < s.keyframes_until;
       expect(session_id, s, id, id, now);
-      if (late) came(s, id, /*keyframe=*/true);
-      else s.keyframes_until = id + 1;
+      if (late)
+        came(s, id, /*keyframe=*/true);
+      else
+        s.keyframes_until = id + 1;
       return;
     }
     case Seen::kLocalGraph: {
       const bool late = id < s.graphs_until;
       expect(session_id, s, id + 1, id, now);
-      if (late) came(s, id, /*keyframe=*/false);
-      else s.graphs_until = id + 1;
+      if (late)
+        came(s, id, /*keyframe=*/false);
+      else
+        s.graphs_until = id + 1;
       return;
     }
     case Seen::kGraphWithoutKeyframe: {
@@ -52,9 +56,7 @@ void KeyframeGaps::seen(Seen what, std::int64_t session_id, std::int64_t id, Clo
       if (const auto it = s.missing.find(id); it != s.missing.end()) it->second.graph = true;  // refused: needed again
       return;
     }
-    case Seen::kPose:
-      expect(session_id, s, id + 1, id, now);
-      return;
+    case Seen::kPose: expect(session_id, s, id + 1, id, now); return;
   }
 }
 
@@ -64,7 +66,8 @@ void KeyframeGaps::expect(std::int64_t session_id, Session& s, std::int64_t keyf
                           Clock::time_point now) {
   const bool new_keyframes = keyframes_until > s.keyframes_until, new_graphs = graphs_until > s.graphs_until;
   if (!new_keyframes && !new_graphs) return;
-  std::int64_t lo = std::min(new_keyframes ? s.keyframes_until : graphs_until, new_graphs ? s.graphs_until : keyframes_until);
+  std::int64_t lo =
+      std::min(new_keyframes ? s.keyframes_until : graphs_until, new_graphs ? s.graphs_until : keyframes_until);
   const std::int64_t hi = std::max(new_keyframes ? keyframes_until : lo, new_graphs ? graphs_until : lo);
   if (hi - lo > policy_.max_gap) {  // older than any tracker keeps (or a forged id): not asked for
     const std::int64_t cut = hi - policy_.max_gap;

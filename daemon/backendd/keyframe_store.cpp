@@ -40,7 +40,8 @@ std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size
 }
 
 bool known_kind(std::uint8_t kind) {
-  return kind == static_cast<std::uint8_t>(RecordKind::kKeyframe) || kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph);
+  return kind == static_cast<std::uint8_t>(RecordKind::kKeyframe) ||
+         kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph);
 }
 
 std::vector<std::uint8_t> encode_record(RecordKind kind, const std::vector<std::uint8_t>& payload) {
@@ -71,12 +72,15 @@ int write_all_at(int fd, const std::uint8_t* p, std::size_t size, off_t at) {
 void fsync_folder(const fs::path& file) {
   const auto folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
   const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;  // nothing more can be done; the file's own data is durable
-  if (::fsync(fd) != 0) { /* as above */ }
+  if (fd < 0) return;     // nothing more can be done; the file's own data is durable
+  if (::fsync(fd) != 0) { /* as above */
+  }
   ::close(fd);
 }
 
-std::string count(std::size_t n, const char* one, const char* many) { return std::to_string(n) + " " + (n == 1 ? one : many); }
+std::string count(std::size_t n, const char* one, const char* many) {
+  return std::to_string(n) + " " + (n == 1 ? one : many);
+}
 
 // ---------------------------------------------------------------------------------------------
 // Reading back
@@ -142,8 +146,10 @@ Scan scan(const std::uint8_t* data, std::size_t size, std::vector<StoredRecord>&
     }
     const auto next = resync(data, size, at + 1);
     Stretch stretch{at, next - at, check.why};
-    if (next == size && check.cut_short) s.torn = std::move(stretch);
-    else s.damaged.push_back(std::move(stretch));
+    if (next == size && check.cut_short)
+      s.torn = std::move(stretch);
+    else
+      s.damaged.push_back(std::move(stretch));
     at = next;
   }
   return s;
@@ -260,8 +266,10 @@ CleanCopy replace_with_clean_copy(const fs::path& file, const std::uint8_t* data
     copy.size += static_cast<off_t>(r.bytes);
   }
   if (error == 0 && ::fsync(copy.fd) != 0) error = errno;
-  if (error != 0) copy.error = "cannot write " + temp.string() + ": " + std::strerror(error);
-  else copy.aside = keep_aside(file, copy.error);
+  if (error != 0)
+    copy.error = "cannot write " + temp.string() + ": " + std::strerror(error);
+  else
+    copy.aside = keep_aside(file, copy.error);
   if (!copy.aside.empty() && ::rename(temp.c_str(), file.c_str()) != 0) {
     const int rename_error = errno;
     copy.error = "cannot rename " + temp.string() + ": " + std::strerror(rename_error);
@@ -296,7 +304,8 @@ std::string describe(const StoreHealth& health) {
     const char* what = health.error == ENOSPC || health.error == EDQUOT ? "store full"
                        : health.error == EFBIG                          ? "store at the file size limit"
                                                                         : "store failing";
-    out = std::string(what) + " (" + count(health.unsaved, "record", "records") + " unsaved): " + std::strerror(health.error);
+    out = std::string(what) + " (" + count(health.unsaved, "record", "records") +
+          " unsaved): " + std::strerror(health.error);
   }
   if (health.not_durable > 0)
     out += (out.empty() ? "store: " : "; ") + count(health.not_durable, "record", "records") +
@@ -328,13 +337,15 @@ KeyframeStore::~KeyframeStore() {
 // at all.
 void KeyframeStore::create() {
   end_ = 0;
-  if (::ftruncate(fd_, 0) != 0) { /* write_held() writes over what is there */ }
+  if (::ftruncate(fd_, 0) != 0) { /* write_held() writes over what is there */
+  }
   write_held();
 }
 
 void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& warning) {
   struct stat st {};
-  if (::fstat(fd_, &st) != 0) throw io::InputError(file_, std::string("cannot read keyframe store: ") + std::strerror(errno));
+  if (::fstat(fd_, &st) != 0)
+    throw io::InputError(file_, std::string("cannot read keyframe store: ") + std::strerror(errno));
   const auto size = static_cast<std::size_t>(st.st_size);
   const Mapping map(fd_, size, file_);
   const std::uint8_t* data = map.data();
@@ -400,7 +411,8 @@ int KeyframeStore::write_at_end(const std::uint8_t* data, std::size_t size) {
     end_ += static_cast<off_t>(size);
     return 0;
   }
-  if (::ftruncate(fd_, end_) != 0) { /* the next write at end_ goes over what is left */ }
+  if (::ftruncate(fd_, end_) != 0) { /* the next write at end_ goes over what is left */
+  }
   return error;
 }
 
@@ -421,7 +433,8 @@ Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>&
 
 std::optional<StoredRecord> KeyframeStore::read(const RecordRef& where, std::string* error) const {
   const auto fail = [&](const std::string& why) -> std::optional<StoredRecord> {
-    if (error != nullptr) *error = "record at byte " + std::to_string(where.offset) + " of " + file_.string() + ": " + why;
+    if (error != nullptr)
+      *error = "record at byte " + std::to_string(where.offset) + " of " + file_.string() + ": " + why;
     return std::nullopt;
   };
   {

@@ -113,9 +113,9 @@ class KeyframeStore {
   std::filesystem::path file_;
   std::size_t held_max_;
   int fd_ = -1;
-  mutable std::mutex mutex_;                     // cvo-receive appends; cvo-backend reads health()
-  off_t end_ = 0;                                // end of the last complete record (0: magic not written yet)
-  std::uint64_t records_ = 0;                    // on disk
+  mutable std::mutex mutex_;                    // cvo-receive appends; cvo-backend reads health()
+  off_t end_ = 0;                               // end of the last complete record (0: magic not written yet)
+  std::uint64_t records_ = 0;                   // on disk
   std::deque<std::vector<std::uint8_t>> held_;  // encoded records not yet written, oldest first
   StoreHealth health_;
 };

@@ -4,8 +4,8 @@
 // A contract that scripts and the systemd unit rely on (extras may be added, nothing changed):
 //   cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [--set key=value]...
 //                [--publish-url URL] [--exit-on-eof]
-//   exit status 0 after SIGTERM/SIGINT/SIGHUP (or the end of a file:// input with --exit-on-eof); 1 when the configuration, the store or the vocabulary is
-//   unusable (the message says which); 2 on a usage error.
+//   exit status 0 after SIGTERM/SIGINT/SIGHUP (or the end of a file:// input with --exit-on-eof); 1 when the
+//   configuration, the store or the vocabulary is unusable (the message says which); 2 on a usage error.
 #include <csignal>
 #include <iostream>
 #include <optional>

@@ -41,7 +41,8 @@ std::optional<RecordValue> usable(const Identified& message, std::string* error,
     if (auto keyframe = lcm::from_message(*k, error, &failure)) value = std::move(*keyframe);
   } else {
     const auto& g = std::get<cvo_lcm::local_graph_t>(message.message);
-    if (auto graph = lcm::from_message(g, error, &failure)) value = LocalGraphRecord{g.session, g.keyframe_id, std::move(*graph)};
+    if (auto graph = lcm::from_message(g, error, &failure))
+      value = LocalGraphRecord{g.session, g.keyframe_id, std::move(*graph)};
   }
   if (!value && bad != nullptr) *bad = static_cast<std::size_t>(failure);
   return value;

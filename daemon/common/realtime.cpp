@@ -33,7 +33,8 @@ std::string pin_this_thread(int cpu) {
 }
 
 std::string lock_all_memory() {
-  if (mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT) != 0 && (errno != EINVAL || mlockall(MCL_CURRENT | MCL_FUTURE) != 0))
+  if (mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT) != 0 &&
+      (errno != EINVAL || mlockall(MCL_CURRENT | MCL_FUTURE) != 0))
     return std::string("mlockall: ") + std::strerror(errno) + " (needs CAP_IPC_LOCK or LimitMEMLOCK=infinity)";
   return {};
 }

@@ -6,7 +6,8 @@
 
 namespace cvo::daemon {
 
-std::optional<int> supervise(const SystemdNotifier& systemd, const Workers& workers, const std::function<bool()>& ended) {
+std::optional<int> supervise(const SystemdNotifier& systemd, const Workers& workers,
+                             const std::function<bool()>& ended) {
   using namespace std::chrono_literals;
   using Clock = std::chrono::steady_clock;
   auto last_watchdog = Clock::now();

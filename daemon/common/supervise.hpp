@@ -19,6 +19,7 @@ struct Workers {
 
 /// Returns the stop signal that came (SIGTERM, SIGINT or SIGHUP: signals.hpp), or nullopt once
 /// `ended()` is true. READY is the caller's; STOPPING is sent here, whichever way it ends.
-std::optional<int> supervise(const SystemdNotifier& systemd, const Workers& workers, const std::function<bool()>& ended);
+std::optional<int> supervise(const SystemdNotifier& systemd, const Workers& workers,
+                             const std::function<bool()>& ended);
 
 }  // namespace cvo::daemon

@@ -67,9 +67,9 @@ class FrameRing {
   Overflow overflow_;
   void give_back(int& slot);  // with the mutex held
 
-  std::vector<RingSlot> slots_;   // depth + 3: the waiting frames, one being written, one read, the previous
-  std::vector<int> free_;         // reserved to slots_.size(): push/pop never allocate
-  std::vector<int> queue_;        // circular FIFO of waiting slot indices
+  std::vector<RingSlot> slots_;  // depth + 3: the waiting frames, one being written, one read, the previous
+  std::vector<int> free_;        // reserved to slots_.size(): push/pop never allocate
+  std::vector<int> queue_;       // circular FIFO of waiting slot indices
   std::size_t head_ = 0, count_ = 0;
   int writing_ = -1, reading_ = -1, previous_ = -1;
   bool closed_ = false;

@@ -75,9 +75,9 @@ class KeyframeHistory {
   [[nodiscard]] std::size_t index_of(std::int64_t session, std::int64_t id) const;  // slots_.size(): none
 
   std::vector<Slot> slots_;
-  std::size_t keyframe_bytes_, graph_bytes_;  // each slot's room
-  std::size_t next_ = 0;  // the oldest slot, taken by the next keyframe
-  std::map<std::int64_t, std::int64_t> newest_;  // this tracker's sessions: their newest keyframe id
+  std::size_t keyframe_bytes_, graph_bytes_;              // each slot's room
+  std::size_t next_ = 0;                                  // the oldest slot, taken by the next keyframe
+  std::map<std::int64_t, std::int64_t> newest_;           // this tracker's sessions: their newest keyframe id
   std::set<std::pair<std::int64_t, std::int64_t>> gone_;  // answered lost or never sent: counted already
   std::int64_t resent_ = 0, lost_ = 0;
 };

@@ -39,8 +39,9 @@ struct Arguments {
 };
 
 void add_options(CLI::App& app, Arguments& args) {
-  app.add_option("--config", args.config_file,
-                 "YAML configuration (every key: libcvo/config/default.yaml; the trackerd section configures this daemon)")
+  app.add_option(
+         "--config", args.config_file,
+         "YAML configuration (every key: libcvo/config/default.yaml; the trackerd section configures this daemon)")
       ->type_name("FILE");
   app.add_option("--source", args.source, "frame source (trackerd.source; the forms below)")->type_name("SPEC");
   app.add_option("--lcm-url", args.lcm_url, "where results are published (trackerd.lcm_url)")->type_name("URL");

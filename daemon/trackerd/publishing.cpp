@@ -16,8 +16,8 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/status.hpp"
-#include "libcvo/core/units.hpp"
 #include "libcvo/core/session.hpp"
+#include "libcvo/core/units.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
@@ -35,8 +35,8 @@ using namespace std::chrono_literals;
 std::size_t max_keyframe_bytes(std::uint64_t camera_size, const odometry::KeyframeOdometryParameters& parameters) {
   const auto pixels = (camera_size >> 32) * (camera_size & 0xffffffffU);
   const std::size_t images = pixels * (3 + 2);  // BGR8 and 16-bit depth
-  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) + parameters.odometry.max_points * (3 + 5) * sizeof(float) +
-         images + images / 8;
+  return static_cast<std::size_t>(cvo_lcm::keyframe_t{}.getEncodedSize()) +
+         parameters.odometry.max_points * (3 + 5) * sizeof(float) + images + images / 8;
 }
 
 std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& parameters) {
@@ -78,7 +78,9 @@ void Publishing::run() {
   name_this_thread("cvo-publish");
   struct Handler {
     Publishing* self;
-    void map(const ::lcm::ReceiveBuffer* b, const std::string&) { self->apply_map(b->data, static_cast<int>(b->data_size)); }
+    void map(const ::lcm::ReceiveBuffer* b, const std::string&) {
+      self->apply_map(b->data, static_cast<int>(b->data_size));
+    }
     void request(const ::lcm::ReceiveBuffer* b, const std::string&) {
       self->answer_request(b->data, static_cast<int>(b->data_size));
     }
@@ -92,8 +94,10 @@ void Publishing::run() {
   while (true) {
     shared_.publish_heartbeat.beat();
     if (shared_.out.ready) {
-      if (shared_.out.outbox->pop(event, 10ms)) publish(event);
-      else if (shared_.tracker_done && shared_.out.outbox->finished()) break;
+      if (shared_.out.outbox->pop(event, 10ms))
+        publish(event);
+      else if (shared_.tracker_done && shared_.out.outbox->finished())
+        break;
     } else if (shared_.tracker_done) {
       break;
     } else {
@@ -128,7 +132,8 @@ void Publishing::publish(const Event& event) {
     lcm_.publish("CVO_LOCAL_GRAPH", bytes.data(), static_cast<unsigned>(bytes.size()));
     history().keep_graph(event.session, g.keyframe_id, bytes);
   }
-  if (event.keyframe_slot >= 0) publish_keyframe(event);
+  if (event.keyframe_slot >= 0)
+    publish_keyframe(event);
   else if (event.has_pose && event.pose.is_keyframe)  // no outbox slot: counted by the outbox
     history().never_sent(event.session, event.pose.keyframe_id);
   if (event.has_pose) {
@@ -171,9 +176,9 @@ void Publishing::answer_request(const void* data, int size) {
   if (!request) return shared_.count_bad(static_cast<int>(failure), "skipped CVO_KEYFRAME_REQUEST", error);
   const std::string what = "CVO_KEYFRAME_REQUEST for session " + core::session_name(request->session);
   if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS)
-    return shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
-                             std::to_string(request->num_ids) + " ids, more than " +
-                                 std::to_string(cvo_lcm::keyframe_request_t::MAX_IDS));
+    return shared_.count_bad(
+        cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
+        std::to_string(request->num_ids) + " ids, more than " + std::to_string(cvo_lcm::keyframe_request_t::MAX_IDS));
   if (!shared_.out.ready) {  // nothing made yet: only a request for the running session concerns us
     if (request->session == shared_.session.load())
       shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what, "no keyframe made yet");
@@ -194,8 +199,8 @@ void Publishing::answer_request(const void* data, int size) {
     done += (done.empty() ? "" : "; ") + std::string("lost (not in the history of ") +
             std::to_string(history().capacity()) + "): " + id_list(answer.lost);
   shared_.notes.note_limited("keyframe request", "the back end asked again for keyframes of session " +
-                                                     core::session_name(request->session) + " (#" +
-                                                     std::to_string(n) + "): " + done);
+                                                     core::session_name(request->session) + " (#" + std::to_string(n) +
+                                                     "): " + done);
 }
 
 void Publishing::publish_status(std::int8_t state_override) {
@@ -230,8 +235,8 @@ void Publishing::publish_status(std::int8_t state_override) {
   const cvo_lcm::status_t message = daemon::status_message(std::move(s), shared_.notes);
   lcm_.publish("CVO_STATUS", &message);
   shared_.systemd.status(std::to_string(published_) + " frames, " + std::to_string(std::lround(s.rate_hz)) +
-                          " Hz, latency p99 " + std::to_string(std::lround(s.latency_p99_ms)) + " ms, " +
-                          std::to_string(s.dropped_frames) + " dropped");
+                         " Hz, latency p99 " + std::to_string(std::lround(s.latency_p99_ms)) + " ms, " +
+                         std::to_string(s.dropped_frames) + " dropped");
   published_at_last_status_ = published_;
   failed_at_last_status_ = c.failed_frames;
   last_status_ = now;

@@ -12,8 +12,8 @@
 #include "daemon/common/supervise.hpp"
 #include "daemon/trackerd/publishing.hpp"
 #include "daemon/trackerd/tracking.hpp"
-#include "libcvo/io/input_error.hpp"
 #include "libcvo/core/session.hpp"
+#include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
 namespace cvo::daemon::trackerd {
@@ -27,7 +27,8 @@ Trackerd::Trackerd(config::Config config, SourceFactory open_source) : open_sour
   if (t.source.find(':') == std::string::npos)
     throw io::InputError("trackerd.source", "'" + t.source + "': expected tum:DIR, lcm:URL, openni2:URI or v4l2:DEV");
   if (!lcm::parse_colour_encoding(t.keyframe_colour_encoding))
-    throw io::InputError("trackerd.keyframe_colour_encoding", "'" + t.keyframe_colour_encoding + "': expected raw, jpeg or png");
+    throw io::InputError("trackerd.keyframe_colour_encoding",
+                         "'" + t.keyframe_colour_encoding + "': expected raw, jpeg or png");
   ::lcm::LCM probe(t.lcm_url);  // the publisher opens its own; a bad URL should fail at start-up
   if (!probe.good()) throw io::InputError("trackerd.lcm_url", "cannot open LCM provider '" + t.lcm_url + "'");
   if (!open_source_) open_source_ = configured_source(config);
@@ -42,7 +43,8 @@ int Trackerd::run() {
   s.notes.note("session " + core::session_name(s.session));
   s.notes.note("source " + t.source + ", publishing on " + t.lcm_url + (t.deterministic ? " (deterministic)" : ""));
   if (t.lock_memory)
-    if (const auto why = lock_all_memory(); !why.empty()) s.notes.note("warning: " + why + "; running without locked memory");
+    if (const auto why = lock_all_memory(); !why.empty())
+      s.notes.note("warning: " + why + "; running without locked memory");
 
   Acquisition acquisition(s, open_source_);
   Tracking tracking(s);
@@ -70,8 +72,9 @@ void Trackerd::closing_note() {
   Shared& s = *shared_;
   const auto& c = s.counters;
   s.notes.note("tracked " + std::to_string(c.frames_tracked.load()) + " frames: " + std::to_string(c.keyframes.load()) +
-               " keyframes, " + std::to_string(c.failed_frames.load()) + " failed, " + std::to_string(s.ring.dropped()) +
-               " dropped by the ring, " + std::to_string(c.source_lost_frames.load()) +
+               " keyframes, " + std::to_string(c.failed_frames.load()) + " failed, " +
+               std::to_string(s.ring.dropped()) + " dropped by the ring, " +
+               std::to_string(c.source_lost_frames.load()) +
                " missing from the source; tracking-thread allocations after warm-up: " +
                std::to_string(c.allocations_after_warmup.load()));
 }

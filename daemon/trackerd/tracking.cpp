@@ -4,8 +4,8 @@
 #include <string>
 
 #include "daemon/common/realtime.hpp"
-#include "program/allocation_counter.hpp"
 #include "libcvo/core/session.hpp"
+#include "program/allocation_counter.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {
@@ -60,7 +60,7 @@ void Tracking::run() {
     slot->frame.index -= first_index_;  // frame indices count from 0 in a session
     Event event;
     track(*slot, event);
-    shared_.ring.end_read();  // this frame's slot is kept: the next frame may make it a keyframe
+    shared_.ring.end_read();                // this frame's slot is kept: the next frame may make it a keyframe
     outbox_->push(event, t.deterministic);  // when full, dropped: counted, with what it carried
     ++session_frames_;
     ++shared_.counters.frames_tracked;
@@ -81,8 +81,8 @@ bool Tracking::start(const core::RgbdFrame& first) {
   const auto& p = shared_.parameters;
   camera_ = k;
   tracker_ = std::make_unique<odometry::KeyframeOdometry>(k.width, k.height, p);
-  shared_.out.outbox =
-      std::make_unique<Outbox>(kOutboxEvents, kPoolSlots, k.width, k.height, p.odometry.max_points, p.tracking.local_graph_capacity);
+  shared_.out.outbox = std::make_unique<Outbox>(kOutboxEvents, kPoolSlots, k.width, k.height, p.odometry.max_points,
+                                                p.tracking.local_graph_capacity);
   outbox_ = shared_.out.outbox.get();
   shared_.out.camera_size = packed_size(k.width, k.height);
   shared_.out.ready = true;

@@ -38,13 +38,13 @@ class Tracking {
   void count_allocations();
 
   Shared& shared_;
-  core::Intrinsics camera_;  // of the frames tracked
+  core::Intrinsics camera_;                              // of the frames tracked
   std::unique_ptr<odometry::KeyframeOdometry> tracker_;  // sized by the camera
-  Outbox* outbox_ = nullptr;                              // shared_.out's, once made
-  std::int64_t session_frames_ = 0;  // frames tracked in the running session
-  std::uint64_t connection_ = 0;     // the source connection they came from (RingSlot::connection)
-  std::uint64_t first_index_ = 0;    // acquisition's index of the session's first frame
-  core::Intrinsics other_camera_;    // another camera's frames, in a row: other_frames_ of them
+  Outbox* outbox_ = nullptr;                             // shared_.out's, once made
+  std::int64_t session_frames_ = 0;                      // frames tracked in the running session
+  std::uint64_t connection_ = 0;                         // the source connection they came from (RingSlot::connection)
+  std::uint64_t first_index_ = 0;                        // acquisition's index of the session's first frame
+  core::Intrinsics other_camera_;                        // another camera's frames, in a row: other_frames_ of them
   std::size_t other_frames_ = 0;
   // Warm-up, again after a camera change: allocations are defects from warmup_frames frames on.
   std::int64_t warm_frames_ = 0, allocations_at_warmup_ = 0, defects_before_ = 0;

@@ -83,10 +83,10 @@ struct Playback {
   StreamIntrinsics intrinsics;
   int fps = 30;
 
-  std::size_t next = 0;        // the frame to play next
-  std::uint64_t played = 0;    // frames played, over all connections
-  bool unplugged = false;      // between an unplug and its replug
-  bool unplug_done = false;    // unplug_after acts once
+  std::size_t next = 0;      // the frame to play next
+  std::uint64_t played = 0;  // frames played, over all connections
+  bool unplugged = false;    // between an unplug and its replug
+  bool unplug_done = false;  // unplug_after acts once
 };
 
 [[nodiscard]] int width_of(const Playback& p) { return p.sequence.intrinsics().width; }
@@ -123,10 +123,15 @@ class VirtualStream final : public oni::driver::StreamBase {
 
   OniBool isPropertySupported(int id) override {
     switch (id) {
-      case ONI_STREAM_PROPERTY_VIDEO_MODE: case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:
-      case ONI_STREAM_PROPERTY_VERTICAL_FOV: case ONI_STREAM_PROPERTY_MIRRORING: case ONI_STREAM_PROPERTY_STRIDE:
-      case ONI_STREAM_PROPERTY_CROPPING: case kIntrinsicsProperty: return TRUE;
-      case ONI_STREAM_PROPERTY_MAX_VALUE: case ONI_STREAM_PROPERTY_MIN_VALUE: return type_ == ONI_SENSOR_DEPTH;
+      case ONI_STREAM_PROPERTY_VIDEO_MODE:
+      case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:
+      case ONI_STREAM_PROPERTY_VERTICAL_FOV:
+      case ONI_STREAM_PROPERTY_MIRRORING:
+      case ONI_STREAM_PROPERTY_STRIDE:
+      case ONI_STREAM_PROPERTY_CROPPING:
+      case kIntrinsicsProperty: return TRUE;
+      case ONI_STREAM_PROPERTY_MAX_VALUE:
+      case ONI_STREAM_PROPERTY_MIN_VALUE: return type_ == ONI_SENSOR_DEPTH;
       default: return FALSE;
     }
   }
@@ -327,16 +332,16 @@ class VirtualDevice final : public oni::driver::DeviceBase {
   const std::shared_ptr<Playback> playback_;
   std::vector<OniVideoMode> depth_modes_, colour_modes_;
   std::vector<OniSensorInfo> sensors_;
-  std::mutex mutex_;                  // the settings and the thread's wake-up conditions
+  std::mutex mutex_;  // the settings and the thread's wake-up conditions
   std::condition_variable_any wake_;
-  std::mutex streams_mutex_;          // the streams, while the thread sends into them
+  std::mutex streams_mutex_;  // the streams, while the thread sends into them
   std::unique_ptr<VirtualStream> depth_, colour_, none_;
   OniImageRegistrationMode registration_ = ONI_IMAGE_REGISTRATION_OFF;
   bool paced_ = true;
-  std::mutex play_mutex_;             // one frame played at a time, by the thread or a trigger
+  std::mutex play_mutex_;              // one frame played at a time, by the thread or a trigger
   std::atomic<bool> finished_{false};  // this connection has ended or been unplugged
   std::optional<std::pair<Clock::time_point, double>> anchor_;  // paced: first frame's time and stamp
-  std::jthread thread_;  // last: started once everything it reads exists
+  std::jthread thread_;                                         // last: started once everything it reads exists
 };
 
 // The driver: the one object of this plug-in that OpenNI keeps (ONI_EXPORT_DRIVER), with the
@@ -501,7 +506,8 @@ bool VirtualDevice::step(const std::stop_token* stop) {
     return true;
   }
   const cv::Size size(width_of(*playback_), height_of(*playback_));
-  if (frame.bgr.size() != size || frame.depth.size() != size || frame.depth.type() != CV_16UC1) return true;  // likewise
+  if (frame.bgr.size() != size || frame.depth.size() != size || frame.depth.type() != CV_16UC1)
+    return true;  // likewise
   if (stop != nullptr && !wait_until_due(*stop, frame.timestamp)) return false;
   send(frame, index);
   return true;

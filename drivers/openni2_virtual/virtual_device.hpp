@@ -24,7 +24,7 @@ inline constexpr int kIntrinsicsProperty = 0x43564F01;  // "CVO" 1, clear of Ope
 struct StreamIntrinsics {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   double distortion[5] = {0, 0, 0, 0, 0};  // k1, k2, p1, p2, k3 as core::Intrinsics
-  double readout_s = 0;                     // as core::Intrinsics
+  double readout_s = 0;                    // as core::Intrinsics
 };
 
 /// Device property (int, 1 or 0): 1 (the default) plays at the recorded rate, as a camera would;

@@ -44,7 +44,7 @@ constexpr Range kAny{};
 constexpr Range kPositive{0, kInf, true, false};
 constexpr Range kNonNegative{0, kInf};
 constexpr Range kAtLeastOne{1, kInf};
-constexpr Range kUnit{0, 1};                   // [0, 1]
+constexpr Range kUnit{0, 1};                      // [0, 1]
 constexpr Range kUnitNonZero{0, 1, true, false};  // (0, 1]
 constexpr Range kHalfTurnDeg{0, 180, true, false};
 constexpr Range kThreads{1, 1024};
@@ -96,7 +96,8 @@ const std::vector<Field>& table() {
           "smallest spatial length-scale of the schedule (m)"),
       row("cvo.ell_decay", &Config::cvo, &CvoParameters::ell_decay, kUnitNonZero,
           "factor applied to ℓ as the solver converges"),
-      row("cvo.sigma", &Config::cvo, &CvoParameters::sigma, kPositive, "σ, spatial kernel signal (std. dev.; amplitude σ²)"),
+      row("cvo.sigma", &Config::cvo, &CvoParameters::sigma, kPositive,
+          "σ, spatial kernel signal (std. dev.; amplitude σ²)"),
       row("cvo.ell_color", &Config::cvo, &CvoParameters::ell_color, kPositive, "ℓ_c, colour kernel length-scale"),
       row("cvo.sigma_color", &Config::cvo, &CvoParameters::sigma_color, kPositive,
           "σ_c, colour kernel signal (std. dev.; amplitude σ_c²)"),
@@ -119,16 +120,17 @@ const std::vector<Field>& table() {
           kPositive, "t_thres, new keyframe beyond this translation (m)"),
       row("keyframe.rotation_threshold_deg", &Config::keyframe, &KeyframeParameters::rotation_threshold_deg,
           kHalfTurnDeg, "θ_thres, new keyframe beyond this rotation (degrees)"),
-      row("keyframe.local_graph_capacity", &Config::keyframe_tracking, &KeyframeTrackingParameters::local_graph_capacity,
-          kAtLeastTwo, "frames per keyframe (its local graph) before a new keyframe is forced"),
+      row("keyframe.local_graph_capacity", &Config::keyframe_tracking,
+          &KeyframeTrackingParameters::local_graph_capacity, kAtLeastTwo,
+          "frames per keyframe (its local graph) before a new keyframe is forced"),
       row("keyframe.gamma_ell", &Config::keyframe_tracking, &KeyframeTrackingParameters::gamma_ell, kPositive,
           "spatial length-scale of γ's inner products (m)"),
       row("keyframe.gamma_sigma", &Config::keyframe_tracking, &KeyframeTrackingParameters::gamma_sigma, kPositive,
           "spatial signal of γ's inner products (std. dev.), looser than cvo.sigma so γ is smooth"),
       row("keyframe.gamma_stride", &Config::keyframe_tracking, &KeyframeTrackingParameters::gamma_stride, kAtLeastOne,
           "γ's inner products sum every stride-th point of the frame (1: all)"),
-      row("keyframe.chain_weight", &Config::keyframe_tracking, &KeyframeTrackingParameters::chain_weight,
-          kNonNegative, "scale of the chain edge's information in the fused pose (0: keyframe registration alone)"),
+      row("keyframe.chain_weight", &Config::keyframe_tracking, &KeyframeTrackingParameters::chain_weight, kNonNegative,
+          "scale of the chain edge's information in the fused pose (0: keyframe registration alone)"),
       row("keyframe.chain_full_weight_deg", &Config::keyframe_tracking,
           &KeyframeTrackingParameters::chain_full_weight_deg, kHalfTurnDegOrZero,
           "rotation from the keyframe (degrees) at which the chain weight, ramped as θ², is full (0: always full)"),
@@ -140,8 +142,8 @@ const std::vector<Field>& table() {
           "descriptor matches needed for a loop candidate"),
       row("loop_closure.max_refinements", &Config::loop_verification, &LoopVerificationParameters::max_refinements,
           kNonNegative, "CVO refinements per new keyframe, best η first (0: no limit)"),
-      row("loop_closure.ransac_iterations", &Config::loop_verification,
-          &LoopVerificationParameters::ransac_iterations, kAtLeastOne, "RANSAC minimal sets tried for the initial pose"),
+      row("loop_closure.ransac_iterations", &Config::loop_verification, &LoopVerificationParameters::ransac_iterations,
+          kAtLeastOne, "RANSAC minimal sets tried for the initial pose"),
       row("loop_closure.ransac_inlier_m", &Config::loop_verification, &LoopVerificationParameters::ransac_inlier_m,
           kPositive, "3-D distance within which a match is a RANSAC inlier (m)"),
       row("loop_closure.min_inliers", &Config::loop_verification, &LoopVerificationParameters::min_inliers,
@@ -152,7 +154,8 @@ const std::vector<Field>& table() {
       row("loop_closure.ransac_seed", &Config::loop_verification, &LoopVerificationParameters::ransac_seed, kUint32,
           "seed of RANSAC's random generator: the same loops on every run"),
       row("loop_closure.orb_features", &Config::loop_verification, &LoopVerificationParameters::orb_features,
-          kAtLeastOne, "ORB keypoints per keyframe at most, the strongest first (the default vocabulary was "
+          kAtLeastOne,
+          "ORB keypoints per keyframe at most, the strongest first (the default vocabulary was "
           "trained with the orb_* defaults)"),
       row("loop_closure.orb_scale_factor", &Config::loop_verification, &LoopVerificationParameters::orb_scale_factor,
           kAboveOne, "ORB pyramid scale between levels"),
@@ -185,7 +188,8 @@ const std::vector<Field>& table() {
           "never drop: acquisition waits for the tracker, so a replay gives the same poses every time"),
       row("trackerd.realtime_priority", &Config::trackerd, &TrackerdParameters::realtime_priority, kRealtimePriority,
           "SCHED_FIFO priority of the tracking thread (0: normal scheduling)"),
-      row("trackerd.cpu", &Config::trackerd, &TrackerdParameters::cpu, kCpu, "CPU the tracking thread is pinned to (-1: any)"),
+      row("trackerd.cpu", &Config::trackerd, &TrackerdParameters::cpu, kCpu,
+          "CPU the tracking thread is pinned to (-1: any)"),
       row("trackerd.lock_memory", &Config::trackerd, &TrackerdParameters::lock_memory, kAny,
           "mlockall: no page faults in the tracking thread"),
       row("trackerd.deadline_ms", &Config::trackerd, &TrackerdParameters::deadline_ms, kPositive,
@@ -271,7 +275,8 @@ std::string assign(const Field& field, Config& config, std::string_view text) {
         } else {
           const auto v = io::to_integer(text);
           if (!v) return "expected an integer, got " + quoted;
-          if (!field.range.contains(static_cast<double>(*v))) return "must be " + field.range.text() + ", got " + quoted;
+          if (!field.range.contains(static_cast<double>(*v)))
+            return "must be " + field.range.text() + ", got " + quoted;
           if (!std::in_range<T>(*v)) return "out of range: " + quoted;
           get(config) = static_cast<T>(*v);
           return {};
@@ -284,10 +289,14 @@ std::string kind_of(const Field& field) {
   return std::visit(
       [](const auto& get) -> std::string {
         using T = std::remove_reference_t<std::invoke_result_t<decltype(get), Config&>>;
-        if constexpr (std::is_same_v<T, std::string>) return "a string";
-        else if constexpr (std::is_same_v<T, bool>) return "true or false";
-        else if constexpr (std::is_same_v<T, double>) return "a number";
-        else return "an integer";
+        if constexpr (std::is_same_v<T, std::string>)
+          return "a string";
+        else if constexpr (std::is_same_v<T, bool>)
+          return "true or false";
+        else if constexpr (std::is_same_v<T, double>)
+          return "a number";
+        else
+          return "an integer";
       },
       field.member);
 }
@@ -423,7 +432,8 @@ Config parse_config(std::string_view yaml_text, const std::filesystem::path& sou
       set_from_node(*field, top.second, line, config, source);
       continue;
     }
-    if (!is_section(name)) throw ConfigError(source, line, name + ": unknown section" + suggestion(name, top_level_names()));
+    if (!is_section(name))
+      throw ConfigError(source, line, name + ": unknown section" + suggestion(name, top_level_names()));
     if (top.second.IsNull()) continue;  // "cvo:" with nothing under it
     if (!top.second.IsMap())
       throw ConfigError(source, line, name + ": expected a mapping of keys, e.g. '" + name + ": {key: value}'");
@@ -469,7 +479,7 @@ void apply_override(Config& config, std::string_view assignment) {
 }
 
 std::string dump_config(const Config& config) {
-  Config c = config;  // the accessors need a mutable object; they only read here
+  Config c = config;                 // the accessors need a mutable object; they only read here
   std::vector<std::string> entries;  // "  key: value", before comments are aligned
   std::size_t width = 0;
   for (const auto& f : table()) {

@@ -31,12 +31,12 @@ struct TrackerdParameters {
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   bool paced = true;
   bool exit_on_eof = false;
-  std::size_t ring_slots = 4;   // ~130 ms at 30 Hz: a hiccup is absorbed, a slow tracker sheds load
+  std::size_t ring_slots = 4;  // ~130 ms at 30 Hz: a hiccup is absorbed, a slow tracker sheds load
   bool deterministic = false;
-  int realtime_priority = 40;   // SCHED_FIFO, below threaded IRQ handlers (50) so camera interrupts go first
+  int realtime_priority = 40;  // SCHED_FIFO, below threaded IRQ handlers (50) so camera interrupts go first
   int cpu = -1;
   bool lock_memory = true;
-  double deadline_ms = 33.3;    // one frame period at 30 Hz
+  double deadline_ms = 33.3;  // one frame period at 30 Hz
   std::size_t warmup_frames = 30;
   std::string keyframe_colour_encoding = "jpeg";
   double status_period_s = 1.0;
@@ -59,8 +59,8 @@ struct BackenddParameters {
   std::string vocabulary = "default";  // the installed default (share/cvo-slam/orb_k10_l4.voc), or a file
   double status_period_s = 1.0;
   std::string publish_url = "lcm_url";  // where CVO_MAP and CVO_STATUS go; "lcm_url": the same provider
-  bool exit_on_eof = false;      // a file:// lcm_url that ends: final optimisation, final map, exit 0
-  std::size_t queue_max = 64;    // records waiting for the back end's thread in memory; more wait in the store
+  bool exit_on_eof = false;             // a file:// lcm_url that ends: final optimisation, final map, exit 0
+  std::size_t queue_max = 64;           // records waiting for the back end's thread in memory; more wait in the store
   // Accepted records held in memory while the keyframe store cannot be written (disk full, file
   // size limit), written in order when it works again; beyond this they are used but not stored.
   // A 640x480 keyframe with JPEG colour is about 300 kB.

@@ -10,20 +10,20 @@
 namespace cvo::core {
 
 enum class BadKind : std::int32_t {
-  kTooShort = 0,          // shorter than the 8-byte fingerprint
-  kFingerprint = 1,       // another message type, or another schema of this one
-  kBody = 2,              // counts that do not fit, a truncated or corrupt body, trailing bytes
-  kVersion = 3,           // our type, another `version`
-  kContent = 4,           // decodes, but malformed: sizes that do not match, images that do not decode, ...
-  kConflict = 5,          // contradicts what was accepted before
-  kUnknownKeyframe = 6,   // names a keyframe the receiver does not have
-  kNotFinite = 7,         // a NaN or infinite pose, point or number
-  kInformation = 8,       // an information matrix that is not symmetric positive definite
-  kImageFormat = 9,       // an image that is not the format its encoding field declares
-  kImageSize = 10,        // an image header with another size or depth than the message, or too large
-  kStale = 11,            // a CVO_MAP not newer than the last one applied
-  kForeign = 12,          // a CVO_MAP without an entry for this tracker's session
-  kImplausible = 13,      // a CVO_MAP correction that jumps further than allowed
+  kTooShort = 0,         // shorter than the 8-byte fingerprint
+  kFingerprint = 1,      // another message type, or another schema of this one
+  kBody = 2,             // counts that do not fit, a truncated or corrupt body, trailing bytes
+  kVersion = 3,          // our type, another `version`
+  kContent = 4,          // decodes, but malformed: sizes that do not match, images that do not decode, ...
+  kConflict = 5,         // contradicts what was accepted before
+  kUnknownKeyframe = 6,  // names a keyframe the receiver does not have
+  kNotFinite = 7,        // a NaN or infinite pose, point or number
+  kInformation = 8,      // an information matrix that is not symmetric positive definite
+  kImageFormat = 9,      // an image that is not the format its encoding field declares
+  kImageSize = 10,       // an image header with another size or depth than the message, or too large
+  kStale = 11,           // a CVO_MAP not newer than the last one applied
+  kForeign = 12,         // a CVO_MAP without an entry for this tracker's session
+  kImplausible = 13,     // a CVO_MAP correction that jumps further than allowed
 };
 inline constexpr int kNumBadKinds = 14;
 

@@ -36,8 +36,7 @@ InformationCheck check_information(const core::Matrix6d& omega) {
     check.defect = InformationDefect::kNotFinite;
     return check;
   }
-  const Eigen::SelfAdjointEigenSolver<core::Matrix6d> eigen(0.5 * (omega + omega.transpose()),
-                                                            Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<core::Matrix6d> eigen(0.5 * (omega + omega.transpose()), Eigen::EigenvaluesOnly);
   check.smallest_eigenvalue = eigen.eigenvalues()(0);  // ascending
   check.largest_eigenvalue = eigen.eigenvalues()(5);
   const double scale = omega.cwiseAbs().maxCoeff();

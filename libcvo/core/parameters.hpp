@@ -48,7 +48,7 @@ struct SelectionParameters {
 /// libcvo/registration/README.md). Colour labels are RGB in [0, 1] plus the grey gradient in
 /// [-1, 1] (registration/feature.hpp).
 struct CvoParameters {
-  double ell_init = 0.1;                       // ℓ_init: spatial kernel initial length-scale (m)
+  double ell_init = 0.1;  // ℓ_init: spatial kernel initial length-scale (m)
   // Smallest length-scale of the schedule (m); not in Table 1. 0.07 ends the schedule one step
   // earlier than 0.05 (0.1 -> 0.07, not 0.1 -> 0.07 -> 0.05): a little accuracy traded for
   // realtime at 30 Hz on one core.
@@ -59,9 +59,9 @@ struct CvoParameters {
   double sigma_color = 1.0;                    // σ_c: colour kernel signal (standard deviation)
   double sparsification_threshold = 8.315e-3;  // pairs with a_ij below this contribute nothing
   int max_iterations = 100;
-  double min_step = 1e-4;                      // converged at ℓ_min when |Δρ| + |Δφ| < this (m + rad)
-  int threads = 1;                             // the tracker runs single-threaded by default
-  bool mutual_visibility = true;               // align() sums only what both views see (registration.hpp)
+  double min_step = 1e-4;         // converged at ℓ_min when |Δρ| + |Δφ| < this (m + rad)
+  int threads = 1;                // the tracker runs single-threaded by default
+  bool mutual_visibility = true;  // align() sums only what both views see (registration.hpp)
 
   bool operator==(const CvoParameters&) const = default;
 };
@@ -124,18 +124,18 @@ struct LoopVerificationParameters {
   // CVO refinements per new keyframe, best η first (0: no limit): CVO is the back end's main cost,
   // and verifying only the best few kept the map as good.
   int max_refinements = 3;
-  int ransac_iterations = 300;         // minimal sets tried for the initial pose
-  double ransac_inlier_m = 0.03;       // 3-D distance for a match to count as an inlier (m)
-  int min_inliers = 12;                // fewer after RANSAC: no initial pose, no loop
-  double min_inlier_retention = 0.5;   // share of RANSAC's inliers the CVO pose must keep (step 3b)
-  std::uint32_t ransac_seed = 0;       // RANSAC's std::mt19937: the same loops every run
+  int ransac_iterations = 300;        // minimal sets tried for the initial pose
+  double ransac_inlier_m = 0.03;      // 3-D distance for a match to count as an inlier (m)
+  int min_inliers = 12;               // fewer after RANSAC: no initial pose, no loop
+  double min_inlier_retention = 0.5;  // share of RANSAC's inliers the CVO pose must keep (step 3b)
+  std::uint32_t ransac_seed = 0;      // RANSAC's std::mt19937: the same loops every run
   // ORB keypoints (cv::ORB; loop_closure/orb_features.hpp): ORB-SLAM2's feature count, OpenCV's
   // other defaults. The installed vocabulary was trained with these (cvo-vocabulary).
-  int orb_features = 1000;             // at most this many keypoints, the strongest first
-  double orb_scale_factor = 1.2;       // pyramid scale between levels
-  int orb_levels = 8;                  // pyramid levels
-  int orb_edge_threshold = 31;         // border without features, pixels (>= patch size: descriptors fit)
-  int orb_fast_threshold = 20;         // FAST intensity threshold
+  int orb_features = 1000;        // at most this many keypoints, the strongest first
+  double orb_scale_factor = 1.2;  // pyramid scale between levels
+  int orb_levels = 8;             // pyramid levels
+  int orb_edge_threshold = 31;    // border without features, pixels (>= patch size: descriptors fit)
+  int orb_fast_threshold = 20;    // FAST intensity threshold
 
   bool operator==(const LoopVerificationParameters&) const = default;
 };

@@ -15,8 +15,7 @@ Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& phi) {
   const double th = phi.norm();
   const double th2 = th * th;
   const Eigen::Matrix3d W = hat(phi);
-  if (th < kSmallAngle)
-    return Eigen::Matrix3d::Identity() + (0.5 - th2 / 24.0) * W + (1.0 / 6.0 - th2 / 120.0) * W * W;
+  if (th < kSmallAngle) return Eigen::Matrix3d::Identity() + (0.5 - th2 / 24.0) * W + (1.0 / 6.0 - th2 / 120.0) * W * W;
   const double s = std::sin(0.5 * th);
   return Eigen::Matrix3d::Identity() + 2.0 * s * s / th2 * W + (th - std::sin(th)) / (th2 * th) * W * W;
 }
@@ -34,8 +33,7 @@ Eigen::Matrix3d so3_left_jacobian_inverse(const Eigen::Vector3d& phi) {
   const double th2 = th * th;
   const Eigen::Matrix3d W = hat(phi);
   // c = (1 - (th/2) cot(th/2)) / th^2
-  const double c = th < kSmallAngle ? 1.0 / 12.0 + th2 / 720.0
-                                    : (1.0 - 0.5 * th / std::tan(0.5 * th)) / th2;
+  const double c = th < kSmallAngle ? 1.0 / 12.0 + th2 / 720.0 : (1.0 - 0.5 * th / std::tan(0.5 * th)) / th2;
   return Eigen::Matrix3d::Identity() - 0.5 * W + c * W * W;
 }
 
@@ -118,8 +116,6 @@ bool SE3::is_finite() const { return q_.coeffs().allFinite() && t_.allFinite(); 
 
 SE3 SE3::operator*(const SE3& other) const { return {q_ * other.q_, q_ * other.t_ + t_}; }
 
-SE3 interpolate(const SE3& a, const SE3& b, double s) {
-  return a * SE3::exp(s * (a.inverse() * b).log());
-}
+SE3 interpolate(const SE3& a, const SE3& b, double s) { return a * SE3::exp(s * (a.inverse() * b).log()); }
 
 }  // namespace cvo::core

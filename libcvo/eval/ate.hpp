@@ -32,9 +32,9 @@ struct AtePair {
 };
 
 struct AteResult {
-  core::SE3 alignment;          // maps estimate positions onto the ground truth
-  std::vector<AtePair> pairs;   // the associated pairs, by increasing ground-truth timestamp
-  ErrorStatistics error;        // m, over pairs (error.count == pairs.size())
+  core::SE3 alignment;         // maps estimate positions onto the ground truth
+  std::vector<AtePair> pairs;  // the associated pairs, by increasing ground-truth timestamp
+  ErrorStatistics error;       // m, over pairs (error.count == pairs.size())
 };
 
 /// Throws std::invalid_argument when fewer than 3 pairs associate, when an option is not finite

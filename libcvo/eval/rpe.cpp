@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "libcvo/eval/trajectory_checks.hpp"
 #include "libcvo/core/units.hpp"
+#include "libcvo/eval/trajectory_checks.hpp"
 
 namespace cvo::eval {
 
@@ -54,8 +54,7 @@ RpeResult relative_pose_error(const core::Trajectory& groundtruth, const core::T
     const double t_gt = gt_stamps[core::find_closest_index(gt_stamps, t + options.offset)];
     returned.insert(core::find_closest_index(est_stamps, t_gt - options.offset));
   }
-  if (returned.size() < 2)
-    throw std::invalid_argument("RPE: the estimate and the ground truth hardly overlap in time");
+  if (returned.size() < 2) throw std::invalid_argument("RPE: the estimate and the ground truth hardly overlap in time");
 
   const double max_gt_gap = 2.0 * median_interval(gt_stamps);
   RpeResult result;

@@ -37,10 +37,10 @@ struct RpePair {
 };
 
 struct RpeResult {
-  double delta = 1.0;           // s, as evaluated
-  std::vector<RpePair> pairs;   // by increasing est_timestamp_0
-  ErrorStatistics translation;  // m per delta
-  ErrorStatistics rotation_deg; // degrees per delta
+  double delta = 1.0;            // s, as evaluated
+  std::vector<RpePair> pairs;    // by increasing est_timestamp_0
+  ErrorStatistics translation;   // m per delta
+  ErrorStatistics rotation_deg;  // degrees per delta
 };
 
 /// The error transform A B^-1 of one pair (see above).

@@ -9,7 +9,8 @@ namespace cvo::eval {
 
 core::Trajectory sorted_unique(const core::Trajectory& trajectory, std::string_view what) {
   core::Trajectory sorted = trajectory;
-  std::stable_sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
   const auto dup = std::adjacent_find(sorted.begin(), sorted.end(),
                                       [](const auto& a, const auto& b) { return a.timestamp == b.timestamp; });
   if (dup != sorted.end()) {

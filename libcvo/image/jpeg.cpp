@@ -48,8 +48,8 @@ std::string decode_jpeg(std::span<const std::uint8_t> jpeg, cv::Mat& bgr, cv::Si
     return "JPEG: image is " + size_text(header.width, header.height) + ", expected " +
            size_text(expected.width, expected.height);
   if (header.width > kMaxSide || header.height > kMaxSide)
-    return "JPEG: image of " + size_text(header.width, header.height) + " is larger than " +
-           std::to_string(kMaxSide) + " a side";
+    return "JPEG: image of " + size_text(header.width, header.height) + " is larger than " + std::to_string(kMaxSide) +
+           " a side";
   bgr.create(header.height, header.width, CV_8UC3);
   const int flags = warnings == JpegWarnings::kRefuse ? TJFLAG_STOPONWARNING : 0;
   if (tjDecompress2(tj.get(), jpeg.data(), jpeg.size(), bgr.data, bgr.cols, int(bgr.step[0]), bgr.rows, TJPF_BGR,

@@ -182,8 +182,8 @@ std::string decode_png(std::span<const std::uint8_t> png, PngPixels pixels, cv::
 std::string encode_png(const cv::Mat& image, PngPixels pixels, int compression, std::vector<std::uint8_t>& png) {
   const int type = pixels == PngPixels::kGrey16 ? CV_16UC1 : CV_8UC3;
   if (image.type() != type || image.dims != 2)
-    return std::string("PNG: can encode only a 2-D ") + (type == CV_16UC1 ? "CV_16UC1" : "CV_8UC3") + " image here, not type " +
-           std::to_string(image.type());
+    return std::string("PNG: can encode only a 2-D ") + (type == CV_16UC1 ? "CV_16UC1" : "CV_8UC3") +
+           " image here, not type " + std::to_string(image.type());
   if (image.empty() || image.cols > kMaxSide || image.rows > kMaxSide)
     return "PNG: cannot encode an image of " + size_text(image.cols, image.rows);
   if (compression < 0 || compression > 9) return "PNG: compression " + std::to_string(compression) + " is not 0..9";

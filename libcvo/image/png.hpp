@@ -17,9 +17,9 @@ namespace cvo::image {
 
 /// What an image is in memory.
 enum class PngPixels {
-  kBgr8,   // CV_8UC3, OpenCV's channel order
-  kRgb8,   // CV_8UC3, the file's channel order
-  kGrey16, // CV_16UC1: depth
+  kBgr8,    // CV_8UC3, OpenCV's channel order
+  kRgb8,    // CV_8UC3, the file's channel order
+  kGrey16,  // CV_16UC1: depth
 };
 
 /// Reads the signature and IHDR only.

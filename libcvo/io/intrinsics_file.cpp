@@ -17,8 +17,8 @@
 namespace cvo::io {
 namespace {
 
-constexpr std::array<std::string_view, 13> kKeys{"fx",          "fy", "cx", "cy", "width", "height",
-                                                 "depth_scale", "k1", "k2", "p1", "p2",    "k3", "readout_s"};
+constexpr std::array<std::string_view, 13> kKeys{"fx", "fy", "cx", "cy", "width", "height",   "depth_scale",
+                                                 "k1", "k2", "p1", "p2", "k3",    "readout_s"};
 constexpr std::size_t kRequiredKeys = 6;  // fx .. height; the rest default
 constexpr std::string_view kExpected = "fx, fy, cx, cy, width, height, depth_scale, k1, k2, p1, p2, k3, readout_s";
 constexpr std::array<std::string_view, 5> kDistortionKeys{"k1", "k2", "p1", "p2", "k3"};  // OpenCV's order
@@ -120,8 +120,9 @@ core::Intrinsics parse_map(const YAML::Node& map, const std::filesystem::path& n
     const auto key = entry.first.Scalar();
     const auto line = line_of(entry.first);
     if (key != nested && std::find(kKeys.begin(), kKeys.end(), key) == kKeys.end())
-      throw InputError(name, line, "unknown key '" + key + "' (expected " + std::string(kExpected) + ", " +
-                                       std::string(nested) + ")");
+      throw InputError(
+          name, line,
+          "unknown key '" + key + "' (expected " + std::string(kExpected) + ", " + std::string(nested) + ")");
     if (const auto [it, fresh] = seen.emplace(key, line); !fresh)
       throw InputError(name, line, "duplicate key '" + key + "' (first on line " + std::to_string(it->second) + ")");
     if (key != nested) set_key(k, key, entry.second, name, line);
@@ -138,8 +139,8 @@ core::Intrinsics parse_map(const YAML::Node& map, const std::filesystem::path& n
 CameraFile parse_yaml(std::string_view text, const std::filesystem::path& name) {
   const YAML::Node root = load_yaml(text, name);
   if (!root.IsMap())
-    throw InputError(name, std::string("expected a YAML mapping with keys ").append(kExpected) +
-                               ", or an ETH3D line 'fx fy cx cy'");
+    throw InputError(
+        name, std::string("expected a YAML mapping with keys ").append(kExpected) + ", or an ETH3D line 'fx fy cx cy'");
   std::map<std::string, std::size_t, std::less<>> seen;  // key -> line
   CameraFile camera{parse_map(root, name, 0, kDepthSensorKey, seen), std::nullopt};
   if (const YAML::Node section = root[std::string(kDepthSensorKey)]) {
@@ -149,7 +150,8 @@ CameraFile parse_yaml(std::string_view text, const std::filesystem::path& name) 
     core::DepthSensor depth{parse_map(section, name, line, kExtrinsicKey, inner), {}};
     if (!inner.contains(std::string(kExtrinsicKey)))
       throw InputError(name, line, std::string(kDepthSensorKey) + ": missing key '" + std::string(kExtrinsicKey) + "'");
-    depth.T_colour_depth = parse_extrinsic(section[std::string(kExtrinsicKey)], name, inner.at(std::string(kExtrinsicKey)));
+    depth.T_colour_depth =
+        parse_extrinsic(section[std::string(kExtrinsicKey)], name, inner.at(std::string(kExtrinsicKey)));
     camera.depth_sensor = depth;
   }
   return camera;

@@ -16,8 +16,8 @@ core::Trajectory parse_tum_trajectory(std::istream& in, const std::filesystem::p
   core::Trajectory trajectory;
   for_each_data_line(in, name, [&](std::size_t line_no, const std::vector<std::string>& fields) {
     if (fields.size() != 8)
-      throw InputError(name, line_no, "expected 8 fields 'timestamp tx ty tz qx qy qz qw', got " +
-                                          std::to_string(fields.size()));
+      throw InputError(name, line_no,
+                       "expected 8 fields 'timestamp tx ty tz qx qy qz qw', got " + std::to_string(fields.size()));
     std::array<double, 8> v{};
     for (std::size_t k = 0; k < 8; ++k) v[k] = parse_finite(fields[k], name, line_no);
     const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);

@@ -103,8 +103,9 @@ core::Intrinsics camera_for(const std::filesystem::path& dir, const TumOptions& 
   if (const auto own = dir / "camera.yaml"; std::filesystem::exists(own)) return read_intrinsics_file(own);
   const auto preset = guess_camera_preset(dir);
   if (!preset)
-    throw InputError(dir, "cannot tell the camera: no camera.yaml and no fr1/fr2/fr3 in the folder name; give a "
-                          "preset or an intrinsics file");
+    throw InputError(dir,
+                     "cannot tell the camera: no camera.yaml and no fr1/fr2/fr3 in the folder name; give a "
+                     "preset or an intrinsics file");
   return *core::camera_preset(*preset);
 }
 
@@ -172,11 +173,12 @@ core::RgbdFrame TumSequence::read(std::size_t i) const {
   frame.bgr = read_colour(i, files.rgb);
   frame.depth = read_depth(i, files.depth);
   if (frame.depth.size() != frame.bgr.size())
-    throw FrameError(i, files.depth, "depth image is " + size_text(frame.depth.size()) + " but its colour image " +
-                                         size_text(frame.bgr.size()));
+    throw FrameError(
+        i, files.depth,
+        "depth image is " + size_text(frame.depth.size()) + " but its colour image " + size_text(frame.bgr.size()));
   if (const cv::Size camera(intrinsics_.width, intrinsics_.height); frame.bgr.size() != camera)
-    throw FrameError(i, files.rgb, "image is " + size_text(frame.bgr.size()) + " but the camera's " +
-                                       size_text(camera));
+    throw FrameError(i, files.rgb,
+                     "image is " + size_text(frame.bgr.size()) + " but the camera's " + size_text(camera));
   return frame;
 }
 

@@ -14,10 +14,11 @@ constexpr bool same(BadKind kind, std::int32_t index) { return static_cast<std::
 static_assert(same(BadKind::kTooShort, S::BAD_TOO_SHORT) && same(BadKind::kFingerprint, S::BAD_FINGERPRINT) &&
               same(BadKind::kBody, S::BAD_BODY) && same(BadKind::kVersion, S::BAD_VERSION) &&
               same(BadKind::kContent, S::BAD_CONTENT) && same(BadKind::kConflict, S::BAD_CONFLICT) &&
-              same(BadKind::kUnknownKeyframe, S::BAD_UNKNOWN_KEYFRAME) && same(BadKind::kNotFinite, S::BAD_NOT_FINITE) &&
-              same(BadKind::kInformation, S::BAD_INFORMATION) && same(BadKind::kImageFormat, S::BAD_IMAGE_FORMAT) &&
-              same(BadKind::kImageSize, S::BAD_IMAGE_SIZE) && same(BadKind::kStale, S::BAD_STALE) &&
-              same(BadKind::kForeign, S::BAD_FOREIGN) && same(BadKind::kImplausible, S::BAD_IMPLAUSIBLE));
+              same(BadKind::kUnknownKeyframe, S::BAD_UNKNOWN_KEYFRAME) &&
+              same(BadKind::kNotFinite, S::BAD_NOT_FINITE) && same(BadKind::kInformation, S::BAD_INFORMATION) &&
+              same(BadKind::kImageFormat, S::BAD_IMAGE_FORMAT) && same(BadKind::kImageSize, S::BAD_IMAGE_SIZE) &&
+              same(BadKind::kStale, S::BAD_STALE) && same(BadKind::kForeign, S::BAD_FOREIGN) &&
+              same(BadKind::kImplausible, S::BAD_IMPLAUSIBLE));
 static_assert(core::kNumBadKinds == S::NUM_BAD_KINDS &&
               sizeof(S{}.bad_messages) / sizeof(std::int64_t) == core::kNumBadKinds);
 

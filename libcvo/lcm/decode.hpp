@@ -43,8 +43,9 @@ template <class T>
 std::optional<T> decode(const void* data, int size, std::string* error, DecodeFailure* failure = nullptr) {
   const char* type = T::getTypeName();
   if (data == nullptr || size < 8) {
-    detail::set_error(error, type, "buffer of " + std::to_string(data == nullptr ? 0 : size) +
-                                       " bytes is shorter than the 8-byte fingerprint");
+    detail::set_error(
+        error, type,
+        "buffer of " + std::to_string(data == nullptr ? 0 : size) + " bytes is shorter than the 8-byte fingerprint");
     detail::set_failure(failure, DecodeFailure::kTooShort);
     return std::nullopt;
   }
@@ -79,12 +80,15 @@ std::optional<T> decode(const void* data, int size, std::string* error, DecodeFa
     return std::nullopt;
   }
   if (used != size) {
-    detail::set_error(error, type,
-                      std::to_string(size - used) + " trailing bytes after a " + std::to_string(used) + "-byte message");
+    detail::set_error(
+        error, type, std::to_string(size - used) + " trailing bytes after a " + std::to_string(used) + "-byte message");
     detail::set_failure(failure, DecodeFailure::kBody);
     return std::nullopt;
   }
-  if constexpr (requires { message.version; T::SCHEMA_VERSION; }) {
+  if constexpr (requires {
+                  message.version;
+                  T::SCHEMA_VERSION;
+                }) {
     if (message.version != T::SCHEMA_VERSION) {
       detail::set_error(error, type,
                         "schema version " + std::to_string(message.version) + ", this build reads version " +

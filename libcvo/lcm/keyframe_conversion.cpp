@@ -58,7 +58,8 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
     if (failure != nullptr) *failure = f;
   };
   kind(ContentFailure::kContent);
-  if (m.version != cvo_lcm::keyframe_t::SCHEMA_VERSION) return fail(error, "schema version " + std::to_string(m.version));
+  if (m.version != cvo_lcm::keyframe_t::SCHEMA_VERSION)
+    return fail(error, "schema version " + std::to_string(m.version));
   if (m.id < 0) return fail(error, "negative keyframe id " + std::to_string(m.id));
   std::string why;
   const auto pose = from_message(m.pose, &why);
@@ -102,7 +103,8 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
     if (m.xyz[i].size() != 3 || m.labels[i].size() != registration::kFeatureDim)
       return fail(error, "point " + std::to_string(i) + " has the wrong number of coordinates or label channels");
 
-  Keyframe k{m.session, m.id, std::move(*images), *pose, registration::PointCloud(static_cast<std::size_t>(m.num_points))};
+  Keyframe k{m.session, m.id, std::move(*images), *pose,
+             registration::PointCloud(static_cast<std::size_t>(m.num_points))};
   for (std::int32_t i = 0; i < m.num_points; ++i) {
     const auto& p = m.xyz[static_cast<std::size_t>(i)];
     registration::Feature f{};

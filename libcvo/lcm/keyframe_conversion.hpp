@@ -16,10 +16,10 @@
 namespace cvo::lcm {
 
 struct Keyframe {
-  std::int64_t session = 0;    // the tracker session (proto/pose_t.lcm)
-  std::int64_t id = 0;         // increasing within the session
-  core::RgbdFrame frame;       // the frame it was made from (index, stamps, images, intrinsics)
-  core::SE3 pose;              // T_odom_camera
+  std::int64_t session = 0;        // the tracker session (proto/pose_t.lcm)
+  std::int64_t id = 0;             // increasing within the session
+  core::RgbdFrame frame;           // the frame it was made from (index, stamps, images, intrinsics)
+  core::SE3 pose;                  // T_odom_camera
   registration::PointCloud cloud;  // in the keyframe's camera frame
 };
 

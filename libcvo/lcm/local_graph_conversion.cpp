@@ -4,8 +4,8 @@
 #include <cmath>
 #include <iterator>
 
-#include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/core/information.hpp"
+#include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -22,16 +22,19 @@ struct Refusal {
 };
 
 bool is_node(const odometry::LocalGraph& graph, std::int64_t index) {
-  return std::any_of(graph.nodes().begin(), graph.nodes().end(),
-                     [&](const odometry::LocalGraphNode& n) { return static_cast<std::int64_t>(n.frame_index) == index; });
+  return std::any_of(graph.nodes().begin(), graph.nodes().end(), [&](const odometry::LocalGraphNode& n) {
+    return static_cast<std::int64_t>(n.frame_index) == index;
+  });
 }
 
 std::optional<Refusal> add_node(const cvo_lcm::local_graph_node_t& n, odometry::LocalGraph& graph) {
   const std::string name = "node " + std::to_string(n.frame_index);
   std::string why;
   const auto pose = from_message(n.pose, &why);
-  if (!pose) return Refusal{is_finite(n.pose) ? ContentFailure::kContent : ContentFailure::kNotFinite, name + ": " + why};
-  if (n.frame_index < 0) return Refusal{ContentFailure::kContent, "negative frame index " + std::to_string(n.frame_index)};
+  if (!pose)
+    return Refusal{is_finite(n.pose) ? ContentFailure::kContent : ContentFailure::kNotFinite, name + ": " + why};
+  if (n.frame_index < 0)
+    return Refusal{ContentFailure::kContent, "negative frame index " + std::to_string(n.frame_index)};
   graph.add_node({static_cast<std::uint64_t>(n.frame_index), from_utime(n.utime), *pose});
   return std::nullopt;
 }
@@ -48,10 +51,11 @@ std::optional<Refusal> add_edge(const cvo_lcm::graph_edge_t& e, odometry::LocalG
     return Refusal{is_finite(e.measurement) ? ContentFailure::kContent : ContentFailure::kNotFinite, name + ": " + why};
   const core::Matrix6d information = matrix6_from_message(e.information);
   if (const auto check = core::check_information(information); !check.ok())
-    return Refusal{check.defect == core::InformationDefect::kNotFinite ? ContentFailure::kNotFinite
-                                                                             : ContentFailure::kInformation,
-                   name + ": " + check.why()};
-  if (!graph.add_edge({static_cast<std::uint64_t>(e.from), static_cast<std::uint64_t>(e.to), *measurement, information}))
+    return Refusal{
+        check.defect == core::InformationDefect::kNotFinite ? ContentFailure::kNotFinite : ContentFailure::kInformation,
+        name + ": " + check.why()};
+  if (!graph.add_edge(
+          {static_cast<std::uint64_t>(e.from), static_cast<std::uint64_t>(e.to), *measurement, information}))
     return Refusal{ContentFailure::kContent, "more than two edges per node"};
   return std::nullopt;
 }

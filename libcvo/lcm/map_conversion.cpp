@@ -16,7 +16,8 @@ cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t
   for (const auto& s : map.sessions)
     m.sessions.push_back({s.session, s.placed, s.piece, static_cast<std::int32_t>(s.keyframes), s.joined_at_keyframe,
                           to_message(s.correction)});
-  for (const auto& k : map.keyframes) m.keyframes.push_back({k.session, k.id, to_utime(k.timestamp), to_message(k.pose)});
+  for (const auto& k : map.keyframes)
+    m.keyframes.push_back({k.session, k.id, to_utime(k.timestamp), to_message(k.pose)});
   for (const auto& l : map.loops) {
     cvo_lcm::map_loop_t loop{};
     loop.from_session = l.from_session;
@@ -44,7 +45,8 @@ std::optional<slam::Map> from_message(const cvo_lcm::map_t& m, std::string* erro
   for (const auto& s : m.sessions)
     map.sessions.push_back({s.session, s.placed != 0, s.piece, static_cast<std::size_t>(std::max(0, s.keyframes)),
                             s.joined_at_keyframe, *from_message(s.correction, nullptr)});
-  for (const auto& k : m.keyframes) map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *from_message(k.pose, nullptr)});
+  for (const auto& k : m.keyframes)
+    map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *from_message(k.pose, nullptr)});
   for (const auto& l : m.loops) {
     slam::MapLoop loop;
     loop.from_session = l.from_session;

@@ -14,8 +14,8 @@
 #include <cstdint>
 #include <string>
 
-#include "libcvo/core/se3.hpp"
 #include "libcvo/core/bad_kind.hpp"
+#include "libcvo/core/se3.hpp"
 
 namespace cvo::lcm {
 
@@ -35,9 +35,9 @@ struct CorrectionLimits {
 
 struct CorrectionDecision {
   bool apply = false;
-  AppliedCorrection correction;          // when apply: the new state
+  AppliedCorrection correction;                     // when apply: the new state
   core::BadKind refusal = core::BadKind::kContent;  // when refused: CVO_STATUS's bad_messages index
-  std::string why;                       // when refused: for the daemon's note
+  std::string why;                                  // when refused: for the daemon's note
 };
 
 /// The decision for the CVO_MAP bytes `data` (as received) for `session`, given the correction

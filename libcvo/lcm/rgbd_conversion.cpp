@@ -43,7 +43,8 @@ bool encode_colour(const cv::Mat& bgr, const RgbdEncoding& encoding, Message& m,
         return refuse(error, "JPEG encoding of the colour image failed: " + bad);
       return true;
     case ColourEncoding::kPng:
-      if (const auto bad = image::encode_png(bgr, image::PngPixels::kBgr8, encoding.png_compression, m.colour); !bad.empty())
+      if (const auto bad = image::encode_png(bgr, image::PngPixels::kBgr8, encoding.png_compression, m.colour);
+          !bad.empty())
         return refuse(error, "PNG encoding of the colour image failed: " + bad);
       return true;
   }
@@ -65,7 +66,8 @@ bool encode_depth(const cv::Mat& depth, const RgbdEncoding& encoding, Message& m
       return true;
     }
     case DepthEncoding::kPng:
-      if (const auto bad = image::encode_png(depth, image::PngPixels::kGrey16, encoding.png_compression, m.depth); !bad.empty())
+      if (const auto bad = image::encode_png(depth, image::PngPixels::kGrey16, encoding.png_compression, m.depth);
+          !bad.empty())
         return refuse(error, "PNG encoding of the depth image failed: " + bad);
       return true;
   }
@@ -97,8 +99,9 @@ std::string check_png(const std::uint8_t* b, std::size_t size, const ExpectedIma
   const int bit_depth = b[24], colour_type = b[25];
   if (w != std::uint32_t(e.width) || h != std::uint32_t(e.height))
     return "PNG header says " + dims(w, h) + ", the message " + dims(std::uint32_t(e.width), std::uint32_t(e.height));
-  const bool ok = e.depth16 ? bit_depth == 16 && colour_type == 0
-                            : bit_depth == 8 && (colour_type == 0 || colour_type == 2 || colour_type == 3 || colour_type == 6);
+  const bool ok =
+      e.depth16 ? bit_depth == 16 && colour_type == 0
+                : bit_depth == 8 && (colour_type == 0 || colour_type == 2 || colour_type == 3 || colour_type == 6);
   if (!ok)
     return "PNG of bit depth " + std::to_string(bit_depth) + ", colour type " + std::to_string(colour_type) +
            (e.depth16 ? " (depth must be 16-bit grey)" : " (colour must be 8-bit grey, RGB, palette or RGBA)");
@@ -127,7 +130,8 @@ std::string check_jpeg(const std::uint8_t* b, std::size_t size, const ExpectedIm
       const std::uint32_t h = be16(b + at + 5), w = be16(b + at + 7);
       const int precision = b[at + 4], components = b[at + 9];
       if (w != std::uint32_t(e.width) || h != std::uint32_t(e.height))
-        return "JPEG header says " + dims(w, h) + ", the message " + dims(std::uint32_t(e.width), std::uint32_t(e.height));
+        return "JPEG header says " + dims(w, h) + ", the message " +
+               dims(std::uint32_t(e.width), std::uint32_t(e.height));
       if (e.depth16 || precision != 8 || (components != 1 && components != 3))
         return "JPEG of precision " + std::to_string(precision) + " with " + std::to_string(components) +
                " components (colour must be 8-bit grey or 3-component)";
@@ -181,8 +185,8 @@ std::optional<Message> to_message(const core::RgbdFrame& frame, const RgbdEncodi
     return fail(error, "colour image must be CV_8UC3 " + expected + ", is type " + std::to_string(frame.bgr.type()) +
                            " " + size_text(frame.bgr));
   if (frame.depth.type() != CV_16UC1 || frame.depth.cols != k.width || frame.depth.rows != k.height)
-    return fail(error, "depth image must be CV_16UC1 " + expected + ", is type " +
-                           std::to_string(frame.depth.type()) + " " + size_text(frame.depth));
+    return fail(error, "depth image must be CV_16UC1 " + expected + ", is type " + std::to_string(frame.depth.type()) +
+                           " " + size_text(frame.depth));
 
   Message m{};
   m.version = Message::SCHEMA_VERSION;
@@ -225,11 +229,13 @@ cv::Mat decode_checked(const std::vector<std::uint8_t>& bytes, const ExpectedIma
   const std::string bad =
       expected.format == ImageFormat::kJpeg
           ? image::decode_jpeg(bytes, decoded, size)
-          : image::decode_png(bytes, expected.depth16 ? image::PngPixels::kGrey16 : image::PngPixels::kBgr8, decoded, size);
+          : image::decode_png(bytes, expected.depth16 ? image::PngPixels::kGrey16 : image::PngPixels::kBgr8, decoded,
+                              size);
   if (!bad.empty()) {
     fail(error, kind, BadKind::kContent,
-         std::string(what) + " image does not decode to " + (expected.depth16 ? "16-bit depth of " : "8-bit colour of ") +
-             std::to_string(expected.width) + "x" + std::to_string(expected.height) + ": " + bad);
+         std::string(what) + " image does not decode to " +
+             (expected.depth16 ? "16-bit depth of " : "8-bit colour of ") + std::to_string(expected.width) + "x" +
+             std::to_string(expected.height) + ": " + bad);
     return {};
   }
   return decoded;
@@ -309,8 +315,8 @@ std::string check_image_header(const std::uint8_t* bytes, std::size_t size, cons
 std::optional<core::RgbdFrame> from_message(const Message& m, std::string* error, BadKind* kind) {
   if (kind != nullptr) *kind = BadKind::kContent;
   if (m.version != Message::SCHEMA_VERSION)
-    return fail(error, "schema version " + std::to_string(m.version) + ", expected " +
-                           std::to_string(Message::SCHEMA_VERSION));
+    return fail(
+        error, "schema version " + std::to_string(m.version) + ", expected " + std::to_string(Message::SCHEMA_VERSION));
   if (m.frame_index < 0) return fail(error, "negative frame_index " + std::to_string(m.frame_index));
   if (m.colour_size != static_cast<std::int64_t>(m.colour.size()) ||
       m.depth_size != static_cast<std::int64_t>(m.depth.size()))

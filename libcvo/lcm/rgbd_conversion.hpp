@@ -29,7 +29,7 @@ enum class DepthEncoding : std::int8_t {
 struct RgbdEncoding {
   ColourEncoding colour = ColourEncoding::kPng;
   DepthEncoding depth = DepthEncoding::kPng;
-  int jpeg_quality = 90;  // 0..100, for ColourEncoding::kJpeg
+  int jpeg_quality = 90;    // 0..100, for ColourEncoding::kJpeg
   int png_compression = 1;  // 0..9; 1: most of the size gain at a fraction of the time of 9
 };
 

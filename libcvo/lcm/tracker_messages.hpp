@@ -10,8 +10,8 @@
 
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
-#include "libcvo/core/se3.hpp"
 #include "libcvo/core/bad_kind.hpp"
+#include "libcvo/core/se3.hpp"
 #include "libcvo/odometry/track_result.hpp"
 
 namespace cvo::lcm {
@@ -38,9 +38,9 @@ cvo_lcm::pose_t pose_message(std::int64_t session, const TrackedPose& pose, doub
 
 /// What a tracker's state in CVO_STATUS is made of.
 struct TrackerActivity {
-  std::int64_t published = 0;    // poses published so far
+  std::int64_t published = 0;  // poses published so far
   bool source_connected = false;
-  bool idle = false;             // no pose for a while
+  bool idle = false;                 // no pose for a while
   bool failures_since_last = false;  // frames failed since the previous status
 };
 /// STATE_STARTING until the first pose (STATE_WAITING_FOR_INPUT while no source), then

@@ -7,8 +7,8 @@ namespace cvo::lcm {
 namespace {
 
 // Wire sizes of the embedded types (proto/*.lcm).
-constexpr int kPose3d = 7 * 8;                       // position[3], orientation[4]
-constexpr int kGraphNode = 8 + 8 + kPose3d;          // frame_index, utime, pose
+constexpr int kPose3d = 7 * 8;                        // position[3], orientation[4]
+constexpr int kGraphNode = 8 + 8 + kPose3d;           // frame_index, utime, pose
 constexpr int kGraphEdge = 8 + 8 + kPose3d + 36 * 8;  // from, to, measurement, information
 
 // rgbd_frame_t: version, utime, depth_utime, frame_index (28), fx fy cx cy (60), width height (68),
@@ -28,8 +28,8 @@ constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 28, kGraphNode},
 constexpr int kMapSession = 8 + 1 + 8 + 4 + 8 + kPose3d;
 constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
 constexpr int kMapLoop = 8 + 8 + kGraphEdge;
-constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession}, CountField{"num_keyframes", 32, kMapKeyframe},
-                                CountField{"num_loops", 36, kMapLoop}};
+constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession},
+                                CountField{"num_keyframes", 32, kMapKeyframe}, CountField{"num_loops", 36, kMapLoop}};
 // keyframe_request_t: version, utime, session (20), then the count of int64 ids.
 constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}};
 
@@ -55,7 +55,7 @@ WireLayout wire_layout(std::string_view type_name) {
 std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int size) {
   if (size < layout.header_bytes) return {};
   for (int i = 0, at = layout.strings_at; i < layout.num_strings; ++i) {
-    if (size - at < 4) return {};  // truncated: the lcm-gen decoder says so
+    if (size - at < 4) return {};                      // truncated: the lcm-gen decoder says so
     const std::int32_t length = read_be32(body + at);  // includes the terminating NUL
     if (length < 1 || length > size - at - 4)
       return "corrupt string length " + std::to_string(length) + " at body offset " + std::to_string(at);

@@ -8,7 +8,8 @@
 namespace cvo::loop_closure {
 
 void KeyframeDatabase::add(KeyframeId id, BowVector bow) {
-  if (position_.contains(id)) throw std::invalid_argument("keyframe database: keyframe " + std::to_string(id) + " added twice");
+  if (position_.contains(id))
+    throw std::invalid_argument("keyframe database: keyframe " + std::to_string(id) + " added twice");
   for (std::size_t e = 0; e < bow.size(); ++e)
     if ((e > 0 && bow[e].word <= bow[e - 1].word) || !std::isfinite(bow[e].weight) || !(bow[e].weight > 0))
       throw std::invalid_argument("keyframe database: keyframe " + std::to_string(id) +
@@ -44,7 +45,8 @@ std::vector<LoopCandidate> KeyframeDatabase::candidates(KeyframeId query_id, con
     if (const double eta = s / reference; eta > min_eta) out.push_back({ids_[j], s, eta});
   }
   // Stable: equal η keep insertion order.
-  std::stable_sort(out.begin(), out.end(), [](const LoopCandidate& a, const LoopCandidate& b) { return a.eta > b.eta; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const LoopCandidate& a, const LoopCandidate& b) { return a.eta > b.eta; });
   return out;
 }
 

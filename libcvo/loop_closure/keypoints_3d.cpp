@@ -30,7 +30,8 @@ Keypoints3d keypoints_with_depth(const OrbFeatures& features, const core::RgbdFr
     rows.push_back(static_cast<int>(k));
   }
   out.descriptors = cv::Mat(static_cast<int>(rows.size()), 32, CV_8UC1);
-  for (std::size_t r = 0; r < rows.size(); ++r) features.descriptors.row(rows[r]).copyTo(out.descriptors.row(static_cast<int>(r)));
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    features.descriptors.row(rows[r]).copyTo(out.descriptors.row(static_cast<int>(r)));
   return out;
 }
 

@@ -7,7 +7,8 @@
 namespace cvo::loop_closure {
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, const LoopDetectorParameters& parameters)
-    : vocabulary_(std::move(vocabulary)), parameters_(parameters),
+    : vocabulary_(std::move(vocabulary)),
+      parameters_(parameters),
       registration_(registration::Capacities{parameters.odometry.max_points}, parameters.cvo) {}
 
 std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
@@ -31,8 +32,7 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
 
   std::vector<LoopClosure> loops;
   if (placement.previous && database_.contains(*placement.previous)) {
-    const auto candidates =
-        database_.candidates(id, bow, *placement.previous, parameters_.loop.similarity_threshold);
+    const auto candidates = database_.candidates(id, bow, *placement.previous, parameters_.loop.similarity_threshold);
     const int max_refinements = parameters_.verification.max_refinements;
     int refinements = 0;
     for (const auto& c : candidates) {  // best η first

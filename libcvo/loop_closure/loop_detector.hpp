@@ -70,11 +70,11 @@ class LoopDetector {
   std::vector<LoopClosure> add_keyframe(const KeyframePlacement& placement, const core::RgbdFrame& frame,
                                         const registration::PointCloud& cloud);
 
-  /// One session, one piece: keyframe `id` follows the last one added (ids increase; `pose` is its current global estimate T_world_keyframe,
-  /// `cloud` its CVO points in its camera frame) and returns the loops accepted between it and
-  /// earlier keyframes, best η first. Every candidate tried is recorded in last_attempts().
-  /// Throws std::invalid_argument when id is not above every earlier id, and as extract_orb and
-  /// keypoints_with_depth do on a bad frame (wrong image types or sizes, bad intrinsics).
+  /// One session, one piece: keyframe `id` follows the last one added (ids increase; `pose` is its current global
+  /// estimate T_world_keyframe, `cloud` its CVO points in its camera frame) and returns the loops accepted between it
+  /// and earlier keyframes, best η first. Every candidate tried is recorded in last_attempts(). Throws
+  /// std::invalid_argument when id is not above every earlier id, and as extract_orb and keypoints_with_depth do on a
+  /// bad frame (wrong image types or sizes, bad intrinsics).
   std::vector<LoopClosure> add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
                                         const registration::PointCloud& cloud, const core::SE3& pose);
 
@@ -93,7 +93,7 @@ class LoopDetector {
   KeyframeDatabase database_;
   registration::Registration registration_;
   std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
-  std::optional<std::int64_t> previous_;             // the last keyframe added
+  std::optional<std::int64_t> previous_;            // the last keyframe added
   std::vector<LoopAttempt> attempts_;
 };
 

@@ -99,8 +99,8 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
   v.attempt.accepted = true;
   v.attempt.verdict = "accepted";
   // Ω = H as the solver reports it: see the header for why no adjoint is needed.
-  v.closure = LoopClosure{j.id, i.id, v.refinement.transform.inverse(), v.refinement.hessian, 0.0, v.attempt.alpha,
-                          v.attempt.inliers};
+  v.closure = LoopClosure{
+      j.id, i.id, v.refinement.transform.inverse(), v.refinement.hessian, 0.0, v.attempt.alpha, v.attempt.inliers};
   return v;
 }
 

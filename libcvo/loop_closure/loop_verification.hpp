@@ -56,8 +56,8 @@ struct LoopDetectorParameters {
   core::LoopClosureParameters loop;               // η_thres, ratio, min_matches (Table 1)
   core::LoopVerificationParameters verification;  // refinements, RANSAC, step 3b, ORB
   core::CvoParameters cvo;                        // of the refinement
-  core::SelectionParameters selection;  // min_depth_m / max_depth_m: the keypoints' depth range
-  core::OdometryParameters odometry;    // max_points: capacity of the stored clouds
+  core::SelectionParameters selection;            // min_depth_m / max_depth_m: the keypoints' depth range
+  core::OdometryParameters odometry;              // max_points: capacity of the stored clouds
 };
 
 /// An accepted loop: an edge of the keyframe pose graph, in posegraph::Edge's convention.
@@ -66,9 +66,9 @@ struct LoopClosure {
   std::int64_t to = 0;    // i, the new keyframe
   core::SE3 measurement;  // T_from_to = T_j^-1 T_i (keyframe i's camera in keyframe j's frame)
   core::Matrix6d information = core::Matrix6d::Identity();  // CVO Hessian, [translation, rotation]
-  double eta = 0;    // normalised bag-of-words score of the candidate
-  double alpha = 0;  // eq. 12, > 0
-  int inliers = 0;   // RANSAC inliers of the initial pose
+  double eta = 0;                                           // normalised bag-of-words score of the candidate
+  double alpha = 0;                                         // eq. 12, > 0
+  int inliers = 0;                                          // RANSAC inliers of the initial pose
 };
 
 /// Why each candidate was refused, for logs and tests.
@@ -108,11 +108,11 @@ struct AlphaInnerProducts {
 };
 
 struct LoopVerification {
-  LoopAttempt attempt;                 // eta is the caller's (0 here)
-  std::optional<LoopClosure> closure;  // when accepted (eta 0 here too)
-  core::SE3 initial;                   // T_ji^0, RANSAC (identity when it failed)
+  LoopAttempt attempt;                          // eta is the caller's (0 here)
+  std::optional<LoopClosure> closure;           // when accepted (eta 0 here too)
+  core::SE3 initial;                            // T_ji^0, RANSAC (identity when it failed)
   registration::RegistrationResult refinement;  // CVO's T_ij and Hessian (default when not run)
-  AlphaInnerProducts inner_products;   // when CVO converged
+  AlphaInnerProducts inner_products;            // when CVO converged
 };
 
 /// Steps 1-4 for new keyframe i and earlier keyframe j. `registration` must have been built with

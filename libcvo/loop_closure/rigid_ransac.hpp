@@ -25,12 +25,11 @@
 
 namespace cvo::loop_closure {
 
-
 struct RigidFit {
   bool found = false;
-  core::SE3 transform;                // dst ≈ T src
-  std::vector<std::size_t> inliers;   // indices k of the correspondences within the threshold, ascending
-  double rms_m = 0;                   // RMS residual over the inliers
+  core::SE3 transform;               // dst ≈ T src
+  std::vector<std::size_t> inliers;  // indices k of the correspondences within the threshold, ascending
+  double rms_m = 0;                  // RMS residual over the inliers
 };
 
 /// The Umeyama fit on the correspondences listed in `subset` (all when it is empty); nullopt when

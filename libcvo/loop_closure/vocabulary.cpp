@@ -86,7 +86,8 @@ Descriptor majority(const std::vector<Descriptor>& all, std::span<const std::uin
   for (const std::uint32_t m : members)
     for (int b = 0; b < 4; ++b) {
       const std::uint64_t word = all[m][static_cast<std::size_t>(b)];
-      for (int i = 0; i < 64; ++i) ones[static_cast<std::size_t>(64 * b + i)] += static_cast<std::uint32_t>((word >> i) & 1U);
+      for (int i = 0; i < 64; ++i)
+        ones[static_cast<std::size_t>(64 * b + i)] += static_cast<std::uint32_t>((word >> i) & 1U);
     }
   Descriptor centre{};
   for (std::size_t i = 0; i < 256; ++i)

@@ -76,10 +76,10 @@ using BowVector = std::vector<BowEntry>;
 double score(const BowVector& a, const BowVector& b);
 
 struct VocabularyParameters {
-  int branching = 10;         // k, 2..256
-  int levels = 4;             // L, 1..16
-  std::uint64_t seed = 0;     // k-means++ seeding
-  int max_iterations = 100;   // k-medians iterations per node (stops earlier when stable)
+  int branching = 10;        // k, 2..256
+  int levels = 4;            // L, 1..16
+  std::uint64_t seed = 0;    // k-means++ seeding
+  int max_iterations = 100;  // k-medians iterations per node (stops earlier when stable)
 };
 
 class Vocabulary {

@@ -172,11 +172,16 @@ core::Vector6d KeyframeOdometry::twist(const core::RgbdFrame& frame) const {
 
 bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
   const auto& k = parameters_.keyframe;
-  if (gamma < k.inner_product_ratio_threshold) reason_ = KeyframeReason::kGamma;
-  else if (T_mn.translation().norm() > k.translation_threshold_m) reason_ = KeyframeReason::kTranslation;
-  else if (core::degrees(T_mn.angle()) > k.rotation_threshold_deg) reason_ = KeyframeReason::kRotation;
-  else if (graphs_[graph_].full()) reason_ = KeyframeReason::kGraphFull;
-  else return false;
+  if (gamma < k.inner_product_ratio_threshold)
+    reason_ = KeyframeReason::kGamma;
+  else if (T_mn.translation().norm() > k.translation_threshold_m)
+    reason_ = KeyframeReason::kTranslation;
+  else if (core::degrees(T_mn.angle()) > k.rotation_threshold_deg)
+    reason_ = KeyframeReason::kRotation;
+  else if (graphs_[graph_].full())
+    reason_ = KeyframeReason::kGraphFull;
+  else
+    return false;
   return true;
 }
 
@@ -277,8 +282,10 @@ core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const
   }
   result.motion = previous_pose_.inverse() * pose;
   if (r.f2f.converged || result.status == TrackStatus::kOk) velocity_dt_ = frame.timestamp - previous_timestamp_;
-  if (r.f2f.converged) velocity_ = r.f2f.transform;
-  else if (result.status == TrackStatus::kOk) velocity_ = result.motion;
+  if (r.f2f.converged)
+    velocity_ = r.f2f.transform;
+  else if (result.status == TrackStatus::kOk)
+    velocity_ = result.motion;
   return pose;
 }
 
@@ -325,7 +332,8 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
     // The first frame, or the first usable one after a failure: it is the keyframe.
     const bool first = !have_keyframe_;
     pose = first ? parameters_.initial_pose : predicted;
-    start_keyframe(current_, frame.index, frame.timestamp, pose, first ? KeyframeReason::kFirst : KeyframeReason::kRestart);
+    start_keyframe(current_, frame.index, frame.timestamp, pose,
+                   first ? KeyframeReason::kFirst : KeyframeReason::kRestart);
     result.status = first ? TrackStatus::kFirstFrame : TrackStatus::kRegistrationFailed;
     result.keyframe = true;
     result.motion = first ? core::SE3() : velocity_;

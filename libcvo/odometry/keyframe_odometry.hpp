@@ -58,10 +58,10 @@ namespace cvo::odometry {
 struct KeyframeOdometryParameters {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
-  core::KeyframeParameters keyframe;           // the paper's thresholds
-  core::KeyframeTrackingParameters tracking;   // γ's kernel, the local graph's capacity, the fusion
-  core::OdometryParameters odometry;           // max_points: capacity of each cloud
-  core::SE3 initial_pose;                      // P of the first usable frame
+  core::KeyframeParameters keyframe;          // the paper's thresholds
+  core::KeyframeTrackingParameters tracking;  // γ's kernel, the local graph's capacity, the fusion
+  core::OdometryParameters odometry;          // max_points: capacity of each cloud
+  core::SE3 initial_pose;                     // P of the first usable frame
 };
 
 /// Why a frame made a new keyframe.
@@ -83,14 +83,14 @@ struct HandedLocalGraph {
 struct NewKeyframe {
   std::int64_t id = -1;  // from 0 in every session
   core::RgbdFrame frame;
-  core::SE3 pose;  // T_odom_keyframe: the anchor of the local graph it opens
+  core::SE3 pose;                                   // T_odom_keyframe: the anchor of the local graph it opens
   const registration::PointCloud* cloud = nullptr;  // its CVO points, in its camera frame
 };
 
 /// Everything one track() gives its caller, so that nobody asks the tracker a second time.
 struct TrackStep : TrackResult {
-  std::int64_t keyframe_id = -1;  // the keyframe this frame is tracked against (-1 before the first)
-  double gamma = 0;               // γ of this frame (eq. 9); 0 when no keyframe registration ran
+  std::int64_t keyframe_id = -1;                  // the keyframe this frame is tracked against (-1 before the first)
+  double gamma = 0;                               // γ of this frame (eq. 9); 0 when no keyframe registration ran
   KeyframeReason reason = KeyframeReason::kNone;  // why this frame made a keyframe
   // Covariance of this frame's keyframe→frame edge T_m^n (the inverse of its CVO Hessian,
   // [translation, rotation]); none for a frame without one (a first frame, a restart, a failure).
@@ -156,11 +156,11 @@ class KeyframeOdometry {
 
   std::uint64_t previous_frame_ = 0;
   double previous_timestamp_ = 0;
-  core::SE3 previous_pose_;   // P_{n-1}
-  core::SE3 T_m_previous_;    // T_m^{n-1}
-  core::SE3 velocity_;        // T_{n-2}^{n-1}
-  double velocity_dt_ = 0;    // colour-stamp seconds velocity_ spans; 0: none yet
-  core::SE3 last_pose_;       // the last published pose (tracked or predicted)
+  core::SE3 previous_pose_;  // P_{n-1}
+  core::SE3 T_m_previous_;   // T_m^{n-1}
+  core::SE3 velocity_;       // T_{n-2}^{n-1}
+  double velocity_dt_ = 0;   // colour-stamp seconds velocity_ spans; 0: none yet
+  core::SE3 last_pose_;      // the last published pose (tracked or predicted)
 
   // The previous frame (n-1), sharing the caller's images: the keyframe when one is made at n-1.
   core::RgbdFrame previous_images_;

@@ -21,8 +21,8 @@ struct LocalGraphNode {
 };
 
 struct LocalGraphEdge {
-  std::uint64_t from = 0, to = 0;  // frame indices
-  core::SE3 measurement;           // T_from_to: the `to` camera in the `from` camera's frame
+  std::uint64_t from = 0, to = 0;                           // frame indices
+  core::SE3 measurement;                                    // T_from_to: the `to` camera in the `from` camera's frame
   core::Matrix6d information = core::Matrix6d::Identity();  // [translation, rotation] order
 };
 

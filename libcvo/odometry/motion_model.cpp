@@ -21,9 +21,7 @@ void MotionModel::update(std::uint64_t index, const core::SE3& predicted, const 
                          TrackResult& result) {
   bool becomes_reference = false;
   switch (result.status) {
-    case TrackStatus::kSelectionFailed:
-      result.pose = predicted;
-      break;
+    case TrackStatus::kSelectionFailed: result.pose = predicted; break;
     case TrackStatus::kFirstFrame:
       result.pose = predicted;  // the initial pose, or a prediction when earlier frames were unusable
       becomes_reference = true;

@@ -1,7 +1,7 @@
 #include "libcvo/odometry/opencv_odometry.hpp"
 
-#include "libcvo/odometry/motion_model.hpp"
 #include "libcvo/core/units.hpp"
+#include "libcvo/odometry/motion_model.hpp"
 
 #include <array>
 #include <chrono>
@@ -21,7 +21,6 @@ namespace {
 using Clock = core::SteadyClock;
 using core::ms_since;
 using cv::rgbd::OdometryFrame;
-
 
 // As in frame_to_frame.cpp: V^s = exp(s log V), and the frames between two stream indices (1 when
 // they do not increase).
@@ -94,9 +93,12 @@ registration::SelectionStatus OpenCvOdometry::State::prepare(const core::RgbdFra
 }
 
 OpenCvOdometry::OpenCvOdometry(const core::Intrinsics& camera, const OpenCvOdometryParameters& parameters)
-    : state_(std::make_unique<State>(State{parameters, camera, {}, {},
-                                           MotionModel(parameters.initial_pose,
-                                                       parameters.odometry.restart_after_failures)})) {
+    : state_(std::make_unique<State>(
+          State{parameters,
+                camera,
+                {},
+                {},
+                MotionModel(parameters.initial_pose, parameters.odometry.restart_after_failures)})) {
   State& s = *state_;
   // CV_32FC1 as OpenCV's own sample: RgbdICPOdometry compares it with its normals computer's K.
   const cv::Mat k = (cv::Mat_<float>(3, 3) << static_cast<float>(camera.fx), 0.f, static_cast<float>(camera.cx), 0.f,

@@ -23,8 +23,8 @@ const char* to_string(TrackStatus status);
 
 struct TrackResult {
   TrackStatus status = TrackStatus::kFirstFrame;
-  core::SE3 pose;    // T_world_camera of this frame
-  core::SE3 motion;  // T_previous_current: this camera in the frame of the previous frame's camera
+  core::SE3 pose;         // T_world_camera of this frame
+  core::SE3 motion;       // T_previous_current: this camera in the frame of the previous frame's camera
   bool keyframe = false;  // a new keyframe was made (never in frame-to-frame mode: it has none)
   registration::SelectionStatus selection_status = registration::SelectionStatus::kOk;
   registration::RegistrationStatus registration_status = registration::RegistrationStatus::kOk;

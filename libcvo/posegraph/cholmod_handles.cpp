@@ -41,7 +41,7 @@ namespace detail {
 CholmodCommon::CholmodCommon() {
   send_cholmod_messages_to_stderr();
   cholmod_l_start(&common_);
-  common_.print = 0;  // CHOLMOD prints nothing itself ...
+  common_.print = 0;                          // CHOLMOD prints nothing itself ...
   common_.error_handler = log_cholmod_error;  // ... real errors are logged here
 }
 

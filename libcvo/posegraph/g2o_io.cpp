@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "libcvo/core/information.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/text_lines.hpp"
-#include "libcvo/core/information.hpp"
 
 namespace cvo::posegraph {
 namespace {
@@ -38,8 +38,9 @@ core::SE3 parse_pose(const std::vector<std::string>& fields, std::size_t first, 
 void expect_fields(const std::vector<std::string>& fields, std::size_t n, const std::filesystem::path& name,
                    std::size_t line) {
   if (fields.size() != n)
-    throw io::InputError(name, line, fields[0] + " needs " + std::to_string(n - 1) + " values, not " +
-                                         std::to_string(fields.size() - 1));
+    throw io::InputError(
+        name, line,
+        fields[0] + " needs " + std::to_string(n - 1) + " values, not " + std::to_string(fields.size() - 1));
 }
 
 // EDGE_SE3:QUAT i j x y z qx qy qz qw I11 .. I66 (fields already counted).
@@ -85,8 +86,8 @@ std::string number(double v) {
 void write_pose(std::ostream& out, const core::SE3& T) {
   const auto& t = T.translation();
   const auto& q = T.rotation();
-  out << number(t.x()) << ' ' << number(t.y()) << ' ' << number(t.z()) << ' ' << number(q.x()) << ' '
-      << number(q.y()) << ' ' << number(q.z()) << ' ' << number(q.w());
+  out << number(t.x()) << ' ' << number(t.y()) << ' ' << number(t.z()) << ' ' << number(q.x()) << ' ' << number(q.y())
+      << ' ' << number(q.z()) << ' ' << number(q.w());
 }
 
 }  // namespace
@@ -115,8 +116,8 @@ PoseGraph parse_g2o(std::istream& in, const std::filesystem::path& name, std::os
       if (f.size() < 2) throw io::InputError(name, line, "FIX needs at least one vertex id");
       for (std::size_t k = 1; k < f.size(); ++k) fixes.emplace_back(parse_id(f[k], name, line), line);
     } else {
-      throw io::InputError(name, line, "unsupported g2o tag '" + tag +
-                                           "' (only VERTEX_SE3:QUAT, EDGE_SE3:QUAT and FIX are read)");
+      throw io::InputError(name, line,
+                           "unsupported g2o tag '" + tag + "' (only VERTEX_SE3:QUAT, EDGE_SE3:QUAT and FIX are read)");
     }
   });
   for (const auto& [e, line] : edges) {

@@ -52,8 +52,8 @@ struct Problem {
 Problem make_problem(const PoseGraph& graph) {
   Problem p;
   std::unordered_map<NodeId, int> index;
-  const bool any_fixed = std::any_of(graph.nodes().begin(), graph.nodes().end(),
-                                     [](const auto& kv) { return kv.second.fixed; });
+  const bool any_fixed =
+      std::any_of(graph.nodes().begin(), graph.nodes().end(), [](const auto& kv) { return kv.second.fixed; });
   int next_var = 0;
   for (const auto& [id, node] : graph.nodes()) {
     const bool held = node.fixed || (!any_fixed && p.poses.empty());  // gauge: hold the first node
@@ -100,8 +100,7 @@ cholmod_sparse* allocate_matrix(const BlockPattern& pattern, bool blocks_only, c
   const auto n = static_cast<int>(pattern.column_blocks.size());
   const int b = blocks_only ? 1 : 6;
   std::size_t nnz = 0;
-  for (const auto& rows : pattern.column_blocks)
-    nnz += blocks_only ? rows.size() : 36 * (rows.size() - 1) + 21;
+  for (const auto& rows : pattern.column_blocks) nnz += blocks_only ? rows.size() : 36 * (rows.size() - 1) + 21;
   const auto dim = static_cast<std::size_t>(b * n);
   cholmod_sparse* A = cholmod_l_allocate_sparse(dim, dim, nnz, /*sorted=*/1, /*packed=*/1, /*stype=upper*/ 1,
                                                 blocks_only ? CHOLMOD_PATTERN : CHOLMOD_REAL, cc);
@@ -252,8 +251,10 @@ void NormalEquations::assemble(const Problem& problem, const std::vector<SE3>& p
       g_.segment<6>(6 * s.b) += lin.jacobian_j.transpose() * We;
     }
     if (s.off >= 0) {
-      if (s.a < s.b) add_block(s.a, s.b, s.off, lin.jacobian_i.transpose() * WJj);
-      else add_block(s.b, s.a, s.off, lin.jacobian_j.transpose() * WJi);
+      if (s.a < s.b)
+        add_block(s.a, s.b, s.off, lin.jacobian_i.transpose() * WJj);
+      else
+        add_block(s.b, s.a, s.off, lin.jacobian_j.transpose() * WJi);
     }
   }
   for (int col = 0; col < dim_; ++col) {
@@ -278,8 +279,7 @@ void NormalEquations::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) con
 
 }  // namespace
 
-Optimizer::Optimizer(OptimizerOptions options)
-    : options_(options), cholmod_(std::make_unique<detail::Cholmod>()) {}
+Optimizer::Optimizer(OptimizerOptions options) : options_(options), cholmod_(std::make_unique<detail::Cholmod>()) {}
 Optimizer::~Optimizer() = default;
 Optimizer::Optimizer(Optimizer&&) noexcept = default;
 Optimizer& Optimizer::operator=(Optimizer&&) noexcept = default;
@@ -313,19 +313,19 @@ class Pcg {
   explicit Pcg(int dim) : x_(dim), r_(dim), z_(dim), p_(dim), q_(dim) {}
 
   /// Whether |b - A x| <= tolerance |b| was reached; x is then in solution().
-  bool solve(const NormalEquations& equations, detail::Cholmod& cholmod, const Eigen::VectorXd& b,
-             double tolerance, int max_iterations);
+  bool solve(const NormalEquations& equations, detail::Cholmod& cholmod, const Eigen::VectorXd& b, double tolerance,
+             int max_iterations);
   [[nodiscard]] const Eigen::VectorXd& solution() const { return x_; }
   [[nodiscard]] const Eigen::VectorXd& residual() const { return r_; }  // b - A x
-  [[nodiscard]] int iterations() const { return iterations_; }  // of the last solve
+  [[nodiscard]] int iterations() const { return iterations_; }          // of the last solve
 
  private:
   Eigen::VectorXd x_, r_, z_, p_, q_;
   int iterations_ = 0;
 };
 
-bool Pcg::solve(const NormalEquations& equations, detail::Cholmod& cholmod, const Eigen::VectorXd& b,
-                double tolerance, int max_iterations) {
+bool Pcg::solve(const NormalEquations& equations, detail::Cholmod& cholmod, const Eigen::VectorXd& b, double tolerance,
+                int max_iterations) {
   const auto dim = b.size();
   const double b_norm = b.norm();
   x_.setZero();
@@ -413,7 +413,7 @@ class LevenbergMarquardt {
   double lambda_ = 0;
   double nu_ = 2.0;
   double decrease_ = 0;  // of the last accepted step
-  bool factor_usable_;  // a factorisation of this structure is at hand, perhaps from an earlier call
+  bool factor_usable_;   // a factorisation of this structure is at hand, perhaps from an earlier call
   // Solve work since the last factorisation (in PCG iterations, the factorisation included), the
   // iterations it served, and the work of the last iteration.
   double work_since_factor_ = 0;
@@ -424,8 +424,7 @@ class LevenbergMarquardt {
 // Puts the step on the poses and evaluates; accepts it when the cost goes down, updating lambda
 // by the gain ratio (actual over predicted decrease, the model being g.d + 1/2 d^T H d). residual:
 // PCG's r = -g - (H + lambda D) d, or nullptr for a direct solve (r = 0).
-LevenbergMarquardt::Outcome LevenbergMarquardt::try_step(const Eigen::VectorXd& step,
-                                                         const Eigen::VectorXd* residual) {
+LevenbergMarquardt::Outcome LevenbergMarquardt::try_step(const Eigen::VectorXd& step, const Eigen::VectorXd* residual) {
   if (!step.allFinite()) return Outcome::kRejected;
   if (step.norm() < options_.step_tolerance) return Outcome::kSmallStep;
   const auto& poses = problem_.poses;
@@ -518,7 +517,8 @@ OptimizationReport Optimizer::optimize(PoseGraph& graph) {
   const auto start = std::chrono::steady_clock::now();
   Problem problem = make_problem(graph);
   OptimizationReport report;
-  report.initial_cost = report.final_cost = problem_cost(problem, problem.poses, RobustKernel{options_.pose_graph.cauchy_delta});
+  report.initial_cost = report.final_cost =
+      problem_cost(problem, problem.poses, RobustKernel{options_.pose_graph.cauchy_delta});
   const auto finish = [&](std::string reason, bool converged) {
     for (std::size_t k = 0; const auto& kv : graph.nodes()) graph.set_pose(kv.first, problem.poses[k++]);
     report.stop_reason = std::move(reason);

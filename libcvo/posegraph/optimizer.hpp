@@ -2,7 +2,8 @@
 // Levenberg-Marquardt on SE(3)^n for a PoseGraph, sparse normal equations solved by CHOLMOD.
 //
 // Each iteration linearises every edge (residual [t; log R] of Z^-1 T_i^-1 T_j, update T (+) delta =
-// (R exp(phi), t + R rho), exact Jacobians: residual.hpp), weights it by IRLS (w = rho'(chi^2), see cost.hpp) and assembles
+// (R exp(phi), t + R rho), exact Jacobians: residual.hpp), weights it by IRLS (w = rho'(chi^2), see cost.hpp) and
+// assembles
 //   H = sum w J^T Omega J,  g = sum w J^T Omega e
 // over the free nodes only: fixed nodes are removed from the system, and when no node is fixed
 // the first (lowest id) is held, which fixes the gauge. It then solves (H + lambda D) delta = -g,
@@ -55,16 +56,16 @@ struct OptimizerOptions {
 };
 
 struct IterationRecord {
-  double cost = 0;    // after the iteration
-  double lambda = 0;  // the damping of the accepted (or last tried) step
-  int trials = 0;     // factorisations this iteration needed (more than one when steps were rejected)
+  double cost = 0;                    // after the iteration
+  double lambda = 0;                  // the damping of the accepted (or last tried) step
+  int trials = 0;                     // factorisations this iteration needed (more than one when steps were rejected)
   bool reused_factorization = false;  // the step came by PCG from an earlier factor (trials 0)
 };
 
 struct OptimizationReport {
   double initial_cost = 0;
   double final_cost = 0;
-  int iterations = 0;  // linearisations; each may hold several lambda trials
+  int iterations = 0;      // linearisations; each may hold several lambda trials
   int factorizations = 0;  // numeric factorisations, over all iterations
   double seconds = 0;
   bool converged = false;

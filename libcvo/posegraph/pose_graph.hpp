@@ -4,9 +4,9 @@
 //
 // An edge (i, j) measures T_ij = T_i^-1 T_j. Its residual is, with E = T_ij^-1 T_i^-1 T_j,
 //   e_ij = [t_E; 2 vec(q_E)]   in R^6, [translation; rotation] (core::SE3's order),
-// equal to log(E) to first order (residual.hpp says why not log(E) itself), and its information matrix Omega (6x6, symmetric positive semi-definite) is in that same order.
-// The cost of the graph is  F = 1/2 sum_edges rho(e^T Omega e)  with rho the identity, or the
-// Cauchy kernel on edges marked robust (see cost.hpp).
+// equal to log(E) to first order (residual.hpp says why not log(E) itself), and its information matrix Omega (6x6,
+// symmetric positive semi-definite) is in that same order. The cost of the graph is  F = 1/2 sum_edges rho(e^T Omega e)
+// with rho the identity, or the Cauchy kernel on edges marked robust (see cost.hpp).
 #include <cstdint>
 #include <map>
 #include <vector>
@@ -23,11 +23,11 @@ struct Node {
 };
 
 struct Edge {
-  NodeId from = 0;  // i
-  NodeId to = 0;    // j
-  core::SE3 measurement;                                  // T_ij = T_i^-1 T_j
+  NodeId from = 0;                                          // i
+  NodeId to = 0;                                            // j
+  core::SE3 measurement;                                    // T_ij = T_i^-1 T_j
   core::Matrix6d information = core::Matrix6d::Identity();  // [translation, rotation] order
-  bool robust = false;                                    // Cauchy kernel instead of plain squares
+  bool robust = false;                                      // Cauchy kernel instead of plain squares
 };
 
 class PoseGraph {

@@ -42,8 +42,8 @@ struct Range {
 };
 
 struct PointSums {
-  float a = 0;                    // Σ a_ij
-  float dx = 0, dy = 0, dz = 0;   // Σ a_ij (x_i - w)
+  float a = 0;                   // Σ a_ij
+  float dx = 0, dy = 0, dz = 0;  // Σ a_ij (x_i - w)
   std::uint32_t pairs = 0;
 };
 
@@ -59,8 +59,8 @@ inline void add_pair(PointSums& sums, float log_a, float dx, float dy, float dz,
   ++sums.pairs;
 }
 
-using PointFunction = PointSums (*)(const FixedCloudView& fixed, const Range* ranges, int range_count,
-                                    const float w[3], const float feature[kFeatureDim], const Constants& k);
+using PointFunction = PointSums (*)(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
+                                    const float feature[kFeatureDim], const Constants& k);
 
 PointSums point_scalar(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
                        const float feature[kFeatureDim], const Constants& k);

@@ -111,8 +111,8 @@ std::size_t collect_avx2(const FixedCloudView& fixed, const Range* ranges, int r
       const __m256 near = _mm256_and_ps(_mm256_cmp_ps(l.r2, reach, _CMP_LE_OQ), _mm256_castsi256_ps(l.mask));
       if (_mm256_movemask_ps(near) == 0) continue;
       const __m256 term = _mm256_mul_ps(colour_distance_sq(fixed, i, l, p), inv_c);
-      auto bits = static_cast<unsigned>(
-          _mm256_movemask_ps(_mm256_and_ps(near, _mm256_cmp_ps(term, max_colour, _CMP_LE_OQ))));
+      auto bits =
+          static_cast<unsigned>(_mm256_movemask_ps(_mm256_and_ps(near, _mm256_cmp_ps(term, max_colour, _CMP_LE_OQ))));
       if (bits == 0) continue;
       _mm256_store_ps(terms, term);
       for (; bits != 0; bits &= bits - 1) {  // the lanes kept, in order

@@ -11,8 +11,8 @@ namespace {
 inline float32x4_t exp128(float32x4_t x) {
   x = vmaxq_f32(x, vdupq_n_f32(-87.0f));
   const float32x4_t n = vrndnq_f32(vmulq_f32(x, vdupq_n_f32(1.44269504088896341f)));  // to nearest, ties even
-  float32x4_t r = vfmsq_f32(x, n, vdupq_n_f32(0.693359375f));                          // x - n * c1
-  r = vfmsq_f32(r, n, vdupq_n_f32(-2.12194440e-4f));                                   // r - n * c2
+  float32x4_t r = vfmsq_f32(x, n, vdupq_n_f32(0.693359375f));                         // x - n * c1
+  r = vfmsq_f32(r, n, vdupq_n_f32(-2.12194440e-4f));                                  // r - n * c2
   float32x4_t p = vdupq_n_f32(1.9875691500e-4f);
   p = vfmaq_f32(vdupq_n_f32(1.3981999507e-3f), p, r);
   p = vfmaq_f32(vdupq_n_f32(8.3334519073e-3f), p, r);

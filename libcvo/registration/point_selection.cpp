@@ -17,7 +17,8 @@ class RollingShutter {
       : on_(K.rolling_shutter() && K.height > 1 && twist.allFinite() && !twist.isZero()),
         seconds_per_row_(static_cast<float>(K.readout_s / (K.height - 1))),
         middle_row_(0.5f * static_cast<float>(K.height - 1)),
-        v_(twist.head<3>().cast<float>()), w_(twist.tail<3>().cast<float>()) {}
+        v_(twist.head<3>().cast<float>()),
+        w_(twist.tail<3>().cast<float>()) {}
 
   [[nodiscard]] Eigen::Vector3f at_frame_time(const Eigen::Vector3f& P, int row) const {
     if (!on_) return P;
@@ -31,8 +32,8 @@ class RollingShutter {
   Eigen::Vector3f v_, w_;
 };
 
-constexpr int kRegion = 32;           // DSO's threshold region size (pixels)
-constexpr int kHistogramBins = 50;    // |g| on the 0-255 scale, clipped
+constexpr int kRegion = 32;                        // DSO's threshold region size (pixels)
+constexpr int kHistogramBins = 50;                 // |g| on the 0-255 scale, clipped
 constexpr float kThresholdOffset = 7.0f / 255.0f;  // DSO's constant above the median
 constexpr int kMaxCellSize = 64;
 
@@ -57,13 +58,19 @@ RawDepthRange valid_raw_depths(float min_raw, float max_raw) {
   std::int32_t lo = 0, hi = 65536;  // first d in [0, 65536) with above_min, 65536 if none
   while (lo < hi) {
     const std::int32_t mid = (lo + hi) / 2;
-    if (above_min(mid)) hi = mid; else lo = mid + 1;
+    if (above_min(mid))
+      hi = mid;
+    else
+      lo = mid + 1;
   }
   std::int32_t first = lo;
   lo = -1, hi = 65535;  // last d in [0, 65536) with below_max, -1 if none
   while (lo < hi) {
     const std::int32_t mid = (lo + hi + 1) / 2;
-    if (below_max(mid)) lo = mid; else hi = mid - 1;
+    if (below_max(mid))
+      lo = mid;
+    else
+      hi = mid - 1;
   }
   const std::int32_t last = lo;
   if (first > last) return {1, 0};
@@ -89,8 +96,11 @@ const char* to_string(SelectionStatus status) {
 }
 
 PointSelector::PointSelector(int width, int height, const core::SelectionParameters& parameters)
-    : width_(width), height_(height), parameters_(parameters),
-      regions_x_((width + kRegion - 1) / kRegion), regions_y_((height + kRegion - 1) / kRegion),
+    : width_(width),
+      height_(height),
+      parameters_(parameters),
+      regions_x_((width + kRegion - 1) / kRegion),
+      regions_y_((height + kRegion - 1) / kRegion),
       words_per_row_((width + 63) / 64) {
   const auto n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   const auto W = static_cast<std::size_t>(width), words = static_cast<std::size_t>(words_per_row_);
@@ -153,7 +163,7 @@ void PointSelector::thresholds_and_candidates(const core::RgbdFrame& frame, RawD
   // thresholds, then the smoothed thresholds and candidates of row ry - 1, whose neighbours are
   // all known by then.
   const auto W = static_cast<std::size_t>(width_), words = static_cast<std::size_t>(words_per_row_);
-  std::fill_n(candidate_bits_.begin(), words, 0);                                   // row 0
+  std::fill_n(candidate_bits_.begin(), words, 0);                                     // row 0
   std::fill_n(candidate_bits_.end() - static_cast<std::ptrdiff_t>(words), words, 0);  // last row
   int grey_done = 0;  // rows [0, grey_done) have their grey
   for (int ry = 0; ry <= regions_y_; ++ry) {
@@ -191,7 +201,9 @@ int PointSelector::count_at_most(int rx, int rows, int bin) const {
   std::array<std::uint8_t, kRegion> lanes{};
   for (int r = 0; r < rows; ++r) {
     const std::uint8_t* row = bins_.data() + static_cast<std::size_t>(r * width_ + u0);
-    for (int k = 0; k < n; ++k) lanes[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(lanes[static_cast<std::size_t>(k)] + (row[k] <= b));
+    for (int k = 0; k < n; ++k)
+      lanes[static_cast<std::size_t>(k)] =
+          static_cast<std::uint8_t>(lanes[static_cast<std::size_t>(k)] + (row[k] <= b));
   }
   int count = 0;
   for (const auto lane : lanes) count += lane;
@@ -209,7 +221,10 @@ void PointSelector::region_medians(int ry) {
     int lo = 0, hi = kHistogramBins - 1;
     while (lo < hi) {
       const int mid = (lo + hi) / 2;
-      if (2 * count_at_most(rx, rows, mid) >= total) hi = mid; else lo = mid + 1;
+      if (2 * count_at_most(rx, rows, mid) >= total)
+        hi = mid;
+      else
+        lo = mid + 1;
     }
     region_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] =
         (static_cast<float>(lo) + 0.5f) / 255.0f + kThresholdOffset;
@@ -232,8 +247,7 @@ void PointSelector::smooth_thresholds(int ry) {
   }
 }
 
-void PointSelector::find_candidates(const cv::Mat& depth, int ry, RawDepthRange valid_range,
-                                    SelectionResult& result) {
+void PointSelector::find_candidates(const cv::Mat& depth, int ry, RawDepthRange valid_range, SelectionResult& result) {
   // Candidates of region row ry: above their region's threshold with valid depth, interior pixels
   // only. Flags without branches (the loop vectorises; local pointers, as the byte stores could
   // alias the members), packed into candidate_bits_ row by row: later passes read only the bits.

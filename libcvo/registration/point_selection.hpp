@@ -50,7 +50,7 @@ struct SelectionResult {
   std::size_t valid_depth_pixels = 0;
   std::size_t candidates = 0;  // above threshold with valid depth
   std::size_t selected = 0;
-  int cell_size = 1;           // the s finally used
+  int cell_size = 1;  // the s finally used
 };
 
 // Raw depths lo <= d <= hi are valid (point_selection.cpp: valid_raw_depths).
@@ -80,8 +80,7 @@ class PointSelector {
   /// to first order in τ ω (below 0.03 rad for 0.02 s at 90 °/s). Without it a camera pitching at ω
   /// sees its image stretched by ω · readout_s, a rotation error that does not cancel between frames
   /// turning at different rates.
-  SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud,
-                         const core::SE3& colour_T_depth = core::SE3(),
+  SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth = core::SE3(),
                          const core::Vector6d& twist = core::Vector6d::Zero());
 
   [[nodiscard]] int width() const { return width_; }
@@ -105,7 +104,7 @@ class PointSelector {
   int width_, height_;
   core::SelectionParameters parameters_;
   int regions_x_, regions_y_;
-  int words_per_row_;                       // 64-pixel words of a row of candidate_bits_
+  int words_per_row_;                      // 64-pixel words of a row of candidate_bits_
   std::array<float, 3 * 256> grey_lut_{};  // B, G, R contributions to grey
   std::vector<float> grey_, magnitude_;
   std::vector<float> region_threshold_, smoothed_threshold_;
@@ -115,10 +114,10 @@ class PointSelector {
   std::vector<float> row_threshold_;
   std::vector<std::uint8_t> row_flags_;
   std::vector<std::uint64_t> candidate_bits_;
-  std::vector<std::uint64_t> band_;         // the OR of the rows of one band of cells
-  std::vector<std::int32_t> column_cell_;   // per column: its cell's (winners) or the next cell's first column (counts)
-  std::vector<std::int32_t> cell_best_;     // per cell: pixel index of its strongest candidate or -1
-  std::vector<float> cell_magnitude_;       // per cell: that candidate's |g|
+  std::vector<std::uint64_t> band_;        // the OR of the rows of one band of cells
+  std::vector<std::int32_t> column_cell_;  // per column: its cell's (winners) or the next cell's first column (counts)
+  std::vector<std::int32_t> cell_best_;    // per cell: pixel index of its strongest candidate or -1
+  std::vector<float> cell_magnitude_;      // per cell: that candidate's |g|
   // Distorted cameras only: undistorted (x/z, y/z) per pixel, row-major, for ray_intrinsics_.
   std::vector<float> rays_;
   core::Intrinsics ray_intrinsics_{};

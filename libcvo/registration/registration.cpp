@@ -7,11 +7,11 @@
 namespace cvo::registration {
 namespace {
 
-constexpr std::size_t kChunk = 256;        // moving points per reduction chunk (fixed: thread-count independent)
-constexpr std::size_t kMinPairs = 12;      // fewer contributing pairs cannot constrain 6 DoF reliably
+constexpr std::size_t kChunk = 256;    // moving points per reduction chunk (fixed: thread-count independent)
+constexpr std::size_t kMinPairs = 12;  // fewer contributing pairs cannot constrain 6 DoF reliably
 constexpr std::size_t kMinPoints = 3;
-constexpr double kMaxRotationStep = 0.2;   // rad per iteration: a trust region against wild first steps
-constexpr double kShrinkFraction = 0.01;   // shrink ℓ once the step is below this fraction of ℓ
+constexpr double kMaxRotationStep = 0.2;  // rad per iteration: a trust region against wild first steps
+constexpr double kShrinkFraction = 0.01;  // shrink ℓ once the step is below this fraction of ℓ
 // Candidate pairs: the slack s as a fraction of r_max. Wider cells cost each collection more;
 // a narrower slack makes points collect again sooner (the first step at each ℓ moves most).
 constexpr double kSlackFraction = 0.25;
@@ -32,8 +32,8 @@ constexpr std::uint64_t kEmptySlot = ~0ULL;
 
 inline std::int64_t cell_coordinate(float v, double inv_cell) {
   const double c = std::floor(static_cast<double>(v) * inv_cell);
-  return static_cast<std::int64_t>(std::clamp(c, -static_cast<double>(kCoordinateRange - 2),
-                                              static_cast<double>(kCoordinateRange - 2)));
+  return static_cast<std::int64_t>(
+      std::clamp(c, -static_cast<double>(kCoordinateRange - 2), static_cast<double>(kCoordinateRange - 2)));
 }
 
 inline std::uint64_t cell_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
@@ -50,9 +50,7 @@ inline std::size_t slot_hash(std::uint64_t key, std::size_t mask) {
 
 // The product of the two kernels' signal variances: Table 1's σ and σ_c read as standard
 // deviations, so the amplitude is σ² σ_c² (see core::CvoParameters for the measurements).
-double kernel_amplitude(const core::CvoParameters& p) {
-  return p.sigma * p.sigma * p.sigma_color * p.sigma_color;
-}
+double kernel_amplitude(const core::CvoParameters& p) { return p.sigma * p.sigma * p.sigma_color * p.sigma_color; }
 
 bool all_finite(const PointCloud& cloud, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
@@ -98,13 +96,24 @@ core::Matrix6d Registration::Sums::hessian() const {
 }
 
 Registration::Registration(const Capacities& capacities, const core::CvoParameters& parameters, kernel::Isa isa)
-    : parameters_(parameters), isa_(isa), point_(kernel::point_function(isa)), collect_(kernel::collect_function(isa)), capacity_(capacities.max_points),
+    : parameters_(parameters),
+      isa_(isa),
+      point_(kernel::point_function(isa)),
+      collect_(kernel::collect_function(isa)),
+      capacity_(capacities.max_points),
       bucket_mask_(next_power_of_two(std::max<std::size_t>(1024, 2 * capacities.max_points)) - 1),
-      slot_key_(bucket_mask_ + 1), bucket_start_(bucket_mask_ + 2), bucket_of_(capacities.max_points), sx_(capacities.max_points),
-      sy_(capacities.max_points), sz_(capacities.max_points), input_of_(capacities.max_points),
+      slot_key_(bucket_mask_ + 1),
+      bucket_start_(bucket_mask_ + 2),
+      bucket_of_(capacities.max_points),
+      sx_(capacities.max_points),
+      sy_(capacities.max_points),
+      sz_(capacities.max_points),
+      input_of_(capacities.max_points),
       slots_(std::min<std::size_t>(capacities.candidates_per_point, kTooMany - 1)),
-      candidate_fixed_(capacities.max_points * slots_), candidate_colour_(capacities.max_points * slots_),
-      candidate_count_(capacities.max_points, kUncollected), collected_at_(4 * capacities.max_points),
+      candidate_fixed_(capacities.max_points * slots_),
+      candidate_colour_(capacities.max_points * slots_),
+      candidate_count_(capacities.max_points, kUncollected),
+      collected_at_(4 * capacities.max_points),
       chunk_sums_((capacities.max_points + kChunk - 1) / kChunk + 1),
       pairs_log_(static_cast<std::size_t>(std::max(parameters.max_iterations, 0)) + 1) {
   for (auto& channel : sf_) channel.resize(capacities.max_points);
@@ -120,7 +129,7 @@ RegistrationStatus Registration::check(const PointCloud& fixed, const PointCloud
       !(parameters_.ell_min > 0) || !(parameters_.ell_color > 0))
     return RegistrationStatus::kBadParameters;
   return (fixed.size() > capacity_ || moving.size() > capacity_) ? RegistrationStatus::kCapacityExceeded
-                                                                  : RegistrationStatus::kOk;
+                                                                 : RegistrationStatus::kOk;
 }
 
 // The kernel constants at length-scale ℓ, r_max, and the slack s = slack_fraction r_max.
@@ -259,10 +268,9 @@ kernel::PointSums Registration::candidate_sums(std::size_t j, const Eigen::Vecto
   for (std::size_t k = base; k < base + count; ++k) {
     const std::uint32_t i = candidate_fixed_[k];
     const float dx = sx_[i] - w.x(), dy = sy_[i] - w.y(), dz = sz_[i] - w.z();
-    kernel::add_pair(p,
-                     constants_.log_amplitude - (dx * dx + dy * dy + dz * dz) * constants_.inv_two_ell_sq -
-                         candidate_colour_[k],
-                     dx, dy, dz, constants_);
+    kernel::add_pair(
+        p, constants_.log_amplitude - (dx * dx + dy * dy + dz * dz) * constants_.inv_two_ell_sq - candidate_colour_[k],
+        dx, dy, dz, constants_);
   }
   return p;
 }
@@ -294,8 +302,8 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
                               std::size_t stride, bool candidates) {
   const Eigen::Matrix3f R = T.rotation_matrix().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
-  const kernel::FixedCloudView view{sx_.data(), sy_.data(), sz_.data(),
-                                    {sf_[0].data(), sf_[1].data(), sf_[2].data(), sf_[3].data(), sf_[4].data()}};
+  const kernel::FixedCloudView view{
+      sx_.data(), sy_.data(), sz_.data(), {sf_[0].data(), sf_[1].data(), sf_[2].data(), sf_[3].data(), sf_[4].data()}};
   const auto chunks = static_cast<std::ptrdiff_t>((n + kChunk - 1) / kChunk);
 
 #pragma omp parallel for schedule(static) num_threads(parameters_.threads) if (parameters_.threads > 1)
@@ -345,8 +353,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
   collections_ = 0;
   result.status = check(fixed, moving);
   if (result.status == RegistrationStatus::kOk && !initial.is_finite()) result.status = RegistrationStatus::kNonFinite;
-  if (result.status != RegistrationStatus::kOk && result.status != RegistrationStatus::kCapacityExceeded)
-    return result;
+  if (result.status != RegistrationStatus::kOk && result.status != RegistrationStatus::kCapacityExceeded) return result;
   const RegistrationStatus input_status = result.status;
   const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
 
@@ -385,8 +392,8 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
       break;
     }
     // Trust region: at most ℓ of translation and kMaxRotationStep of rotation per iteration.
-    const double scale = std::min({1.0, ell / std::max(xi.head<3>().norm(), 1e-12),
-                                   kMaxRotationStep / std::max(xi.tail<3>().norm(), 1e-12)});
+    const double scale = std::min(
+        {1.0, ell / std::max(xi.head<3>().norm(), 1e-12), kMaxRotationStep / std::max(xi.tail<3>().norm(), 1e-12)});
     xi *= scale;
     T = core::SE3::exp(xi) * T;
     const double step = xi.head<3>().norm() + xi.tail<3>().norm();
@@ -398,8 +405,10 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
     if (ell > ell_min && step < kShrinkFraction * ell) {
       ell = std::max(ell * parameters_.ell_decay, ell_min);
       // The grid and the candidates of the wider kernel serve the narrower one (a superset).
-      if (slots_ > 0) set_length_scale(ell, kSlackFraction);
-      else build_grid(fixed, nf, ell, 0.0);
+      if (slots_ > 0)
+        set_length_scale(ell, kSlackFraction);
+      else
+        build_grid(fixed, nf, ell, 0.0);
       if (visibility_) hide_fixed_unseen(fixed, nf, T);
     }
   }

@@ -23,11 +23,11 @@
 // camera's view; where the views differ, a moving point near the edge of X's view finds partners on
 // one side only, and a fixed point the moving camera no longer sees has none: both pull T towards
 // less motion (the kernel correlation of two truncated clouds peaks short of the truth; KF-CVO
-// under-rotated on real fast turns: libcvo/odometry/README.md, "Rotation"). So align() sums only what both cameras see: moving
-// points whose T z_j falls outside X's view (the extent of X's image coordinates x/z, y/z) are
-// skipped each iteration, and fixed points outside Z's view, seen through T⁻¹, are hidden once per
-// length-scale. Then both clouds are cut at the same place at the truth, where the correlation of
-// the cut clouds peaks. γ and α (inner_product()) measure overlap and keep every point.
+// under-rotated on real fast turns: libcvo/odometry/README.md, "Rotation"). So align() sums only what both cameras see:
+// moving points whose T z_j falls outside X's view (the extent of X's image coordinates x/z, y/z) are skipped each
+// iteration, and fixed points outside Z's view, seen through T⁻¹, are hidden once per length-scale. Then both clouds
+// are cut at the same place at the truth, where the correlation of the cut clouds peaks. γ and α (inner_product())
+// measure overlap and keep every point.
 //
 // Neighbour search: X is hashed once per length-scale into cells of side r_max (see kernel.hpp);
 // each moving point visits the 27 cells around it.
@@ -39,10 +39,10 @@
 // reach - r_max since, no other fixed point can reach the threshold: the iteration sums its
 // candidates alone, which is exact and far cheaper than searching 27 cells again. A point that
 // moved farther collects again. When ℓ shrinks, r_max does: the grid and candidates stay, and
-// last longer. A point with more candidates than its slots is searched in full each iteration. Fixed memory: every buffer is sized at
-// construction from the capacities; after construction align() and inner_product() do not
-// allocate. Threads (optional) split the moving cloud into fixed chunks reduced in a fixed order,
-// so the result does not depend on the thread count.
+// last longer. A point with more candidates than its slots is searched in full each iteration. Fixed memory: every
+// buffer is sized at construction from the capacities; after construction align() and inner_product() do not allocate.
+// Threads (optional) split the moving cloud into fixed chunks reduced in a fixed order, so the result does not depend
+// on the thread count.
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -68,13 +68,13 @@ enum class RegistrationStatus {
 const char* to_string(RegistrationStatus status);
 
 struct RegistrationResult {
-  core::SE3 transform;         // T: Z's frame -> X's frame
+  core::SE3 transform;  // T: Z's frame -> X's frame
   int iterations = 0;
   bool converged = false;
   RegistrationStatus status = RegistrationStatus::kOk;
-  double inner_product = 0;    // F(T) at the final length-scale (over what both views see: see above)
+  double inner_product = 0;  // F(T) at the final length-scale (over what both views see: see above)
   double final_ell = 0;
-  std::size_t pairs = 0;       // contributing pairs at the last iteration
+  std::size_t pairs = 0;                            // contributing pairs at the last iteration
   core::Matrix6d hessian = core::Matrix6d::Zero();  // H / ℓ², ordered [translation, rotation]
 };
 

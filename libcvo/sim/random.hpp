@@ -30,7 +30,9 @@ constexpr std::uint64_t lattice_hash(std::uint64_t key, std::uint64_t ix, std::u
 
 /// Uniform in [0, 1) from the top 53 bits.
 /// (Converted through int64: x86-64 has no direct unsigned 64-bit conversion, it would branch.)
-constexpr double to_unit(std::uint64_t h) { return static_cast<double>(static_cast<std::int64_t>(h >> 11)) * 0x1.0p-53; }
+constexpr double to_unit(std::uint64_t h) {
+  return static_cast<double>(static_cast<std::int64_t>(h >> 11)) * 0x1.0p-53;
+}
 
 /// Standard normal sample (Box-Muller) from one key.
 inline double gaussian(std::uint64_t key) {

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "libcvo/sim/random.hpp"
 #include "libcvo/core/units.hpp"
+#include "libcvo/sim/random.hpp"
 
 namespace cvo::sim {
 namespace {
@@ -75,7 +75,8 @@ double axial_noise_sigma(double z) { return 0.0012 + 0.0019 * (z - 0.4) * (z - 0
 
 core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const core::SE3& T_world_camera,
                        const NoiseOptions& noise, std::uint64_t seed, const RenderOptions& options) {
-  return render(scene, k, [&](int) { return T_world_camera; }, noise, seed, options);
+  return render(
+      scene, k, [&](int) { return T_world_camera; }, noise, seed, options);
 }
 
 core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const PoseAtRow& T_world_camera_at_row,

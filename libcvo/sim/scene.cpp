@@ -7,8 +7,8 @@
 #include <numbers>
 #include <utility>
 
-#include "libcvo/sim/random.hpp"
 #include "libcvo/core/units.hpp"
+#include "libcvo/sim/random.hpp"
 
 namespace cvo::sim {
 namespace {
@@ -32,11 +32,11 @@ struct Furniture {
   double x, y, base, sx, sy, sz, yaw_deg;
 };
 constexpr std::array kFurniture{
-    Furniture{1.2, 1.75, 0.0, 1.1, 0.6, 0.75, 0.0},     // table against the +y wall
-    Furniture{1.0, 1.8, 0.75, 0.3, 0.25, 0.3, 20.0},    // box on the table
-    Furniture{-1.4, 1.7, 0.0, 0.6, 0.5, 1.7, 25.0},     // tall cabinet
-    Furniture{1.35, -1.8, 0.0, 0.5, 0.5, 0.5, 35.0},    // cube
-    Furniture{-1.25, -1.6, 0.0, 0.9, 0.5, 0.45, -15.0}, // bench
+    Furniture{1.2, 1.75, 0.0, 1.1, 0.6, 0.75, 0.0},      // table against the +y wall
+    Furniture{1.0, 1.8, 0.75, 0.3, 0.25, 0.3, 20.0},     // box on the table
+    Furniture{-1.4, 1.7, 0.0, 0.6, 0.5, 1.7, 25.0},      // tall cabinet
+    Furniture{1.35, -1.8, 0.0, 0.5, 0.5, 0.5, 35.0},     // cube
+    Furniture{-1.25, -1.6, 0.0, 0.9, 0.5, 0.45, -15.0},  // bench
 };
 
 // Faces of the box centre + R diag(half) [-1, 1]^3. Face normals point out of the box (furniture)

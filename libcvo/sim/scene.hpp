@@ -62,7 +62,7 @@ struct Scene {
   SceneKind kind = SceneKind::textured_room;
   std::uint64_t seed = 0;
   std::vector<Surface> surfaces;
-  std::vector<Object> objects;  // partition surfaces in order
+  std::vector<Object> objects;            // partition surfaces in order
   Eigen::Vector3d light{0.3, -0.4, 2.2};  // point light for Lambert shading, world frame
   double ambient = 0.6;                   // 1 = no shading at all
 };
@@ -81,11 +81,11 @@ struct Ray {
 };
 
 struct Hit {
-  double t = 0;               // ray parameter of the hit
-  Eigen::Vector3d point;      // world
-  Eigen::Vector3d normal;     // unit front normal of the surface hit (not flipped towards the ray)
-  int surface = -1;           // index into Scene::surfaces
-  Eigen::Vector2d st;         // texture coordinates, metres
+  double t = 0;            // ray parameter of the hit
+  Eigen::Vector3d point;   // world
+  Eigen::Vector3d normal;  // unit front normal of the surface hit (not flipped towards the ray)
+  int surface = -1;        // index into Scene::surfaces
+  Eigen::Vector2d st;      // texture coordinates, metres
 };
 
 /// Nearest hit with t > 0, or nothing when the ray leaves the scene.

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <string>
 #include <fstream>
 #include <stdexcept>
+#include <string>
 #include <system_error>
 #include <vector>
 
@@ -62,13 +62,13 @@ SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceO
 
   const Scene scene = make_scene(options.scene, options.seed);
   const core::Trajectory truth = sample_path(options.path, options.frames, options.start_time, options.rate_hz);
-  const std::string source = "# file: 'cvo-render --scene " + std::string(scene_name(options.scene)) + " --path " +
-                             std::string(path_name(options.path)) + " --seed " + std::to_string(options.seed) +
-                             (options.noise.enabled ? " --noise" : "") +
-                             (options.intrinsics.rolling_shutter()
-                                  ? " --rolling-shutter " + std::to_string(options.intrinsics.readout_s)
-                                  : "") +
-                             "'\n";
+  const std::string source =
+      "# file: 'cvo-render --scene " + std::string(scene_name(options.scene)) + " --path " +
+      std::string(path_name(options.path)) + " --seed " + std::to_string(options.seed) +
+      (options.noise.enabled ? " --noise" : "") +
+      (options.intrinsics.rolling_shutter() ? " --rolling-shutter " + std::to_string(options.intrinsics.readout_s)
+                                            : "") +
+      "'\n";
   std::string rgb_list = "# color images\n" + source + "# timestamp filename\n";
   std::string depth_list = "# depth maps\n" + source + "# timestamp filename\n";
 
@@ -93,7 +93,8 @@ SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceO
   write_text(dir / "rgb.txt", rgb_list);
   write_text(dir / "depth.txt", depth_list);
   write_text(dir / "camera.yaml",
-             io::format_intrinsics_yaml(options.intrinsics, "Camera of a cvo-render sequence; depth is registered to colour."));
+             io::format_intrinsics_yaml(options.intrinsics,
+                                        "Camera of a cvo-render sequence; depth is registered to colour."));
   io::write_tum_trajectory(dir / "groundtruth.txt", truth);
 
   summary.frames = truth.size();

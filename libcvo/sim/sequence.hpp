@@ -34,9 +34,9 @@ struct SequenceOptions {
 
 struct SequenceSummary {
   std::size_t frames = 0;
-  double duration_s = 0;             // last stamp - first stamp
-  double path_length_m = 0;          // sum of translation steps
-  double valid_depth_fraction = 0;   // over all pixels of all frames
+  double duration_s = 0;            // last stamp - first stamp
+  double path_length_m = 0;         // sum of translation steps
+  double valid_depth_fraction = 0;  // over all pixels of all frames
 };
 
 /// Writes the sequence into `dir` (created if needed; files of the same names are overwritten).

@@ -86,14 +86,14 @@ std::optional<Eigen::Vector3d> patch_at(const Texture& tex, double s, double t) 
   constexpr double kMargin = 0.04;
   const double du = u - d.uniform(hu + kMargin, 1.0 - hu - kMargin);
   const double dv = v - d.uniform(hv + kMargin, 1.0 - hv - kMargin);
-  const bool inside = shape == 0 ? (du / hu) * (du / hu) + (dv / hv) * (dv / hv) <= 1.0
-                                 : std::abs(du) <= hu && std::abs(dv) <= hv;
+  const bool inside =
+      shape == 0 ? (du / hu) * (du / hu) + (dv / hv) * (dv / hv) <= 1.0 : std::abs(du) <= hu && std::abs(dv) <= hv;
   if (!inside) return std::nullopt;
   const Eigen::Vector3d first = random_colour(d);
   if (shape <= 1) return first;  // plain ellipse or rectangle
   const Eigen::Vector3d second = random_colour(d);
   const double period = d.uniform(0.03, 0.1) / tex.patch_cell;  // 3-10 cm, in cell units
-  if (shape == 2) {                                              // stripes
+  if (shape == 2) {                                             // stripes
     const double x = (d.uniform() < 0.5 ? du : dv) / period;
     return x - fast_floor(x) < 0.5 ? first : second;
   }

@@ -30,7 +30,7 @@ struct Texture {
   double base_frequency = 2.0;  // f0, cycles per metre
   int octaves = 0;              // 0: no noise
   double gain = 0.8;
-  double contrast = 0.0;  // c above
+  double contrast = 0.0;    // c above
   double patch_cell = 1.0;  // metres
   double patch_probability = 0.0;
   double speckle_cell = 0.15;  // metres

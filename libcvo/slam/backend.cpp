@@ -4,8 +4,8 @@
 #include <string>
 #include <utility>
 
-#include "libcvo/posegraph/cost.hpp"
 #include "libcvo/core/information.hpp"
+#include "libcvo/posegraph/cost.hpp"
 
 namespace cvo::slam {
 namespace {
@@ -34,8 +34,7 @@ void require_information(const std::string& edge, const core::Matrix6d& informat
 
 }  // namespace
 
-Backend::Backend(const BackendParameters& parameters)
-    : parameters_(parameters), optimizer_(optimizer_options()) {}
+Backend::Backend(const BackendParameters& parameters) : parameters_(parameters), optimizer_(optimizer_options()) {}
 
 posegraph::OptimizerOptions Backend::optimizer_options() const {
   posegraph::OptimizerOptions options;
@@ -78,7 +77,8 @@ const LocalSolution& Backend::add_local_graph(NodeId keyframe_id, const odometry
   return add_local_graph(order_.empty() ? core::SessionId{0} : order_.front(), keyframe_id, graph);
 }
 
-const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId keyframe_id, const odometry::LocalGraph& graph) {
+const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId keyframe_id,
+                                              const odometry::LocalGraph& graph) {
   if (graph.empty()) throw std::invalid_argument("backend: empty local graph");
   if (static_cast<NodeId>(graph.keyframe().frame_index) != keyframe_id)
     throw std::invalid_argument("backend: local graph starts at frame " + std::to_string(graph.keyframe().frame_index) +
@@ -124,7 +124,8 @@ bool Backend::insert_loop(const loop_closure::LoopClosure& loop) {
   if (!keyframes_.contains(loop.from) || !keyframes_.contains(loop.to)) return false;
   if (piece(session_of(loop.from)) != piece(session_of(loop.to))) join_pieces(loop);
   // The detector's information is the residual's already (see the header): no conversion.
-  const posegraph::Edge edge{loop.from, loop.to, loop.measurement, 0.5 * (loop.information + loop.information.transpose()),
+  const posegraph::Edge edge{loop.from, loop.to, loop.measurement,
+                             0.5 * (loop.information + loop.information.transpose()),
                              /*robust=*/true};
   keyframes_.add_edge(edge);
   loops_.push_back({loop, edge});
@@ -139,7 +140,8 @@ void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
   const core::SessionId keep = move_to_side ? a : b, moved = move_to_side ? b : a;
   const core::SE3& from = keyframes_.node(loop.from).pose;
   const core::SE3& to = keyframes_.node(loop.to).pose;
-  const core::SE3 move = move_to_side ? from * loop.measurement * to.inverse() : to * loop.measurement.inverse() * from.inverse();
+  const core::SE3 move =
+      move_to_side ? from * loop.measurement * to.inverse() : to * loop.measurement.inverse() * from.inverse();
   for (const auto& [id, node] : std::map<NodeId, posegraph::Node>(keyframes_.nodes()))
     if (piece(session_of(id)) == moved) keyframes_.set_pose(id, move * node.pose);
   for (auto& [id, s] : sessions_)
@@ -148,7 +150,8 @@ void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
 }
 
 bool Backend::add_loop(const loop_closure::LoopClosure& loop) {
-  if (loop.from == loop.to) throw std::invalid_argument("backend: loop from keyframe " + std::to_string(loop.from) + " to itself");
+  if (loop.from == loop.to)
+    throw std::invalid_argument("backend: loop from keyframe " + std::to_string(loop.from) + " to itself");
   const std::string name = "loop " + std::to_string(loop.from) + " -> " + std::to_string(loop.to);
   if (!loop.measurement.is_finite()) throw std::invalid_argument("backend: " + name + " is not finite");
   require_information(name, loop.information);
@@ -214,7 +217,9 @@ core::Trajectory to_trajectory(const std::map<NodeId, core::StampedPose>& poses)
 }  // namespace
 
 core::Trajectory Backend::frame_trajectory() const { return to_trajectory(frame_poses(std::nullopt)); }
-core::Trajectory Backend::frame_trajectory(core::SessionId session) const { return to_trajectory(frame_poses(session)); }
+core::Trajectory Backend::frame_trajectory(core::SessionId session) const {
+  return to_trajectory(frame_poses(session));
+}
 
 core::SE3 Backend::odometry_correction(core::SessionId session) const {
   const auto it = sessions_.find(session);

@@ -95,7 +95,8 @@ class Backend {
   /// keyframe's graph was added already, a node belongs to another session, the graph is
   /// malformed (local_optimisation.hpp), or an information matrix is one
   /// core::check_information refuses.
-  const LocalSolution& add_local_graph(core::SessionId session, posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
+  const LocalSolution& add_local_graph(core::SessionId session, posegraph::NodeId keyframe_id,
+                                       const odometry::LocalGraph& graph);
   /// One session (the first registered, else 0).
   const LocalSolution& add_local_graph(posegraph::NodeId keyframe_id, const odometry::LocalGraph& graph);
 
@@ -151,9 +152,9 @@ class Backend {
     LocalSolution solution;
   };
   struct SessionState {
-    std::size_t ordinal = 0;                  // registration order: the earlier piece stays put
-    core::SessionId piece = 0;                       // see piece()
-    std::optional<posegraph::NodeId> anchor;   // its first keyframe
+    std::size_t ordinal = 0;                     // registration order: the earlier piece stays put
+    core::SessionId piece = 0;                   // see piece()
+    std::optional<posegraph::NodeId> anchor;     // its first keyframe
     std::optional<posegraph::NodeId> last_node;  // last frame of its latest graph
     core::SE3 last_odometry;                     // its tracker pose
   };
@@ -163,7 +164,8 @@ class Backend {
   };
 
   [[nodiscard]] posegraph::OptimizerOptions optimizer_options() const;
-  [[nodiscard]] std::map<posegraph::NodeId, core::StampedPose> frame_poses(std::optional<core::SessionId> session) const;
+  [[nodiscard]] std::map<posegraph::NodeId, core::StampedPose> frame_poses(
+      std::optional<core::SessionId> session) const;
   void join_keyframe(SessionState& session, posegraph::NodeId keyframe, const LocalFrame& first);
   bool insert_loop(const loop_closure::LoopClosure& loop);
   void join_pieces(const loop_closure::LoopClosure& loop);

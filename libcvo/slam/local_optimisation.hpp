@@ -21,13 +21,13 @@ namespace cvo::slam {
 struct LocalFrame {
   posegraph::NodeId id = 0;  // the frame index
   double timestamp = 0;
-  core::SE3 relative;        // T_keyframe_frame, locally optimised (identity for the keyframe)
-  core::SE3 odometry;        // T_world_frame as the tracker published it
+  core::SE3 relative;  // T_keyframe_frame, locally optimised (identity for the keyframe)
+  core::SE3 odometry;  // T_world_frame as the tracker published it
 };
 
 struct LocalSolution {
-  std::vector<LocalFrame> frames;       // in the graph's order: frames.front() is the keyframe
-  std::vector<posegraph::Edge> edges;   // the graph's edges, information as Ω above
+  std::vector<LocalFrame> frames;      // in the graph's order: frames.front() is the keyframe
+  std::vector<posegraph::Edge> edges;  // the graph's edges, information as Ω above
   posegraph::OptimizationReport report;
 };
 

@@ -58,14 +58,14 @@ bool Mapper::knows(core::SessionId session, std::int64_t keyframe_id) const {
 
 KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   const auto frame = static_cast<std::int64_t>(k.frame.index);
-  if (frame >= kMaxFrame) throw MapperError(name(k.session, k.id) + ": frame index " + std::to_string(frame) + " is 2^40 or more");
+  if (frame >= kMaxFrame)
+    throw MapperError(name(k.session, k.id) + ": frame index " + std::to_string(frame) + " is 2^40 or more");
   if (k.id < 0) throw MapperError(name(k.session, k.id) + ": negative id");
   if (const auto it = sessions_.find(k.session); it != sessions_.end()) {
     const auto& keyframes = it->second.keyframes;
     if (const auto same = keyframes.find(k.id); same != keyframes.end()) {
       if (same->second.frame == frame && same->second.timestamp == k.frame.timestamp &&
-          same_pose(same->second.odometry, k.odometry))
-      {
+          same_pose(same->second.odometry, k.odometry)) {
         KeyframeOutcome duplicate;
         duplicate.duplicate = true;
         return duplicate;
@@ -113,16 +113,17 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
 }
 
 std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
-                                               const odometry::LocalGraph& graph) {
+                                                     const odometry::LocalGraph& graph) {
   if (graph.empty()) throw MapperError("local graph of " + name(session_id, keyframe_id) + " is empty");
   const auto first = static_cast<std::int64_t>(graph.keyframe().frame_index);
   for (const auto& n : graph.nodes())
     if (n.frame_index >= static_cast<std::uint64_t>(kMaxFrame))
       throw MapperError("local graph of " + name(session_id, keyframe_id) + ": frame index 2^40 or more");
   if (const auto it = sessions_.find(session_id); it != sessions_.end())
-    if (const auto k = it->second.keyframes.find(keyframe_id); k != it->second.keyframes.end() && k->second.frame != first)
-      throw MapperError("local graph of " + name(session_id, keyframe_id) + " starts at frame " + std::to_string(first) +
-                        ", the keyframe is frame " + std::to_string(k->second.frame));
+    if (const auto k = it->second.keyframes.find(keyframe_id);
+        k != it->second.keyframes.end() && k->second.frame != first)
+      throw MapperError("local graph of " + name(session_id, keyframe_id) + " starts at frame " +
+                        std::to_string(first) + ", the keyframe is frame " + std::to_string(k->second.frame));
   // The Backend checks the rest before it changes anything; a session a refused graph introduced
   // stays registered without nodes (harmless: it is placed by nothing).
   const Session& s = session(session_id);
@@ -177,7 +178,8 @@ Map Mapper::map() const {
   for (const core::SessionId id : order_) {
     const Session& s = sessions_.at(id);
     const core::SE3 correction = backend_.odometry_correction(id);
-    map.sessions.push_back({id, backend_.placed(id), backend_.piece(id), s.keyframes.size(), s.joined_at_keyframe, correction});
+    map.sessions.push_back(
+        {id, backend_.placed(id), backend_.piece(id), s.keyframes.size(), s.joined_at_keyframe, correction});
     for (const auto& [keyframe, record] : s.keyframes) {
       // A keyframe whose local graph has not closed yet follows its session's newest correction.
       const auto it = poses.find(node(s, record.frame));

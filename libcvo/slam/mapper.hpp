@@ -70,11 +70,11 @@ struct SessionKeyframe {
 
 struct MapSession {
   core::SessionId session = 0;
-  bool placed = false;               // in the map frame
-  core::SessionId piece = 0;               // whose odometry frame its poses are in
+  bool placed = false;        // in the map frame
+  core::SessionId piece = 0;  // whose odometry frame its poses are in
   std::size_t keyframes = 0;
   std::int64_t joined_at_keyframe = -1;  // its newest keyframe id when it joined (first session: 0)
-  core::SE3 correction;              // T_piece_odom: piece pose = correction · odometry pose
+  core::SE3 correction;                  // T_piece_odom: piece pose = correction · odometry pose
 };
 
 struct MapKeyframe {
@@ -86,10 +86,10 @@ struct MapKeyframe {
 
 struct MapLoop {
   core::SessionId from_session = 0, to_session = 0;
-  std::int64_t from_id = 0, to_id = 0;  // keyframe ids in their sessions
+  std::int64_t from_id = 0, to_id = 0;        // keyframe ids in their sessions
   std::int64_t from_frame = 0, to_frame = 0;  // their frame indices in their sessions
-  loop_closure::LoopClosure loop;       // node ids as the Backend holds them
-  double chi2 = 0, weight = 1;          // at the current poses (Backend::loops)
+  loop_closure::LoopClosure loop;             // node ids as the Backend holds them
+  double chi2 = 0, weight = 1;                // at the current poses (Backend::loops)
 };
 
 struct Map {
@@ -101,10 +101,10 @@ struct Map {
 
 /// What one add_keyframe did.
 struct KeyframeOutcome {
-  bool duplicate = false;                  // the same keyframe again: nothing done
-  std::size_t loops_tried = 0;             // candidates verified
-  std::vector<MapLoop> loops;              // accepted
-  std::vector<core::SessionId> joined;           // sessions placed in the map by it
+  bool duplicate = false;               // the same keyframe again: nothing done
+  std::size_t loops_tried = 0;          // candidates verified
+  std::vector<MapLoop> loops;           // accepted
+  std::vector<core::SessionId> joined;  // sessions placed in the map by it
 };
 
 class Mapper {
@@ -121,7 +121,8 @@ class Mapper {
   /// frame when the keyframe is known. Returns the sessions it placed in the map (through loops
   /// that waited for it). Throws MapperError when it cannot be applied (as Backend does; a graph
   /// whose first frame is not its keyframe's).
-  std::vector<core::SessionId> add_local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
+  std::vector<core::SessionId> add_local_graph(core::SessionId session, std::int64_t keyframe_id,
+                                               const odometry::LocalGraph& graph);
 
   /// The global optimisation of every frame.
   posegraph::OptimizationReport finish();

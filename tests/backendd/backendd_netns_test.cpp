@@ -67,7 +67,8 @@ class BackenddNetns : public ::testing::Test {
 
   using Iterator = std::vector<Message>::const_iterator;
   static backendd::MessageKey keyframe_key(const Message& m) {
-    const auto message = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+    const auto message =
+        backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
     return message ? message->key : backendd::MessageKey{backendd::RecordKind::kKeyframe, -1, -1};
   }
   static std::set<KeyframeName> keyframes_in(Iterator begin, Iterator end) {
@@ -93,7 +94,8 @@ class BackenddNetns : public ::testing::Test {
     auto backendd = cvo::testing::start_backendd(store, stderr_file, settings);
     const int pid = backendd->pid();
     EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(pid); }, 60s))
-        << "no CVO_STATUS from cvo-backendd\n" << cvo::testing::slurp(stderr_file);
+        << "no CVO_STATUS from cvo-backendd\n"
+        << cvo::testing::slurp(stderr_file);
     return backendd;
   }
 
@@ -104,8 +106,7 @@ class BackenddNetns : public ::testing::Test {
     EXPECT_EQ(*code, 0) << cvo::testing::slurp(stderr_file);
     const int pid = backendd.pid();
     const auto stopping = [&](const Captured& c) { return c.status_from(pid, +cvo_lcm::status_t::STATE_STOPPING); };
-    EXPECT_TRUE(capture.wait_until(stopping, 30s))
-        << "no final CVO_STATUS";
+    EXPECT_TRUE(capture.wait_until(stopping, 30s)) << "no final CVO_STATUS";
   }
 
   // Just after the keyframe nearest the middle: the messages before it are in the store once
@@ -133,7 +134,8 @@ TEST_F(BackenddNetns, KilledAndRestartedMidReplayLosesNoKeyframe) {
     send(messages_.begin(), half);
     // Received (the map holds them), then killed with no chance to flush anything.
     const auto first = keyframes_in(messages_.begin(), half);
-    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(first); }, 120s)) << cvo::testing::slurp(err);
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(first); }, 120s))
+        << cvo::testing::slurp(err);
     ASSERT_TRUE(backendd->running()) << cvo::testing::slurp(err);
     backendd->signal(SIGKILL);
     backendd->wait_for(5s);
@@ -181,7 +183,8 @@ TEST_F(BackenddNetns, AKeyframeRepeatedWithOtherContentIsRefusedAndCounted) {
     send(repeats.begin(), repeats.end());
     send(half, messages_.end());  // used after the refusal
     const auto all = keyframes_in(messages_.begin(), messages_.end());
-    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(all); }, 120s)) << cvo::testing::slurp(err);
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(all); }, 120s))
+        << cvo::testing::slurp(err);
     ASSERT_TRUE(backendd->running()) << cvo::testing::slurp(err);
     stop(*backendd, capture, err);
   }
@@ -256,7 +259,8 @@ TEST_F(BackenddNetns, GivesTheKeyframePosesCvoRunGivesOnTheSameFrames) {
     auto backendd = start(capture, dir.path() / "keyframes.store", err);
     send(messages_.begin(), messages_.end());
     const auto all = keyframes_in(messages_.begin(), messages_.end());
-    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(all); }, 120s)) << cvo::testing::slurp(err);
+    EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(all); }, 120s))
+        << cvo::testing::slurp(err);
     stop(*backendd, capture, err);
   }
   const auto captured = capture.snapshot();
@@ -266,14 +270,15 @@ TEST_F(BackenddNetns, GivesTheKeyframePosesCvoRunGivesOnTheSameFrames) {
   ASSERT_TRUE(map) << error;
 
   const auto traj = dir.path() / "cvo-run.txt";
-  const auto run = cvo::testing::run_tool("cvo-run", cvo::testing::quoted(kClip) + " --mode slam --out " +
-                                                         cvo::testing::quoted(traj), dir.path());
+  const auto run = cvo::testing::run_tool(
+      "cvo-run", cvo::testing::quoted(kClip) + " --mode slam --out " + cvo::testing::quoted(traj), dir.path());
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const core::Trajectory frames = io::read_tum_trajectory(traj);
   ASSERT_GE(map->keyframes.size(), 4u);
   for (const auto& k : map->keyframes) {
-    const auto at = std::find_if(frames.begin(), frames.end(),
-                                 [&](const core::StampedPose& p) { return std::abs(p.timestamp - k.timestamp) < 1e-5; });
+    const auto at = std::find_if(frames.begin(), frames.end(), [&](const core::StampedPose& p) {
+      return std::abs(p.timestamp - k.timestamp) < 1e-5;
+    });
     ASSERT_NE(at, frames.end()) << "keyframe " << k.id << " at " << k.timestamp << " is no frame of cvo-run's";
     EXPECT_LT((at->pose.translation() - k.pose.translation()).norm(), 1e-6) << "keyframe " << k.id;
     EXPECT_LT(at->pose.rotation().angularDistance(k.pose.rotation()), 1e-6) << "keyframe " << k.id;

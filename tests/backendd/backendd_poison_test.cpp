@@ -27,9 +27,9 @@
 #include "daemon/backendd/keyframe_store.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "tests/backendd/tracker_recording.hpp"
+#include "tests/support/cli_contract.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
-#include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -196,8 +196,10 @@ TEST(Backendd, SigHupStopsCleanlyWithTheFinalMap) {
   ASSERT_FALSE(published.maps.empty()) << err;
   ASSERT_FALSE(published.statuses.empty());
   EXPECT_EQ(published.statuses.back().state, +cvo_lcm::status_t::STATE_STOPPING);
-  const auto keyframes = std::count_if(good.begin(), good.end(), [](const Event& e) { return e.channel == "CVO_KEYFRAME"; });
-  EXPECT_EQ(static_cast<std::ptrdiff_t>(published.maps.back().keyframes.size()), keyframes) << "the final map has them all";
+  const auto keyframes =
+      std::count_if(good.begin(), good.end(), [](const Event& e) { return e.channel == "CVO_KEYFRAME"; });
+  EXPECT_EQ(static_cast<std::ptrdiff_t>(published.maps.back().keyframes.size()), keyframes)
+      << "the final map has them all";
 }
 
 // A keyframe as schema version 3 wrote it (before readout_s): v3's fingerprint (its lcm-gen
@@ -256,10 +258,10 @@ TEST(Backendd, SetWithoutAnEqualsSignIsAUsageError) {
 
 TEST(BackenddPoison, ExitOnEofNeedsALog) {
   const cvo::test::TempDir dir("backendd_poison");
-  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
-                         {"--lcm-url", "udpm://239.255.76.67:7667?ttl=0", "--store", (dir.path() / "s").string(),
-                          "--exit-on-eof"},
-                         dir.path() / "err.txt");
+  DaemonProcess backendd(
+      fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
+      {"--lcm-url", "udpm://239.255.76.67:7667?ttl=0", "--store", (dir.path() / "s").string(), "--exit-on-eof"},
+      dir.path() / "err.txt");
   EXPECT_EQ(backendd.wait_for(60s).value_or(-9), 1);
   EXPECT_NE(cvo::testing::slurp(dir.path() / "err.txt").find("backendd.exit_on_eof"), std::string::npos);
 }
@@ -269,7 +271,8 @@ TEST(BackenddPoison, AnUnopenableLcmUrlIsAnErrorNamingItWithOrWithoutAPublishUrl
   const cvo::test::TempDir dir("backendd_poison");
   for (const bool publish : {false, true}) {
     std::vector<std::string> args{"--lcm-url", "bogus://x", "--store", (dir.path() / "s").string()};
-    if (publish) args.insert(args.end(), {"--publish-url", "file://" + (dir.path() / "out.lcmlog").string() + "?mode=w"});
+    if (publish)
+      args.insert(args.end(), {"--publish-url", "file://" + (dir.path() / "out.lcmlog").string() + "?mode=w"});
     DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd", args, dir.path() / "err.txt");
     EXPECT_EQ(backendd.wait_for(60s).value_or(-9), 1) << "with --publish-url: " << publish;
     const auto err = cvo::testing::slurp(dir.path() / "err.txt");

@@ -20,8 +20,8 @@
 #include <gtest/gtest.h>
 
 #include "libcvo/core/session.hpp"
-#include "libcvo/slam/mapper.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/slam/mapper.hpp"
 #include "tests/backendd/netns_support.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -107,7 +107,8 @@ class BackenddSessions : public ::testing::Test {
 
   // The back end over every leg in order (killed and restarted between legs when asked), stopped
   // with SIGTERM at the end; the ATE of its last map.
-  static MapRun run_map(const fs::path& dir, const std::string& name, const std::vector<Leg>& legs, bool restart_between) {
+  static MapRun run_map(const fs::path& dir, const std::string& name, const std::vector<Leg>& legs,
+                        bool restart_between) {
     MapRun run;
     const auto store = dir / (name + ".store");
     const auto maps = dir / (name + ".lcmlog");
@@ -155,8 +156,8 @@ class BackenddSessions : public ::testing::Test {
         "cvo-log", "map " + cvo::testing::quoted(maps) + " --out " + cvo::testing::quoted(trajectory), dir);
     EXPECT_EQ(log.exit_code, 0) << log.err;
     const auto eval = cvo::testing::run_tool(
-        "cvo-eval", cvo::testing::quoted(kSequence / "groundtruth.txt") + " " + cvo::testing::quoted(trajectory) + " --json",
-        dir);
+        "cvo-eval",
+        cvo::testing::quoted(kSequence / "groundtruth.txt") + " " + cvo::testing::quoted(trajectory) + " --json", dir);
     EXPECT_EQ(eval.exit_code, 0) << eval.err;
     return cvo::testing::json_number(eval.out, "ate_rmse_m");
   }
@@ -188,8 +189,10 @@ class BackenddSessions : public ::testing::Test {
     EXPECT_GT(across, 0) << two.backend_log;
     std::string missing;
     for (const auto& k : two.captured.keyframes)
-      if (!two.captured.map_holds({k})) missing += " " + std::to_string(k.second) + " of " + core::session_name(k.first);
-    EXPECT_TRUE(missing.empty()) << "keyframes the trackers sent are not in the map:" << missing << "\n" << two.backend_log;
+      if (!two.captured.map_holds({k}))
+        missing += " " + std::to_string(k.second) + " of " + core::session_name(k.first);
+    EXPECT_TRUE(missing.empty()) << "keyframes the trackers sent are not in the map:" << missing << "\n"
+                                 << two.backend_log;
     for (const auto session : two.sessions) EXPECT_FALSE(two.captured.keyframes_of(session).empty());
 
     std::smatch join;

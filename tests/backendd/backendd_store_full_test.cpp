@@ -9,11 +9,11 @@
 //
 // Runs only inside tests/support/in-private-netns; the full disk also inside
 // tests/support/in-private-mountns (CVO_SMALL_FS: a tmpfs no other process sees).
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/statvfs.h>
 #include <sys/un.h>
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -90,9 +90,9 @@ class NotifySocket {
 
 // How the store is kept from writing, and how room is made again.
 struct Squeeze {
-  std::vector<std::string> wrapper;               // runs cvo-backendd (prlimit ...), or empty
-  std::function<void(int pid)> make_room;         // the daemon's pid
-  std::string status_prefix;                      // systemd's STATUS= meanwhile
+  std::vector<std::string> wrapper;        // runs cvo-backendd (prlimit ...), or empty
+  std::function<void(int pid)> make_room;  // the daemon's pid
+  std::string status_prefix;               // systemd's STATUS= meanwhile
 };
 
 class BackenddStoreFull : public ::testing::Test {
@@ -127,7 +127,8 @@ class BackenddStoreFull : public ::testing::Test {
     std::set<KeyframeName> names;
     for (const auto& m : messages_) {
       if (m.channel != "CVO_KEYFRAME") continue;
-      const auto message = backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+      const auto message =
+          backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
       if (message) names.emplace(message->key.session, message->key.id);
     }
     return names;
@@ -206,8 +207,8 @@ void BackenddStoreFull::degrade_and_recover(const fs::path& store, const Squeeze
            s.unsaved_records == unsaved && said_unsaved() == std::to_string(unsaved);
   };
   ASSERT_TRUE(capture.wait_until(degraded, 120s))
-      << "every keyframe used, and the degraded state said\n" << slurp(err)
-      << (notify.statuses().empty() ? "no STATUS=" : notify.statuses().back());
+      << "every keyframe used, and the degraded state said\n"
+      << slurp(err) << (notify.statuses().empty() ? "no STATUS=" : notify.statuses().back());
   ASSERT_TRUE(backendd->running()) << slurp(err);
   std::cout << "while the store could not be written: " << unsaved << " of " << messages_.size()
             << " records unsaved; STATUS=" << notify.statuses().back() << std::endl;
@@ -281,7 +282,8 @@ TEST_F(BackenddStoreFull, UnderAFileSizeLimitItDegradesAndOnceLiftedLosesNothing
     const rlimit unlimited{RLIM_INFINITY, RLIM_INFINITY};
     EXPECT_EQ(::prlimit(pid, RLIMIT_FSIZE, &unlimited, nullptr), 0);
   };
-  Squeeze squeeze{{prlimit.string(), "--fsize=" + std::to_string(room_for_a_third()) + ":unlimited"}, lift,
+  Squeeze squeeze{{prlimit.string(), "--fsize=" + std::to_string(room_for_a_third()) + ":unlimited"},
+                  lift,
                   "degraded: store at the file size limit ("};
   degrade_and_recover(dir.path() / "keyframes.store", squeeze);
 }

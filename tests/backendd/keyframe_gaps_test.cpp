@@ -21,7 +21,8 @@ constexpr std::int64_t kSession = 0x5e5510'0000'0001;
 const Clock::time_point t0{};
 
 // A tracker's output in order: local graph k-1, then keyframe k, for k in [from, to).
-void send(KeyframeGaps& gaps, std::int64_t from, std::int64_t to, Clock::time_point now, std::int64_t session = kSession) {
+void send(KeyframeGaps& gaps, std::int64_t from, std::int64_t to, Clock::time_point now,
+          std::int64_t session = kSession) {
   for (std::int64_t k = from; k < to; ++k) {
     if (k > 0) gaps.seen(Seen::kLocalGraph, session, k - 1, now);
     gaps.seen(Seen::kKeyframe, session, k, now);
@@ -90,7 +91,7 @@ TEST(KeyframeGaps, AMissingLocalGraphIsAskedForByItsKeyframe) {
 
 TEST(KeyframeGaps, ALocalGraphWhoseKeyframeNeverCameAsksForBoth) {
   KeyframeGaps gaps;
-  send(gaps, 0, 5, t0);  // keyframes 0-4, graphs 0-3
+  send(gaps, 0, 5, t0);                                     // keyframes 0-4, graphs 0-3
   gaps.seen(Seen::kGraphWithoutKeyframe, kSession, 5, t0);  // keyframe 5 lost, its graph refused
   EXPECT_EQ(asked(gaps.due(t0 + 1s)), (Ids{4, 5})) << "graph 4 went out before keyframe 5";
   gaps.seen(Seen::kKeyframe, kSession, 4, t0 + 1s);  // repeats are not seen; these are the answers
@@ -118,15 +119,15 @@ TEST(KeyframeGaps, AsksAgainWithBackOffThenGivesUpAndCountsItLost) {
   send(gaps, 0, 2, t0);
   gaps.seen(Seen::kLocalGraph, kSession, 1, t0);
   gaps.seen(Seen::kKeyframe, kSession, 3, t0);
-  EXPECT_EQ(asked(gaps.due(t0 + 100ms)), (Ids{2}));                  // 1st
+  EXPECT_EQ(asked(gaps.due(t0 + 100ms)), (Ids{2}));  // 1st
   EXPECT_TRUE(gaps.due(t0 + 599ms).requests.empty());
-  EXPECT_EQ(asked(gaps.due(t0 + 600ms)), (Ids{2}));                  // 2nd, 500 ms later
+  EXPECT_EQ(asked(gaps.due(t0 + 600ms)), (Ids{2}));  // 2nd, 500 ms later
   EXPECT_TRUE(gaps.due(t0 + 1599ms).requests.empty());
-  EXPECT_EQ(asked(gaps.due(t0 + 1600ms)), (Ids{2}));                 // 3rd, 1 s later
+  EXPECT_EQ(asked(gaps.due(t0 + 1600ms)), (Ids{2}));  // 3rd, 1 s later
   const auto before = gaps.due(t0 + 3599ms);
   EXPECT_TRUE(before.requests.empty());
   EXPECT_TRUE(before.given_up.empty());
-  const auto round = gaps.due(t0 + 3600ms);                          // 2 s after the last
+  const auto round = gaps.due(t0 + 3600ms);  // 2 s after the last
   EXPECT_TRUE(round.requests.empty());
   ASSERT_EQ(round.given_up.size(), 1u);
   EXPECT_EQ(round.given_up[0].session, kSession);
@@ -151,7 +152,7 @@ TEST(KeyframeGaps, TheGraphOfAKeyframeGivenUpIsNotCountedAgain) {
   EXPECT_EQ(gaps.due(t0 + 2s).given_up.size(), 1u);  // keyframe 3: never came
   EXPECT_EQ(gaps.lost(), 1);
   gaps.seen(Seen::kGraphWithoutKeyframe, kSession, 3, t0 + 3s);  // its graph at the session's end
-  gaps.seen(Seen::kKeyframe, kSession, 4, t0 + 3s);                // and the session goes on
+  gaps.seen(Seen::kKeyframe, kSession, 4, t0 + 3s);              // and the session goes on
   gaps.seen(Seen::kLocalGraph, kSession, 4, t0 + 3s);
   gaps.seen(Seen::kKeyframe, kSession, 5, t0 + 3s);
   EXPECT_TRUE(gaps.due(t0 + 1h).given_up.empty());
@@ -242,7 +243,7 @@ TEST(KeyframeGaps, MemoryIsBoundedAgainstManySessions) {
   policy.max_sessions = 2;
   policy.max_missing = 3;
   KeyframeGaps gaps(policy);
-  gaps.seen(Seen::kKeyframe, 1, 2, t0);      // session 1: keyframes 0, 1 and graphs 0, 1 missing
+  gaps.seen(Seen::kKeyframe, 1, 2, t0);       // session 1: keyframes 0, 1 and graphs 0, 1 missing
   gaps.seen(Seen::kKeyframe, 2, 2, t0 + 1s);  // session 2: one fits, one given up at once
   EXPECT_EQ(gaps.missing(), 3u);
   EXPECT_EQ(gaps.lost(), 1);

@@ -146,7 +146,8 @@ TEST(KeyframeStore, AStoredRecordIsReadBackWhereAppendSaysItIs) {
 
   auto bytes = bytes_of(file);  // one payload byte of the first record flipped on disk
   bytes[static_cast<std::size_t>(first.offset) + 20] ^= 0x10;
-  std::fstream(file, std::ios::binary | std::ios::in | std::ios::out).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::fstream(file, std::ios::binary | std::ios::in | std::ios::out)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   EXPECT_FALSE(store.read(first, &error));
   EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << error;
   EXPECT_TRUE(store.read(second, &error)) << error;
@@ -176,15 +177,16 @@ TEST(KeyframeStore, DamageInAMiddleRecordCostsThatRecordAlone) {
     const auto file = dir.path() / "keyframes.store";
     const auto written = write_store(file, 20);
     auto bytes = bytes_of(file);
-    bytes[written.starts[2] + damage.offset] = static_cast<char>(bytes[written.starts[2] + damage.offset] ^ damage.flip);
+    bytes[written.starts[2] + damage.offset] =
+        static_cast<char>(bytes[written.starts[2] + damage.offset] ^ damage.flip);
     write_bytes(file, bytes);
 
     std::string warning;
     const auto records = reopen(file, warning);
     expect_all_but(records, written, {2});
     const auto skipped = written.starts[3] - written.starts[2];
-    EXPECT_TRUE(contains(warning, "1 damaged stretch skipped (" + std::to_string(skipped) + " bytes; the first at byte " +
-                                      std::to_string(written.starts[2]) + ": "))
+    EXPECT_TRUE(contains(warning, "1 damaged stretch skipped (" + std::to_string(skipped) +
+                                      " bytes; the first at byte " + std::to_string(written.starts[2]) + ": "))
         << warning;
     EXPECT_TRUE(contains(warning, damage.why)) << warning;
     EXPECT_TRUE(contains(warning, "19 intact records kept")) << warning;
@@ -218,7 +220,8 @@ TEST(KeyframeStore, GarbageBetweenRecordsIsSkipped) {
   expect_all_but(records, written, {12});
   const auto damaged_record = written.starts[13] - written.starts[12];
   EXPECT_TRUE(contains(warning, "2 damaged stretches skipped (" + std::to_string(1000 + damaged_record) +
-                                    " bytes; the first at byte " + std::to_string(written.starts[6]) + ": bad record magic"))
+                                    " bytes; the first at byte " + std::to_string(written.starts[6]) +
+                                    ": bad record magic"))
       << warning;
   EXPECT_TRUE(contains(warning, "19 intact records kept")) << warning;
   ASSERT_EQ(damaged_copies(file).size(), 1u);
@@ -343,7 +346,7 @@ TEST(KeyframeStore, RecordsThatCannotBeWrittenAreHeldAndWrittenLaterInOrder) {
   std::vector<std::vector<std::uint8_t>> got;
   for (const auto& r : records) got.push_back(r.payload);
   EXPECT_EQ(got, (std::vector<std::vector<std::uint8_t>>{payloads[0], payloads[1], payloads[2], payloads[3],
-                                                          payloads[4], payloads[5], payloads[8]}));
+                                                         payloads[4], payloads[5], payloads[8]}));
 }
 
 // A new store that cannot even take its magic starts degraded instead of failing to start, and

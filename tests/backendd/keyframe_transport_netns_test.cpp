@@ -54,12 +54,12 @@ constexpr const char* kTrackerUrl = "udpm://239.255.76.68:7668?ttl=0&recv_buf_si
 
 // What the relay saw and did; read under Relay::mutex_.
 struct RelayLog {
-  std::set<KeyframeName> made;          // every keyframe the tracker's poses name (ids from 0)
-  std::set<KeyframeName> sent;          // every CVO_KEYFRAME the tracker sent
-  std::set<KeyframeName> dropped;       // lost on purpose, the first time each was sent
-  int resent = 0;                       // CVO_KEYFRAMEs sent again (passed)
-  int requests = 0;                     // CVO_KEYFRAME_REQUESTs passed to the tracker
-  std::int64_t last_frame = -1;         // the newest frame index of the tracker's poses
+  std::set<KeyframeName> made;                      // every keyframe the tracker's poses name (ids from 0)
+  std::set<KeyframeName> sent;                      // every CVO_KEYFRAME the tracker sent
+  std::set<KeyframeName> dropped;                   // lost on purpose, the first time each was sent
+  int resent = 0;                                   // CVO_KEYFRAMEs sent again (passed)
+  int requests = 0;                                 // CVO_KEYFRAME_REQUESTs passed to the tracker
+  std::int64_t last_frame = -1;                     // the newest frame index of the tracker's poses
   std::optional<cvo_lcm::status_t> tracker_status;  // the tracker's newest CVO_STATUS
 };
 
@@ -186,7 +186,9 @@ TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeLeavesTheMapWhole) {
   const auto tracker_code = cvo::testing::stop(trackerd, 60s);
   EXPECT_EQ(tracker_code.value_or(-9), 0) << logs();
   EXPECT_TRUE(relay.wait_until(
-      [](const RelayLog& r) { return r.tracker_status && r.tracker_status->state == cvo_lcm::status_t::STATE_STOPPING; },
+      [](const RelayLog& r) {
+        return r.tracker_status && r.tracker_status->state == cvo_lcm::status_t::STATE_STOPPING;
+      },
       30s))
       << "no final CVO_STATUS from the tracker";
   const auto backend_code = cvo::testing::stop(*backendd, 120s);
@@ -211,9 +213,9 @@ TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeLeavesTheMapWhole) {
   ASSERT_TRUE(relayed.tracker_status);
   const auto& tracker = *relayed.tracker_status;
   const auto dropped = static_cast<std::int64_t>(relayed.dropped.size());
-  std::cout << "keyframes made " << seen.made.size() << ", dropped by the relay " << dropped
-            << "; back end: requested " << backend.keyframes_requested << ", recovered "
-            << backend.keyframes_recovered << ", lost " << backend.keyframes_lost << ", local graphs refused "
+  std::cout << "keyframes made " << seen.made.size() << ", dropped by the relay " << dropped << "; back end: requested "
+            << backend.keyframes_requested << ", recovered " << backend.keyframes_recovered << ", lost "
+            << backend.keyframes_lost << ", local graphs refused "
             << backend.bad_messages[cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME] << "; tracker: sent again "
             << tracker.keyframes_requested << ", lost " << tracker.keyframes_lost << "; requests relayed "
             << relayed.requests << ", keyframes re-sent " << relayed.resent << std::endl;

@@ -8,8 +8,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <condition_variable>
+#include <csignal>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -41,7 +41,7 @@ using KeyframeName = std::pair<std::int64_t, std::int64_t>;  // (session, id)
 inline constexpr const char* kUrl = kPrivateLcmUrl;
 
 struct Captured {
-  std::optional<cvo_lcm::map_t> map;               // the last CVO_MAP
+  std::optional<cvo_lcm::map_t> map;                // the last CVO_MAP
   std::vector<cvo_lcm::status_t> backend_statuses;  // cvo-backendd's CVO_STATUS, in order
   std::set<KeyframeName> keyframes;                 // every CVO_KEYFRAME seen
   std::map<std::int64_t, std::int64_t> last_frame;  // CVO_POSE: each session's newest frame index
@@ -148,8 +148,15 @@ inline std::unique_ptr<DaemonProcess> start_backendd(const std::filesystem::path
 /// with `exit_at_end` it exits 0 after the last frame, else it stays up as a live one would.
 inline DaemonProcess start_trackerd(const std::filesystem::path& folder, const std::filesystem::path& stderr_file,
                                     bool exit_at_end) {
-  std::vector<std::string> args{"--source",     "tum:" + folder.string(), "--lcm-url", kUrl, "--deterministic", "--set",
-                                "trackerd.realtime_priority=0", "--set",  "trackerd.lock_memory=false"};
+  std::vector<std::string> args{"--source",
+                                "tum:" + folder.string(),
+                                "--lcm-url",
+                                kUrl,
+                                "--deterministic",
+                                "--set",
+                                "trackerd.realtime_priority=0",
+                                "--set",
+                                "trackerd.lock_memory=false"};
   if (exit_at_end) args.emplace_back("--exit-on-eof");
   return DaemonProcess(std::filesystem::path(CVO_TOOLS_DIR) / "cvo-trackerd", args, stderr_file);
 }

@@ -27,10 +27,13 @@ inline std::vector<Message> tracker_recording(const std::filesystem::path& dir,
                                               const std::vector<std::string>& settings = {}) {
   using namespace std::chrono_literals;
   const auto out = dir / "tracker.lcmlog";
-  std::vector<std::string> args{"--source", "tum:" + (std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").string(),
-                                "--exit-on-eof", "--deterministic", "--lcm-url", "file://" + out.string() + "?mode=w",
-                                "--set", "trackerd.paced=false", "--set", "trackerd.realtime_priority=0", "--set",
-                                "trackerd.lock_memory=false"};
+  std::vector<std::string> args{
+      "--source",      "tum:" + (std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").string(),
+      "--exit-on-eof", "--deterministic",
+      "--lcm-url",     "file://" + out.string() + "?mode=w",
+      "--set",         "trackerd.paced=false",
+      "--set",         "trackerd.realtime_priority=0",
+      "--set",         "trackerd.lock_memory=false"};
   for (const auto& s : settings) args.insert(args.end(), {"--set", s});
   DaemonProcess trackerd(std::filesystem::path(CVO_TOOLS_DIR) / "cvo-trackerd", args, dir / "tracker.txt");
   EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0) << slurp(dir / "tracker.txt");

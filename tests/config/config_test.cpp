@@ -197,15 +197,27 @@ TEST(Config, DumpRoundTripsEveryKey) {
 // and iterations. Their defaults are the tuned values; module_parameters_test checks they reach
 // the modules.
 TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
-  const std::vector<std::string> tuned{
-      "odometry.max_points",          "odometry.restart_after_failures",  "keyframe.local_graph_capacity",
-      "keyframe.gamma_ell",           "keyframe.gamma_sigma",             "keyframe.gamma_stride",
-      "keyframe.chain_weight",
-      "keyframe.chain_full_weight_deg", "loop_closure.max_refinements",   "loop_closure.ransac_iterations",
-      "loop_closure.ransac_inlier_m", "loop_closure.min_inliers",         "loop_closure.min_inlier_retention",
-      "loop_closure.ransac_seed",     "loop_closure.orb_features",        "loop_closure.orb_scale_factor",
-      "loop_closure.orb_levels",      "loop_closure.orb_edge_threshold",  "loop_closure.orb_fast_threshold",
-      "pose_graph.bridge_information", "pose_graph.max_iterations"};
+  const std::vector<std::string> tuned{"odometry.max_points",
+                                       "odometry.restart_after_failures",
+                                       "keyframe.local_graph_capacity",
+                                       "keyframe.gamma_ell",
+                                       "keyframe.gamma_sigma",
+                                       "keyframe.gamma_stride",
+                                       "keyframe.chain_weight",
+                                       "keyframe.chain_full_weight_deg",
+                                       "loop_closure.max_refinements",
+                                       "loop_closure.ransac_iterations",
+                                       "loop_closure.ransac_inlier_m",
+                                       "loop_closure.min_inliers",
+                                       "loop_closure.min_inlier_retention",
+                                       "loop_closure.ransac_seed",
+                                       "loop_closure.orb_features",
+                                       "loop_closure.orb_scale_factor",
+                                       "loop_closure.orb_levels",
+                                       "loop_closure.orb_edge_threshold",
+                                       "loop_closure.orb_fast_threshold",
+                                       "pose_graph.bridge_information",
+                                       "pose_graph.max_iterations"};
   const auto keys = config_keys();
   for (const auto& key : tuned) EXPECT_NE(std::find(keys.begin(), keys.end(), key), keys.end()) << key;
 
@@ -248,24 +260,35 @@ TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
   expected.pose_graph.bridge_information = 0.5;
   EXPECT_TRUE(loaded == expected) << dump_config(loaded);
   Config overridden;
-  for (const char* a : {"keyframe.rotation_threshold_deg=20", "keyframe.chain_weight=0",
-                        "keyframe.local_graph_capacity=2", "loop_closure.match_ratio=0.8", "loop_closure.ransac_seed=7",
-                        "loop_closure.orb_scale_factor=1.5", "odometry.max_points=4096",
-                        "pose_graph.bridge_information=0.5"})
+  for (const char* a :
+       {"keyframe.rotation_threshold_deg=20", "keyframe.chain_weight=0", "keyframe.local_graph_capacity=2",
+        "loop_closure.match_ratio=0.8", "loop_closure.ransac_seed=7", "loop_closure.orb_scale_factor=1.5",
+        "odometry.max_points=4096", "pose_graph.bridge_information=0.5"})
     apply_override(overridden, a);
   EXPECT_TRUE(overridden == expected) << dump_config(overridden);
 
   // Their ranges: what the modules cannot use is refused, naming the key.
-  for (const char* bad : {"odometry.max_points=0", "odometry.restart_after_failures=0",
-                          "keyframe.local_graph_capacity=1", "keyframe.gamma_ell=0", "keyframe.gamma_sigma=-1",
-                          "keyframe.chain_weight=-0.5", "keyframe.chain_full_weight_deg=181",
-                          "loop_closure.max_refinements=-1", "loop_closure.ransac_iterations=0",
-                          "loop_closure.ransac_inlier_m=0", "loop_closure.min_inliers=2",
-                          "loop_closure.min_inlier_retention=1.5", "loop_closure.ransac_seed=4294967296",
-                          "loop_closure.ransac_seed=-1", "loop_closure.orb_features=0",
-                          "loop_closure.orb_scale_factor=1", "loop_closure.orb_levels=0",
-                          "loop_closure.orb_edge_threshold=-1", "loop_closure.orb_fast_threshold=0",
-                          "pose_graph.bridge_information=0", "pose_graph.max_iterations=0"}) {
+  for (const char* bad : {"odometry.max_points=0",
+                          "odometry.restart_after_failures=0",
+                          "keyframe.local_graph_capacity=1",
+                          "keyframe.gamma_ell=0",
+                          "keyframe.gamma_sigma=-1",
+                          "keyframe.chain_weight=-0.5",
+                          "keyframe.chain_full_weight_deg=181",
+                          "loop_closure.max_refinements=-1",
+                          "loop_closure.ransac_iterations=0",
+                          "loop_closure.ransac_inlier_m=0",
+                          "loop_closure.min_inliers=2",
+                          "loop_closure.min_inlier_retention=1.5",
+                          "loop_closure.ransac_seed=4294967296",
+                          "loop_closure.ransac_seed=-1",
+                          "loop_closure.orb_features=0",
+                          "loop_closure.orb_scale_factor=1",
+                          "loop_closure.orb_levels=0",
+                          "loop_closure.orb_edge_threshold=-1",
+                          "loop_closure.orb_fast_threshold=0",
+                          "pose_graph.bridge_information=0",
+                          "pose_graph.max_iterations=0"}) {
     Config untouched;
     try {
       apply_override(untouched, bad);

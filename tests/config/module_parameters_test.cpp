@@ -3,8 +3,8 @@
 // tunable lives in its core struct field and its config table row only, libcvo/core/parameters.hpp),
 // the mapping hands each section over whole, and every key reaches its module, through --set as
 // through a file, in cvo-run end to end.
-#include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
+#include "libcvo/config/mapper_parameters.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -82,14 +82,14 @@ constexpr bool holds_exactly = std::is_same_v<decltype(member_types(std::declval
 // beside KeyframeTrackingParameters, say) changes the member list: this file stops compiling.
 static_assert(holds_exactly<odometry::FrameToFrameParameters, core::SelectionParameters, core::CvoParameters,
                             core::OdometryParameters, core::SE3>);
-static_assert(holds_exactly<odometry::KeyframeOdometryParameters, core::SelectionParameters, core::CvoParameters,
-                            core::KeyframeParameters, core::KeyframeTrackingParameters, core::OdometryParameters,
-                            core::SE3>);
+static_assert(
+    holds_exactly<odometry::KeyframeOdometryParameters, core::SelectionParameters, core::CvoParameters,
+                  core::KeyframeParameters, core::KeyframeTrackingParameters, core::OdometryParameters, core::SE3>);
 static_assert(holds_exactly<odometry::OpenCvOdometryParameters, odometry::OpenCvVariant, core::SelectionParameters,
                             core::OdometryParameters, core::SE3>);
-static_assert(holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters,
-                            core::LoopVerificationParameters, core::CvoParameters, core::SelectionParameters,
-                            core::OdometryParameters>);
+static_assert(
+    holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters, core::LoopVerificationParameters,
+                  core::CvoParameters, core::SelectionParameters, core::OdometryParameters>);
 static_assert(std::is_same_v<slam::BackendParameters, core::PoseGraphParameters>);
 static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters>);
 static_assert(holds_exactly<posegraph::OptimizerOptions, core::PoseGraphParameters, double, double, double, bool>);
@@ -99,8 +99,9 @@ static_assert(holds_exactly<posegraph::OptimizerOptions, core::PoseGraphParamete
 std::regex member_declaration(const std::vector<std::string>& names) {
   std::string alternatives;
   for (const auto& name : names) alternatives += (alternatives.empty() ? "" : "|") + name;
-  return std::regex(R"((^|\n)[ \t]*(const[ \t]+)?(double|float|int|bool|unsigned|std::size_t|std::uint32_t|std::string)[ \t]+()" +
-                    alternatives + R"()[ \t]*(=[^;\n]*[^;)\n]|\{[^;\n]*\})?[ \t]*;)");
+  return std::regex(
+      R"((^|\n)[ \t]*(const[ \t]+)?(double|float|int|bool|unsigned|std::size_t|std::uint32_t|std::string)[ \t]+()" +
+      alternatives + R"()[ \t]*(=[^;\n]*[^;)\n]|\{[^;\n]*\})?[ \t]*;)");
 }
 
 std::string read_text(const std::filesystem::path& file) {
@@ -119,8 +120,8 @@ TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
   // Same name, another quantity.
   const std::set<std::pair<std::string, std::string>> other_quantities{
       {"libcvo/loop_closure/vocabulary.hpp", "max_iterations"},  // k-medians iterations of training
-      {"libcvo/registration/registration.hpp", "max_points"},  // Capacities: no default, every caller's max_points
-      {"drivers/usb_cameras.hpp", "source"},                   // where a camera's USB ids are published
+      {"libcvo/registration/registration.hpp", "max_points"},    // Capacities: no default, every caller's max_points
+      {"drivers/usb_cameras.hpp", "source"},                     // where a camera's USB ids are published
   };
   std::set<std::string> names;
   for (const auto& key : config_keys()) names.insert(key.substr(key.find('.') + 1));
@@ -147,7 +148,8 @@ TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
 // The scan above matches what it must: the declarations this rule replaced, and nothing else.
 TEST(ConfigModuleParameters, TheScanRecognisesARedeclaredTunable) {
   const std::regex member = member_declaration({"gamma_ell", "max_points"});
-  EXPECT_TRUE(std::regex_search("struct P {\n  double gamma_ell = core::KeyframeTrackingParameters{}.gamma_ell;\n", member));
+  EXPECT_TRUE(
+      std::regex_search("struct P {\n  double gamma_ell = core::KeyframeTrackingParameters{}.gamma_ell;\n", member));
   EXPECT_TRUE(std::regex_search("  std::size_t max_points = 8192;  // capacity\n", member));
   EXPECT_TRUE(std::regex_search("  double gamma_ell;\n", member));
   EXPECT_TRUE(std::regex_search("  double gamma_ell{0.1};\n", member));
@@ -158,10 +160,10 @@ TEST(ConfigModuleParameters, TheScanRecognisesARedeclaredTunable) {
 
 TEST(ConfigModuleParameters, EveryModuleGetsTheConfigurationsStructsWhole) {
   Config c;
-  for (const char* assignment : {"selection.target_points=1500", "cvo.ell_init=0.15", "odometry.max_points=4096",
-                                 "keyframe.rotation_threshold_deg=20", "keyframe.gamma_ell=0.2",
-                                 "loop_closure.similarity_threshold=0.4", "loop_closure.orb_levels=4",
-                                 "pose_graph.cauchy_delta=1.5", "dataset.max_association_dt=0.01"})
+  for (const char* assignment :
+       {"selection.target_points=1500", "cvo.ell_init=0.15", "odometry.max_points=4096",
+        "keyframe.rotation_threshold_deg=20", "keyframe.gamma_ell=0.2", "loop_closure.similarity_threshold=0.4",
+        "loop_closure.orb_levels=4", "pose_graph.cauchy_delta=1.5", "dataset.max_association_dt=0.01"})
     apply_override(c, assignment);
 
   const auto f2f = frame_to_frame_parameters(c);
@@ -229,10 +231,13 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
                 keyframe_odometry_parameters(c).selection.max_depth_m == 3.5;
        }},
       {"selection.min_depth_m=0.3",
-       [](const Config& c) { return opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).selection.min_depth_m == 0.3; }},
+       [](const Config& c) {
+         return opencv_odometry_parameters(c, odometry::OpenCvVariant::rgbd).selection.min_depth_m == 0.3;
+       }},
       {"cvo.ell_init=0.15",
        [](const Config& c) {
-         return frame_to_frame_parameters(c).cvo.ell_init == 0.15 && keyframe_odometry_parameters(c).cvo.ell_init == 0.15 &&
+         return frame_to_frame_parameters(c).cvo.ell_init == 0.15 &&
+                keyframe_odometry_parameters(c).cvo.ell_init == 0.15 &&
                 mapper_parameters(c).detector.cvo.ell_init == 0.15;
        }},
       {"odometry.max_points=4096",
@@ -250,10 +255,14 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
        [](const Config& c) { return keyframe_odometry_parameters(c).keyframe.rotation_threshold_deg == 20; }},
       {"keyframe.local_graph_capacity=2",
        [](const Config& c) { return keyframe_odometry_parameters(c).tracking.local_graph_capacity == 2; }},
-      {"keyframe.gamma_ell=0.2", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_ell == 0.2; }},
-      {"keyframe.gamma_sigma=0.1", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_sigma == 0.1; }},
-      {"keyframe.gamma_stride=1", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_stride == 1; }},
-      {"keyframe.chain_weight=0", [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_weight == 0; }},
+      {"keyframe.gamma_ell=0.2",
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_ell == 0.2; }},
+      {"keyframe.gamma_sigma=0.1",
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_sigma == 0.1; }},
+      {"keyframe.gamma_stride=1",
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.gamma_stride == 1; }},
+      {"keyframe.chain_weight=0",
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_weight == 0; }},
       {"keyframe.chain_full_weight_deg=10",
        [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_full_weight_deg == 10; }},
       {"loop_closure.similarity_threshold=0.4",
@@ -264,15 +273,18 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
        [](const Config& c) { return mapper_parameters(c).detector.verification.ransac_iterations == 50; }},
       {"loop_closure.ransac_inlier_m=0.05",
        [](const Config& c) { return mapper_parameters(c).detector.verification.ransac_inlier_m == 0.05; }},
-      {"loop_closure.min_inliers=20", [](const Config& c) { return mapper_parameters(c).detector.verification.min_inliers == 20; }},
+      {"loop_closure.min_inliers=20",
+       [](const Config& c) { return mapper_parameters(c).detector.verification.min_inliers == 20; }},
       {"loop_closure.min_inlier_retention=0.8",
        [](const Config& c) { return mapper_parameters(c).detector.verification.min_inlier_retention == 0.8; }},
       {"loop_closure.ransac_seed=4294967295",
        [](const Config& c) { return mapper_parameters(c).detector.verification.ransac_seed == 4294967295u; }},
-      {"loop_closure.orb_features=500", [](const Config& c) { return mapper_parameters(c).detector.verification.orb_features == 500; }},
+      {"loop_closure.orb_features=500",
+       [](const Config& c) { return mapper_parameters(c).detector.verification.orb_features == 500; }},
       {"loop_closure.orb_scale_factor=1.5",
        [](const Config& c) { return mapper_parameters(c).detector.verification.orb_scale_factor == 1.5; }},
-      {"loop_closure.orb_levels=4", [](const Config& c) { return mapper_parameters(c).detector.verification.orb_levels == 4; }},
+      {"loop_closure.orb_levels=4",
+       [](const Config& c) { return mapper_parameters(c).detector.verification.orb_levels == 4; }},
       {"loop_closure.orb_edge_threshold=40",
        [](const Config& c) { return mapper_parameters(c).detector.verification.orb_edge_threshold == 40; }},
       {"loop_closure.orb_fast_threshold=10",
@@ -280,8 +292,10 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
       {"pose_graph.cauchy_delta=1.5", [](const Config& c) { return mapper_parameters(c).backend.cauchy_delta == 1.5; }},
       {"pose_graph.bridge_information=0.25",
        [](const Config& c) { return mapper_parameters(c).backend.bridge_information == 0.25; }},
-      {"pose_graph.max_iterations=20", [](const Config& c) { return mapper_parameters(c).backend.max_iterations == 20; }},
-      {"dataset.max_association_dt=0.01", [](const Config& c) { return tum_options(c).dataset.max_association_dt == 0.01; }},
+      {"pose_graph.max_iterations=20",
+       [](const Config& c) { return mapper_parameters(c).backend.max_iterations == 20; }},
+      {"dataset.max_association_dt=0.01",
+       [](const Config& c) { return tum_options(c).dataset.max_association_dt == 0.01; }},
   };
   for (const auto& r : reaches) {
     EXPECT_FALSE(r.reached(Config{})) << r.assignment << ": already the default";

@@ -29,7 +29,8 @@ TEST(SE3, ExpLogRoundTripIncludingSmallAndNearPiAngles) {
     for (int k = 0; k < 200; ++k) {
       const Vector6d xi = random_xi(rng, max_angle);
       const Vector6d back = SE3::exp(xi).log();
-      EXPECT_TRUE(back.isApprox(xi, 1e-7) || (back - xi).norm() < 1e-12) << xi.transpose() << " vs " << back.transpose();
+      EXPECT_TRUE(back.isApprox(xi, 1e-7) || (back - xi).norm() < 1e-12)
+          << xi.transpose() << " vs " << back.transpose();
     }
   }
 }

@@ -72,7 +72,8 @@ class NotificationSocket {
   std::string drain() {
     std::string out;
     char buffer[512];
-    for (ssize_t n; (n = recv(fd_, buffer, sizeof buffer, 0)) > 0;) out.append(buffer, static_cast<std::size_t>(n)) += '\n';
+    for (ssize_t n; (n = recv(fd_, buffer, sizeof buffer, 0)) > 0;)
+      out.append(buffer, static_cast<std::size_t>(n)) += '\n';
     return out;
   }
 
@@ -92,7 +93,7 @@ TEST(Supervise, ServesTheWatchdogOnlyWhileEveryWorkerBeats) {
   NotificationSocket systemd_socket;
   setenv("NOTIFY_SOCKET", systemd_socket.path().c_str(), 1);
   setenv("WATCHDOG_USEC", "100000", 1);  // a ping every 50 ms
-  const SystemdNotifier systemd;  // reads WATCHDOG_USEC now; sd_notify reads NOTIFY_SOCKET each time
+  const SystemdNotifier systemd;         // reads WATCHDOG_USEC now; sd_notify reads NOTIFY_SOCKET each time
   unsetenv("WATCHDOG_USEC");
   ASSERT_TRUE(systemd.watchdog_period());
 

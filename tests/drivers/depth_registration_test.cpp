@@ -29,9 +29,9 @@ core::DepthSensor depth_sensor() {
 }
 
 struct Comparison {
-  double covered = 0;        // share of the exact depth's pixels that registration filled
-  double within_1pc = 0;     // share of those filled within 1 % of the exact depth
-  double far_behind = 0;     // share filled more than 5 % behind the exact depth (an occlusion missed)
+  double covered = 0;     // share of the exact depth's pixels that registration filled
+  double within_1pc = 0;  // share of those filled within 1 % of the exact depth
+  double far_behind = 0;  // share filled more than 5 % behind the exact depth (an occlusion missed)
 };
 
 Comparison compare(const cv::Mat& registered, const cv::Mat& exact) {
@@ -46,7 +46,9 @@ Comparison compare(const cv::Mat& registered, const cv::Mat& exact) {
       close += std::abs(r - z) <= 0.01 * z;
       behind += r > 1.05 * z;
     }
-  const auto share = [](std::size_t n, std::size_t of) { return of ? static_cast<double>(n) / static_cast<double>(of) : 0.0; };
+  const auto share = [](std::size_t n, std::size_t of) {
+    return of ? static_cast<double>(n) / static_cast<double>(of) : 0.0;
+  };
   return {share(filled, truth), share(close, filled), share(behind, filled)};
 }
 
@@ -70,8 +72,8 @@ TEST(DepthRegistration, ARenderedD435PairMatchesTheColourCamerasExactDepth) {
     cv::Mat registered;
     DepthRegistration(depth_sensor(), colour_camera()).apply(raw.depth, registered);
     const Comparison c = compare(registered, exact);
-    std::printf("t = %.1f s: %.1f %% of the exact depth covered, %.2f %% of it within 1 %%, %.3f %% behind by > 5 %%\n", t,
-                100 * c.covered, 100 * c.within_1pc, 100 * c.far_behind);
+    std::printf("t = %.1f s: %.1f %% of the exact depth covered, %.2f %% of it within 1 %%, %.3f %% behind by > 5 %%\n",
+                t, 100 * c.covered, 100 * c.within_1pc, 100 * c.far_behind);
     EXPECT_GT(c.covered, 0.98) << "at t = " << t;  // all but the strip the depth sensor cannot see
     EXPECT_GT(c.within_1pc, 0.99) << "at t = " << t;
     EXPECT_LT(c.far_behind, 0.002) << "at t = " << t;
@@ -93,7 +95,8 @@ TEST(DepthRegistration, TheNearerSurfaceWinsWhereTwoLandOnOnePixel) {
   int strip = 0;
   for (int u = 0; u < k.width; ++u) strip += registered.at<std::uint16_t>(60, u) == 1000;
   EXPECT_GE(strip, 19);  // the strip keeps its width ...
-  for (int u = 100; u < 118; ++u) EXPECT_EQ(registered.at<std::uint16_t>(60, u), 1000) << u;  // ... and is not overdrawn
+  for (int u = 100; u < 118; ++u)
+    EXPECT_EQ(registered.at<std::uint16_t>(60, u), 1000) << u;  // ... and is not overdrawn
 }
 
 TEST(DepthRegistration, AllocatesNothingOnceItsOutputHasTheColourSize) {

@@ -118,13 +118,14 @@ TEST(LcmSource, EachRefusedMessageIsReportedWithItsKindInOrder) {
   EXPECT_EQ(frame.intrinsics.fx, 50);
 
   const std::string next_version = std::to_string(cvo_lcm::rgbd_frame_t::SCHEMA_VERSION + 1);
-  const std::vector<std::pair<core::BadKind, std::string>> refused{{core::BadKind::kTooShort, "shorter than"},
-                                                              {core::BadKind::kFingerprint, "fingerprint"},
-                                                              {core::BadKind::kBody, "truncated"},
-                                                              {core::BadKind::kBody, "trailing bytes"},
-                                                              {core::BadKind::kVersion, "schema version " + next_version},
-                                                              {core::BadKind::kContent, "raw colour needs"},
-                                                              {core::BadKind::kImageFormat, "not a PNG"}};
+  const std::vector<std::pair<core::BadKind, std::string>> refused{
+      {core::BadKind::kTooShort, "shorter than"},
+      {core::BadKind::kFingerprint, "fingerprint"},
+      {core::BadKind::kBody, "truncated"},
+      {core::BadKind::kBody, "trailing bytes"},
+      {core::BadKind::kVersion, "schema version " + next_version},
+      {core::BadKind::kContent, "raw colour needs"},
+      {core::BadKind::kImageFormat, "not a PNG"}};
   for (const auto& [kind, words] : refused) {
     r = source->read(frame, milliseconds(2000));
     EXPECT_EQ(r.status, ReadStatus::kBadInput) << words;
@@ -166,9 +167,10 @@ TEST(LcmSource, ChannelOptionAndTimeout) {
   test::TempDir dir;
   const auto log = dir.path() / "slow.lcm";
   // Played at the recorded rate (speed=1): the second frame comes 5 s after the first.
-  write_log(log, {{"CAM_FRONT", lcm::encode(message_of(small_frame(0)))},
-                  {"CAM_FRONT", lcm::encode(message_of(small_frame(1)))}},
-            5'000'000);
+  write_log(
+      log,
+      {{"CAM_FRONT", lcm::encode(message_of(small_frame(0)))}, {"CAM_FRONT", lcm::encode(message_of(small_frame(1)))}},
+      5'000'000);
   SourceOptions options;
   options.lcm_channel = "CAM_FRONT";
   auto source = open_source("lcm:file://" + log.string() + "?speed=1", options);

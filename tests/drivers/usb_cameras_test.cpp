@@ -63,16 +63,19 @@ std::string parse_error(const std::string& text) {
 }
 
 TEST(CameraTable, BadLinesAreRefusedWithFileAndLine) {
-  EXPECT_EQ(CameraTable::parse(kHeader + "8086\t0b07\tD435\tv4l2\tsuper\tv4l2:X\thttps://a\n", "t.tsv").cameras().size(),
-            1u);
-  EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD435\tv4l2\tsuper\tv4l2:X\t\n"), "t.tsv:3: every id needs its source"));
+  EXPECT_EQ(
+      CameraTable::parse(kHeader + "8086\t0b07\tD435\tv4l2\tsuper\tv4l2:X\thttps://a\n", "t.tsv").cameras().size(), 1u);
+  EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD435\tv4l2\tsuper\tv4l2:X\t\n"),
+                       "t.tsv:3: every id needs its source"));
   EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD435\tv4l2\tsuper\tv4l2:X\n"), "t.tsv:3: expected 7"));
   EXPECT_TRUE(contains(parse_error(kHeader + "808g\t0b07\tD\tv4l2\tsuper\tv4l2:X\ts\n"), "4 hex digits"));
   EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD\tuvc\tsuper\tv4l2:X\ts\n"), "scheme"));
   EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD\tv4l2\tfast\tv4l2:X\ts\n"), "speed"));
-  EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD\tv4l2\tsuper\topenni2:any\ts\n"), "spec must use the scheme"));
-  EXPECT_TRUE(contains(parse_error(kHeader + "8086\t0b07\tD\tv4l2\tsuper\tv4l2:X\ts\n8086\t0b07\tD\tv4l2\tsuper\tv4l2:X\ts\n"),
-                       "t.tsv:4: 8086:0b07 is listed twice"));
+  EXPECT_TRUE(
+      contains(parse_error(kHeader + "8086\t0b07\tD\tv4l2\tsuper\topenni2:any\ts\n"), "spec must use the scheme"));
+  EXPECT_TRUE(
+      contains(parse_error(kHeader + "8086\t0b07\tD\tv4l2\tsuper\tv4l2:X\ts\n8086\t0b07\tD\tv4l2\tsuper\tv4l2:X\ts\n"),
+               "t.tsv:4: 8086:0b07 is listed twice"));
   EXPECT_TRUE(contains(parse_error("8086\t0b07\tD\tv4l2\tsuper\tv4l2:X\ts\n"), "t.tsv:1: expected the header"));
   EXPECT_TRUE(contains(parse_error("# nothing\n"), "no header line"));
 }
@@ -87,9 +90,12 @@ const UserIds kAlice{1000, {1000, 44}, "alice"};  // in group video (44), not in
 
 FoundCamera camera(UsbIds ids, UsbSpeed speed, NodeAccess node) {
   FoundCamera c;
-  c.known = ids.vendor == 0x8086 ? KnownCamera{ids, "Intel RealSense D435", "v4l2", UsbSpeed::kSuper, "v4l2:COLOUR,DEPTH", "s"}
-                                 : KnownCamera{ids, "PrimeSense PS1080", "openni2", UsbSpeed::kHigh,
-                                               "openni2:{vendor}/{product}@{bus}/{address}", "s"};
+  c.known =
+      ids.vendor == 0x8086
+          ? KnownCamera{ids, "Intel RealSense D435", "v4l2", UsbSpeed::kSuper, "v4l2:COLOUR,DEPTH", "s"}
+          : KnownCamera{
+                ids, "PrimeSense PS1080", "openni2", UsbSpeed::kHigh, "openni2:{vendor}/{product}@{bus}/{address}",
+                "s"};
   c.bus = 2;
   c.address = 5;
   c.ports = {1, 4};
@@ -112,7 +118,8 @@ TEST(UsbDiagnosis, WhoMayOpenANode) {
 }
 
 TEST(UsbDiagnosis, GroupWithAccessNamesTheGroupToJoin) {
-  const auto why = diagnose(camera({0x1d27, 0x0601}, UsbSpeed::kHigh, usb_node(0664, 0, 46, "root", "plugdev")), kAlice);
+  const auto why =
+      diagnose(camera({0x1d27, 0x0601}, UsbSpeed::kHigh, usb_node(0664, 0, 46, "root", "plugdev")), kAlice);
   EXPECT_TRUE(contains(why, "/dev/bus/usb/002/005 is crw-rw-r-- root:plugdev")) << why;
   EXPECT_TRUE(contains(why, "sudo usermod -aG plugdev alice")) << why;
   EXPECT_FALSE(contains(why, "udev")) << why;
@@ -121,8 +128,10 @@ TEST(UsbDiagnosis, GroupWithAccessNamesTheGroupToJoin) {
 TEST(UsbDiagnosis, NodeWithoutGroupAccessNamesTheUdevRule) {
   const auto why = diagnose(camera({0x1d27, 0x0601}, UsbSpeed::kHigh, usb_node(0664, 0, 0, "root", "root")), kAlice);
   EXPECT_TRUE(contains(why, "root:root")) << why;
-  EXPECT_TRUE(contains(why, "SUBSYSTEM==\"usb\", ATTR{idVendor}==\"1d27\", ATTR{idProduct}==\"0601\", MODE=\"0660\", "
-                            "GROUP=\"plugdev\"")) << why;
+  EXPECT_TRUE(contains(why,
+                       "SUBSYSTEM==\"usb\", ATTR{idVendor}==\"1d27\", ATTR{idProduct}==\"0601\", MODE=\"0660\", "
+                       "GROUP=\"plugdev\""))
+      << why;
   EXPECT_TRUE(contains(why, "usermod -aG plugdev alice")) << why;
 }
 
@@ -135,7 +144,8 @@ TEST(UsbDiagnosis, SlowerPortThanTheCameraNeeds) {
   EXPECT_EQ(diagnose(camera({0x1d27, 0x0601}, UsbSpeed::kHigh, open_node), kAlice), "") << "a USB 2 camera";
   EXPECT_TRUE(contains(diagnose(camera({0x1d27, 0x0601}, UsbSpeed::kFull, open_node), kAlice), "needs high"));
   // Both at once: both said.
-  const auto both = diagnose(camera({0x8086, 0x0b07}, UsbSpeed::kHigh, usb_node(0664, 0, 46, "root", "plugdev")), kAlice);
+  const auto both =
+      diagnose(camera({0x8086, 0x0b07}, UsbSpeed::kHigh, usb_node(0664, 0, 46, "root", "plugdev")), kAlice);
   EXPECT_TRUE(contains(both, "plugdev") && contains(both, "needs super")) << both;
 }
 
@@ -147,8 +157,10 @@ TEST(UsbDiagnosis, OpenFailureExplanations) {
   const std::vector<FoundCamera> d435{camera({0x8086, 0x0b07}, UsbSpeed::kHigh, open_node)};
   EXPECT_TRUE(contains(explain_open_failure("openni2:any", d435, {}, kAlice), "no openni2 camera"));
   const auto slow = explain_open_failure("v4l2:/dev/video0,/dev/video2", d435, {}, kAlice);
-  EXPECT_TRUE(contains(slow, "8086:0b07 Intel RealSense D435, serial A1, high (480 Mbit/s, USB 2) on 2-1.4: it is "
-                             "connected at high")) << slow;
+  EXPECT_TRUE(contains(slow,
+                       "8086:0b07 Intel RealSense D435, serial A1, high (480 Mbit/s, USB 2) on 2-1.4: it is "
+                       "connected at high"))
+      << slow;
   const std::vector<FoundCamera> ok{camera({0x1d27, 0x0601}, UsbSpeed::kHigh, open_node)};
   EXPECT_TRUE(contains(explain_open_failure("openni2:any", ok, {}, kAlice), "libusb sees no problem with it"));
 
@@ -301,8 +313,10 @@ TEST(CvoCameras, NoCameraIsAnEmptyListExitZeroAndValidJson) {
   ASSERT_EQ(json.exit_code, 0) << json.err;
   EXPECT_EQ(testing::json_value(json.out, "known_ids"), std::to_string(CameraTable::load().cameras().size()));
   std::ofstream(dir.path() / "out.json") << json.out;
-  const std::string check = "python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
-                            "assert isinstance(d[\"cameras\"], list)' " + testing::quoted(dir.path() / "out.json");
+  const std::string check =
+      "python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); "
+      "assert isinstance(d[\"cameras\"], list)' " +
+      testing::quoted(dir.path() / "out.json");
   EXPECT_EQ(std::system(check.c_str()), 0) << json.out;
   if (testing::json_value(json.out, "cameras") == "[]") {
     const auto text = testing::run_tool("cvo-cameras", "", dir.path());

@@ -56,7 +56,7 @@ TEST(Ate, DriftAlongAStraightLineLeavesTheCentredStretch) {
   const double nd = static_cast<double>(n);
   EXPECT_NEAR(r.error.rmse, v * kStep * std::sqrt((nd * nd - 1) / 12), 1e-12);
   EXPECT_NEAR(r.error.max, v * kStep * (nd - 1) / 2, 1e-12);
-  EXPECT_NEAR(r.error.min, 0, 1e-12);  // the middle pose is the centroid
+  EXPECT_NEAR(r.error.min, 0, 1e-12);                  // the middle pose is the centroid
   EXPECT_NEAR(r.error.median, v * kStep * 10, 1e-12);  // |k - 20| sorted: the 21st value is 10
 }
 
@@ -89,7 +89,7 @@ core::Trajectory shifted_stamps(core::Trajectory t, double dt) {
 
 TEST(Ate, AssociationWindowIsStrictAndConfigurable) {
   const auto gt = make(40, helix);
-  constexpr double dt = 1.0 / 64;  // 0.015625 s, exact in binary
+  constexpr double dt = 1.0 / 64;                                                      // 0.015625 s, exact in binary
   EXPECT_EQ(absolute_trajectory_error(gt, shifted_stamps(gt, dt)).pairs.size(), 40u);  // < 0.02 s
   EXPECT_THROW(absolute_trajectory_error(gt, shifted_stamps(gt, dt), {.max_difference = dt}), std::invalid_argument);
   EXPECT_THROW(absolute_trajectory_error(gt, shifted_stamps(gt, 0.03)), std::invalid_argument);  // > 0.02 s

@@ -24,12 +24,12 @@ namespace {
 using cvo::testing::json_value;
 
 namespace fs = std::filesystem;
-using testing::kStep;
-using testing::make;
 using cvo::testing::quoted;
 using cvo::testing::run_tool;
 using cvo::testing::slurp;
 using cvo::testing::ToolRun;
+using testing::kStep;
+using testing::make;
 
 // A fresh folder per test: ctest runs the tests of this file in parallel processes.
 class CvoEvalCli : public ::testing::Test {
@@ -114,8 +114,8 @@ TEST_F(CvoEvalCli, BadInputExitsOneNamingTheFile) {
 }
 
 TEST_F(CvoEvalCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
-  cvo::testing::expect_cli_contract("cvo-eval", "", {"GROUNDTRUTH", "ESTIMATE", "--json", "--plot", "--max-dt", "--delta", "--offset"},
-                                    dir_);
+  cvo::testing::expect_cli_contract(
+      "cvo-eval", "", {"GROUNDTRUTH", "ESTIMATE", "--json", "--plot", "--max-dt", "--delta", "--offset"}, dir_);
 }
 
 TEST_F(CvoEvalCli, BadArgumentsExitTwo) {

@@ -41,7 +41,7 @@ TEST(Plot, RendersBothPanelsInTheRequestedSize) {
   EXPECT_EQ(img.cols, 1200);
   EXPECT_EQ(img.rows, 600);
   EXPECT_EQ(img.type(), CV_8UC3);
-  EXPECT_GT(count_colour(img, {0, 0, 0}), 1000);    // ground truth, axes, text
+  EXPECT_GT(count_colour(img, {0, 0, 0}), 1000);     // ground truth, axes, text
   EXPECT_GT(count_colour(img, {200, 60, 0}), 1000);  // estimate and error curve
   EXPECT_GT(count_colour(img, {0, 0, 220}), 50);     // differences
   // Left half holds the red differences; the right half has none.

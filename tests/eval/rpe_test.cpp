@@ -68,7 +68,7 @@ TEST(Rpe, DriftAlongXGivesItsSpeed) {
   EXPECT_DOUBLE_EQ(r.delta, 1.0);
 
   const auto two = relative_pose_error(gt, est, {.delta = 2.0});
-  EXPECT_EQ(two.pairs.size(), 24u);  // i + 16 <= 39
+  EXPECT_EQ(two.pairs.size(), 24u);                 // i + 16 <= 39
   EXPECT_NEAR(two.translation.rmse, 2 * v, 1e-12);  // per delta, not divided by it (as the script)
 }
 

@@ -136,7 +136,8 @@ TEST(Png, AViewWithRowPaddingEncodes) {
 
 TEST(Png, AnotherSizeThanExpectedIsRefusedFromTheHeader) {
   cv::Mat image;
-  const std::string bad = decode_png(encoded(test::noise(CV_8UC3), PngPixels::kBgr8), PngPixels::kBgr8, image, {640, 480});
+  const std::string bad =
+      decode_png(encoded(test::noise(CV_8UC3), PngPixels::kBgr8), PngPixels::kBgr8, image, {640, 480});
   EXPECT_EQ(bad, "PNG: image is 64x48, expected 640x480");
   EXPECT_TRUE(image.empty());
 }

@@ -27,8 +27,9 @@ inline cv::Mat scene(int rows = 48, int cols = 64) {
   cv::Mat m(rows, cols, CV_8UC3);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c)
-      m.at<cv::Vec3b>(r, c) = cv::Vec3b(std::uint8_t(255 * c / cols), std::uint8_t(255 * r / rows),
-                                         cv::saturate_cast<std::uint8_t>(128 + 60 * std::sin(r / 5.0) * std::cos(c / 7.0)));
+      m.at<cv::Vec3b>(r, c) =
+          cv::Vec3b(std::uint8_t(255 * c / cols), std::uint8_t(255 * r / rows),
+                    cv::saturate_cast<std::uint8_t>(128 + 60 * std::sin(r / 5.0) * std::cos(c / 7.0)));
   return m;
 }
 

@@ -44,7 +44,8 @@ TEST(Webp, TheSamplesColourReadsAsOpenCvReadsIt) {
 
 TEST(Webp, AnotherSizeThanExpectedIsRefusedFromTheHeader) {
   cv::Mat image;
-  EXPECT_EQ(decode_webp(lossless_webp(test::noise(CV_8UC3)), image, {640, 480}), "WebP: image is 64x48, expected 640x480");
+  EXPECT_EQ(decode_webp(lossless_webp(test::noise(CV_8UC3)), image, {640, 480}),
+            "WebP: image is 64x48, expected 640x480");
   EXPECT_TRUE(image.empty());
 }
 

@@ -5,15 +5,16 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/temp_dir.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/numbers.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace cvo::io {
 namespace {
 
-constexpr const char* kValid = "# a Kinect\nfx: 525.5\nfy: 524\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n"
-                               "depth_scale: 1000\n";
+constexpr const char* kValid =
+    "# a Kinect\nfx: 525.5\nfy: 524\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n"
+    "depth_scale: 1000\n";
 
 TEST(IntrinsicsFile, ReadsYaml) {
   const auto k = parse_intrinsics(kValid, "cam.yaml");
@@ -48,7 +49,8 @@ TEST(IntrinsicsFile, ASeparateDepthSensorHasItsOwnIntrinsicsAndItsPoseInTheColou
 
 TEST(IntrinsicsFile, ABadDepthSensorSectionNamesWhatIsWrong) {
   const std::string colour = "fx: 615\nfy: 615\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n";
-  const std::string sensor = "depth_sensor:\n  fx: 425\n  fy: 425\n  cx: 423.5\n  cy: 239.5\n  width: 848\n  height: 480\n";
+  const std::string sensor =
+      "depth_sensor:\n  fx: 425\n  fy: 425\n  cx: 423.5\n  cy: 239.5\n  width: 848\n  height: 480\n";
   const auto error_of = [](const std::string& text) {
     try {
       parse_camera(text, "d435.yaml");
@@ -65,8 +67,9 @@ TEST(IntrinsicsFile, ABadDepthSensorSectionNamesWhatIsWrong) {
   EXPECT_NE(error_of(colour + sensor + "  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n  baseline: 5\n").find("baseline"),
             std::string::npos);
   EXPECT_NE(error_of(colour + "depth_sensor: 5\n").find("expected a mapping"), std::string::npos);
-  EXPECT_NE(error_of(colour + "depth_sensor:\n  fx: 425\n  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n").find("missing key"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of(colour + "depth_sensor:\n  fx: 425\n  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n").find("missing key"),
+      std::string::npos);
   EXPECT_EQ(error_of(colour + sensor + "  T_colour_depth: [0, 0, 0, 0, 0, 0, 1]\n"), "no error");
 }
 
@@ -100,8 +103,8 @@ TEST(IntrinsicsFile, YamlErrorsNameTheKey) {
 }
 
 TEST(IntrinsicsFile, ReadsDistortionInOpenCvOrderAbsentOnesZero) {
-  const auto k = parse_intrinsics(std::string(kValid) + "k1: 0.2624\nk2: -0.9531\np1: -0.0054\np2: 0.0026\nk3: 1.1633\n",
-                                  "cam.yaml");
+  const auto k = parse_intrinsics(
+      std::string(kValid) + "k1: 0.2624\nk2: -0.9531\np1: -0.0054\np2: 0.0026\nk3: 1.1633\n", "cam.yaml");
   EXPECT_EQ(k.distortion, (std::array{0.2624, -0.9531, -0.0054, 0.0026, 1.1633}));
   const auto radial = parse_intrinsics(std::string(kValid) + "k1: 0.1\nk3: -0.5\n", "cam.yaml");
   EXPECT_EQ(radial.distortion, (std::array{0.1, 0.0, 0.0, 0.0, -0.5}));

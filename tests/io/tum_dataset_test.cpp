@@ -274,8 +274,8 @@ TEST(TumDataset, TruncatedPngFailsOnlyItsFrame) {
   cv::randu(noise, 0, 60000);  // incompressible, so half the file is half the pixels
   std::vector<uchar> png;
   ASSERT_TRUE(cv::imencode(".png", noise, png));
-  std::ofstream(data.depth(2), std::ios::binary).write(reinterpret_cast<const char*>(png.data()),
-                                                       static_cast<std::streamsize>(png.size() / 2));
+  std::ofstream(data.depth(2), std::ios::binary)
+      .write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size() / 2));
   data.expect_only_frame_fails(2, data.depth(2), "cannot decode image");
 }
 

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "libcvo/lcm/decode.hpp"
 #include "lcm/sample_messages.hpp"
+#include "libcvo/lcm/decode.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -119,8 +119,7 @@ TEST(Decode, FailureKindNamesTheCheck) {
   const auto good = encode(test::sample_rgbd());
   const auto kind_of = [](const std::vector<std::uint8_t>& bytes) {
     auto failure = static_cast<DecodeFailure>(-1);  // none of the kinds: each must be set
-    const auto decoded =
-        decode<cvo_lcm::rgbd_frame_t>(bytes.data(), static_cast<int>(bytes.size()), nullptr, &failure);
+    const auto decoded = decode<cvo_lcm::rgbd_frame_t>(bytes.data(), static_cast<int>(bytes.size()), nullptr, &failure);
     EXPECT_FALSE(decoded);
     return failure;
   };

@@ -7,13 +7,13 @@
 
 #include <opencv2/core.hpp>
 
+#include "lcm/sample_messages.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/registration/point_selection.hpp"
-#include "lcm/sample_messages.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -90,7 +90,8 @@ TEST(KeyframeConversion, NonFinitePointsAndBadPosesAreRefused) {
 odometry::LocalGraph sample_graph() {
   odometry::LocalGraph g(8);
   for (std::uint64_t i = 10; i < 14; ++i)
-    g.add_node({i, 100.0 + 0.033 * static_cast<double>(i), core::SE3::from_translation({0.01 * static_cast<double>(i), 0, 0})});
+    g.add_node({i, 100.0 + 0.033 * static_cast<double>(i),
+                core::SE3::from_translation({0.01 * static_cast<double>(i), 0, 0})});
   for (std::uint64_t i = 11; i < 14; ++i) {
     core::Matrix6d information = core::Matrix6d::Identity() * static_cast<double>(i);
     information(0, 1) = information(1, 0) = 0.5;
@@ -116,7 +117,8 @@ TEST(LocalGraphConversion, RoundTripKeepsNodesEdgesAndInformation) {
     EXPECT_EQ(back->edges()[i].from, graph.edges()[i].from);
     EXPECT_EQ(back->edges()[i].to, graph.edges()[i].to);
     EXPECT_EQ(back->edges()[i].information, graph.edges()[i].information);
-    EXPECT_LT((back->edges()[i].measurement.matrix() - graph.edges()[i].measurement.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((back->edges()[i].measurement.matrix() - graph.edges()[i].measurement.matrix()).cwiseAbs().maxCoeff(),
+              1e-12);
   }
 }
 

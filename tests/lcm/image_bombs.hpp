@@ -64,7 +64,8 @@ inline std::vector<std::uint8_t> png_bomb(std::uint32_t width, std::uint32_t hei
   std::vector<std::uint8_t> ihdr;
   put_be32(ihdr, width);
   put_be32(ihdr, height);
-  ihdr.insert(ihdr.end(), {static_cast<std::uint8_t>(depth16 ? 16 : 8), static_cast<std::uint8_t>(depth16 ? 0 : 2), 0, 0, 0});
+  ihdr.insert(ihdr.end(),
+              {static_cast<std::uint8_t>(depth16 ? 16 : 8), static_cast<std::uint8_t>(depth16 ? 0 : 2), 0, 0, 0});
   put_png_chunk(png, "IHDR", ihdr);
   const std::uint64_t row = 1 + std::uint64_t{width} * (depth16 ? 2 : 3);  // filter byte, then the pixels
   put_png_chunk(png, "IDAT", zlib_zeros(row * height));

@@ -89,7 +89,8 @@ std::optional<T> through_bytes(const T& message) {
 TEST(IntrinsicsRoundTrip, ThroughCvoRgbdEveryFieldComesBack) {
   const core::Intrinsics k = every_field_set();
   std::string error;
-  const auto message = to_message(frame_of(k), RgbdEncoding{ColourEncoding::kRawBgr8, DepthEncoding::kRawU16Le}, &error);
+  const auto message =
+      to_message(frame_of(k), RgbdEncoding{ColourEncoding::kRawBgr8, DepthEncoding::kRawU16Le}, &error);
   ASSERT_TRUE(message) << error;
   const auto decoded = through_bytes(*message);
   ASSERT_TRUE(decoded);

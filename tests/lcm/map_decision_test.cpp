@@ -51,7 +51,8 @@ TEST(MapDecision, ANewerMapPlacingTheSessionIsApplied) {
 
   // Any first placement is taken, however far (the map frame is another session's); and a later
   // entry that is not placed returns the session to its odometry frame.
-  const auto far = decide(map_bytes(4, {placed(kSession, core::SE3::from_translation({40, 0, 0}))}), AppliedCorrection{});
+  const auto far =
+      decide(map_bytes(4, {placed(kSession, core::SE3::from_translation({40, 0, 0}))}), AppliedCorrection{});
   EXPECT_TRUE(far.apply) << far.why;
   const auto unplaced = decide(map_bytes(5, {{kSession, false, kSession, 1, -1, kOneMetre}}), d.correction);
   ASSERT_TRUE(unplaced.apply) << unplaced.why;
@@ -68,7 +69,8 @@ TEST(MapDecision, StaleForeignImplausibleAndNonFiniteMapsAreRefusedByKind) {
     EXPECT_NE(d.why.find(says), std::string::npos) << d.why;
   };
   const auto nearby = core::SE3::from_translation({1.2, 0, 0});
-  refused(map_bytes(6, {placed(kSession, nearby)}), BadKind::kStale, "revision 6 of epoch 0, not newer than the applied revision 7");
+  refused(map_bytes(6, {placed(kSession, nearby)}), BadKind::kStale,
+          "revision 6 of epoch 0, not newer than the applied revision 7");
   refused(map_bytes(7, {placed(kSession, nearby)}), BadKind::kStale, "revision 7 of epoch 0, not newer");  // a replay
   refused(map_bytes(8, {placed(kOther, nearby)}), BadKind::kForeign, "no entry for this session");
   refused(map_bytes(8, {placed(kSession, core::SE3::from_translation({3, 0, 0}))}), BadKind::kImplausible,

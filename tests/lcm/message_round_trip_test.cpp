@@ -2,28 +2,49 @@
 // offsets matches what lcm-gen actually encodes.
 #include <gtest/gtest.h>
 
+#include "lcm/sample_messages.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/wire_layout.hpp"
-#include "lcm/sample_messages.hpp"
 
 namespace cvo::lcm {
 namespace {
 
 template <class T>
 struct Sample;
-template <> struct Sample<cvo_lcm::rgbd_frame_t> { static auto make() { return test::sample_rgbd(); } };
-template <> struct Sample<cvo_lcm::pose_t> { static auto make() { return test::sample_pose_message(); } };
-template <> struct Sample<cvo_lcm::keyframe_t> { static auto make() { return test::sample_keyframe(); } };
-template <> struct Sample<cvo_lcm::local_graph_t> { static auto make() { return test::sample_local_graph(); } };
-template <> struct Sample<cvo_lcm::map_t> { static auto make() { return test::sample_map(); } };
-template <> struct Sample<cvo_lcm::status_t> { static auto make() { return test::sample_status(); } };
-template <> struct Sample<cvo_lcm::keyframe_request_t> { static auto make() { return test::sample_keyframe_request(); } };
+template <>
+struct Sample<cvo_lcm::rgbd_frame_t> {
+  static auto make() { return test::sample_rgbd(); }
+};
+template <>
+struct Sample<cvo_lcm::pose_t> {
+  static auto make() { return test::sample_pose_message(); }
+};
+template <>
+struct Sample<cvo_lcm::keyframe_t> {
+  static auto make() { return test::sample_keyframe(); }
+};
+template <>
+struct Sample<cvo_lcm::local_graph_t> {
+  static auto make() { return test::sample_local_graph(); }
+};
+template <>
+struct Sample<cvo_lcm::map_t> {
+  static auto make() { return test::sample_map(); }
+};
+template <>
+struct Sample<cvo_lcm::status_t> {
+  static auto make() { return test::sample_status(); }
+};
+template <>
+struct Sample<cvo_lcm::keyframe_request_t> {
+  static auto make() { return test::sample_keyframe_request(); }
+};
 
 template <class T>
 class MessageRoundTrip : public ::testing::Test {};
-using ChannelTypes = ::testing::Types<cvo_lcm::rgbd_frame_t, cvo_lcm::pose_t, cvo_lcm::keyframe_t,
-                                      cvo_lcm::local_graph_t, cvo_lcm::map_t, cvo_lcm::status_t,
-                                      cvo_lcm::keyframe_request_t>;
+using ChannelTypes =
+    ::testing::Types<cvo_lcm::rgbd_frame_t, cvo_lcm::pose_t, cvo_lcm::keyframe_t, cvo_lcm::local_graph_t,
+                     cvo_lcm::map_t, cvo_lcm::status_t, cvo_lcm::keyframe_request_t>;
 TYPED_TEST_SUITE(MessageRoundTrip, ChannelTypes);
 
 TYPED_TEST(MessageRoundTrip, DecodesToTheSameMessage) {

@@ -167,8 +167,10 @@ TEST(RgbdConversion, BombsAndMislabelledImagesAreRefusedBeforeDecoding) {
   depth_bomb.depth = test::png_bomb(16384, 16384, true);
   depth_bomb.depth_size = static_cast<std::int32_t>(depth_bomb.depth.size());
   const std::vector<Case> cases = {
-      {"PNG bomb", with_colour(*png, test::png_bomb(16384, 16384, false)), BadKind::kImageSize, "PNG header says 16384x16384"},
-      {"JPEG bomb", with_colour(*jpeg, test::jpeg_bomb(16384, 16384)), BadKind::kImageSize, "JPEG header says 16384x16384"},
+      {"PNG bomb", with_colour(*png, test::png_bomb(16384, 16384, false)), BadKind::kImageSize,
+       "PNG header says 16384x16384"},
+      {"JPEG bomb", with_colour(*jpeg, test::jpeg_bomb(16384, 16384)), BadKind::kImageSize,
+       "JPEG header says 16384x16384"},
       {"depth PNG bomb", depth_bomb, BadKind::kImageSize, "depth image: PNG header says 16384x16384"},
       {"PNG labelled JPEG", with_colour(*jpeg, png->colour), BadKind::kImageFormat, "not a JPEG"},
       {"JPEG labelled PNG", with_colour(*png, jpeg->colour), BadKind::kImageFormat, "not a PNG"},
@@ -222,14 +224,16 @@ TEST(RgbdConversion, ImageHeadersAreCheckedAgainstTheMessage) {
   padded[0] = 0xff;
   padded[1] = 0xd8;
   padded[2] = 0xff;
-  EXPECT_NE(check(padded, {ImageFormat::kJpeg, 8, 6, false}).find("image size: 70000 bytes, more than"), std::string::npos);
+  EXPECT_NE(check(padded, {ImageFormat::kJpeg, 8, 6, false}).find("image size: 70000 bytes, more than"),
+            std::string::npos);
 
   auto no_ihdr = colour_png;
   no_ihdr[12] = 'X';
   EXPECT_NE(check(no_ihdr, colour).find("image format: PNG without an IHDR"), std::string::npos);
   // A JPEG cut before its frame header, and one whose first segment's length runs off the end.
-  EXPECT_NE(check({colour_jpeg.begin(), colour_jpeg.begin() + 20}, jpeg).find("image format: JPEG without a frame header"),
-            std::string::npos);
+  EXPECT_NE(
+      check({colour_jpeg.begin(), colour_jpeg.begin() + 20}, jpeg).find("image format: JPEG without a frame header"),
+      std::string::npos);
   auto no_sof = colour_jpeg;
   for (std::size_t i = 2; i + 1 < no_sof.size(); ++i)
     if (no_sof[i] == 0xff && no_sof[i + 1] == 0xc0) no_sof[i + 1] = 0xe5;  // the frame header becomes an APP5 segment

@@ -145,8 +145,8 @@ inline cvo_lcm::map_t sample_map() {
   m.sessions = {{kFirst, true, kFirst, 3, 0, sample_pose(0)}, {kSecond, false, kSecond, 1, -1, sample_pose(1)}};
   const std::int64_t ids[] = {0, 1, 2, 5};
   for (std::size_t i = 0; i < 4; ++i)
-    m.keyframes.push_back({i < 3 ? kFirst : kSecond, ids[i], 1305031233528748 + 100000 * ids[i],
-                           sample_pose(static_cast<double>(i))});
+    m.keyframes.push_back(
+        {i < 3 ? kFirst : kSecond, ids[i], 1305031233528748 + 100000 * ids[i], sample_pose(static_cast<double>(i))});
   m.loops = {{kFirst, kFirst, sample_edge(0, 2)}, {kFirst, kSecond, sample_edge(1, 5)}};
   m.num_sessions = static_cast<std::int32_t>(m.sessions.size());
   m.num_keyframes = static_cast<std::int32_t>(m.keyframes.size());

@@ -79,9 +79,9 @@ TEST(Tum2Lcm, LogHoldsTheDatasetFramesInOrder) {
 TEST(Tum2Lcm, ChannelAndJpegOptions) {
   test::TempDir dir("tum2lcm");
   const auto log = dir.path() / "jpeg.lcmlog";
-  const auto run = run_tool("tum2lcm", quoted(kDataset) + " " + quoted(log) +
-                                           " --max-frames 2 --colour jpeg --depth raw --channel CAM_FRONT",
-                            dir.path());
+  const auto run = run_tool(
+      "tum2lcm", quoted(kDataset) + " " + quoted(log) + " --max-frames 2 --colour jpeg --depth raw --channel CAM_FRONT",
+      dir.path());
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const auto events = read_log(log);
   ASSERT_EQ(events.size(), 2u);
@@ -97,9 +97,10 @@ TEST(Tum2Lcm, ToTumRoundTripIsExactForLosslessEncodings) {
     test::TempDir dir("tum2lcm");
     const auto log = dir.path() / "in.lcmlog";
     const auto out = dir.path() / "back";
-    auto run = run_tool("tum2lcm", quoted(kDataset) + " " + quoted(log) + " --max-frames 5 --colour " + encoding +
-                                       " --depth " + encoding,
-                        dir.path());
+    auto run =
+        run_tool("tum2lcm",
+                 quoted(kDataset) + " " + quoted(log) + " --max-frames 5 --colour " + encoding + " --depth " + encoding,
+                 dir.path());
     ASSERT_EQ(run.exit_code, 0) << run.err;
     run = run_tool("tum2lcm", "--to-tum " + quoted(log) + " " + quoted(out), dir.path());
     ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -123,10 +124,10 @@ TEST(Tum2Lcm, ToTumRoundTripIsExactForLosslessEncodings) {
 
 TEST(Tum2Lcm, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   test::TempDir dir("tum2lcm");
-  testing::expect_cli_contract("tum2lcm", "",
-                               {"INPUT", "OUTPUT", "--to-tum", "--colour", "--color", "--depth", "--jpeg-quality",
-                                "--channel", "--max-frames"},
-                               dir.path());
+  testing::expect_cli_contract(
+      "tum2lcm", "",
+      {"INPUT", "OUTPUT", "--to-tum", "--colour", "--color", "--depth", "--jpeg-quality", "--channel", "--max-frames"},
+      dir.path());
 }
 
 TEST(Tum2Lcm, ExitCodes) {

@@ -20,7 +20,9 @@ namespace fs = std::filesystem;
 using cvo::testing::quoted;
 using cvo::testing::ToolRun;
 
-ToolRun run(const test::TempDir& dir, const std::string& args) { return cvo::testing::run_tool("cvo-vocabulary", args, dir.path()); }
+ToolRun run(const test::TempDir& dir, const std::string& args) {
+  return cvo::testing::run_tool("cvo-vocabulary", args, dir.path());
+}
 
 TEST(CvoVocabularyCli, TrainsOnATumFolderAndInfoVerifiesTheFile) {
   const test::TempDir dir;
@@ -66,7 +68,8 @@ TEST(CvoVocabularyCli, TrainsOnImageFilesAndFoldersOfImages) {
   const fs::path single = dir.path() / "c.png";
   cv::imwrite(single.string(), testing::sample_frame(49));
   const fs::path out = dir.path() / "v.voc";
-  const ToolRun r = run(dir, "train " + quoted(out) + " " + quoted(images) + " " + quoted(single) + " --k 4 --levels 2");
+  const ToolRun r =
+      run(dir, "train " + quoted(out) + " " + quoted(images) + " " + quoted(single) + " --k 4 --levels 2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(Vocabulary::load(out).training_images(), 3u);
 }
@@ -108,10 +111,11 @@ TEST(CvoVocabularyCli, BadInputExitsWithOneAndNamesTheFile) {
 TEST(CvoVocabularyCli, UsageErrorsExitWithTwoAndHelpWithZero) {
   const test::TempDir dir;
   const std::string sample = quoted(testing::sample_dir());
-  for (const std::string& args : std::vector<std::string>{"", "fly", "train", "train out.voc", "info", "info a.voc b.voc",
-                                 "train out.voc " + sample + " --k 1", "train out.voc " + sample + " --k ten",
-                                 "train out.voc " + sample + " --levels 17", "train out.voc " + sample + " --every 0",
-                                 "train out.voc " + sample + " --features", "train out.voc " + sample + " --wat"}) {
+  for (const std::string& args :
+       std::vector<std::string>{"", "fly", "train", "train out.voc", "info", "info a.voc b.voc",
+                                "train out.voc " + sample + " --k 1", "train out.voc " + sample + " --k ten",
+                                "train out.voc " + sample + " --levels 17", "train out.voc " + sample + " --every 0",
+                                "train out.voc " + sample + " --features", "train out.voc " + sample + " --wat"}) {
     const ToolRun r = run(dir, args);
     EXPECT_EQ(r.exit_code, 2) << "'" << args << "': " << r.err;
     EXPECT_NE(r.err.find("usage: cvo-vocabulary"), std::string::npos) << args;

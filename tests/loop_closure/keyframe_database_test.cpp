@@ -77,8 +77,8 @@ TEST(KeyframeDatabase, OnlyKeyframesAddedBeforeTheQueryAreConsidered) {
 
 TEST(KeyframeDatabase, NoCandidatesWhenThePreviousScoreIsZeroOrUnknown) {
   const KeyframeDatabase db = example();
-  EXPECT_TRUE(db.candidates(21, kQuery, 13, 0.3).empty());      // s(q, v_13) = 0: η undefined
-  EXPECT_TRUE(db.candidates(21, kQuery, 99, 0.3).empty());      // no such keyframe
+  EXPECT_TRUE(db.candidates(21, kQuery, 13, 0.3).empty());       // s(q, v_13) = 0: η undefined
+  EXPECT_TRUE(db.candidates(21, kQuery, 99, 0.3).empty());       // no such keyframe
   EXPECT_TRUE(db.candidates(21, BowVector{}, 20, 0.3).empty());  // an image without words
   EXPECT_TRUE(KeyframeDatabase{}.candidates(0, kQuery, -1, 0.3).empty());
 }

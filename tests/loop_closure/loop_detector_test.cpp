@@ -26,7 +26,8 @@ class LoopDetectorTest : public ::testing::Test {
   static LoopDetector detector() { return LoopDetector(*vocabulary_, LoopDetectorParameters{}); }
 
   // add_keyframe, timed.
-  std::vector<LoopClosure> add(LoopDetector& d, std::int64_t id, const testing::TestKeyframe& k, const core::SE3& pose) {
+  std::vector<LoopClosure> add(LoopDetector& d, std::int64_t id, const testing::TestKeyframe& k,
+                               const core::SE3& pose) {
     const auto start = Clock::now();
     auto loops = d.add_keyframe(id, k.frame, k.cloud, pose);
     times_ms_.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count());
@@ -47,8 +48,9 @@ class LoopDetectorTest : public ::testing::Test {
 
 void print_attempts(std::int64_t id, const LoopDetector& d) {
   for (const auto& a : d.last_attempts())
-    std::printf("  keyframe %lld vs %lld: eta %.2f, %d matches, %d inliers, alpha %.4f: %s\n", static_cast<long long>(id),
-                static_cast<long long>(a.candidate), a.eta, a.matches, a.inliers, a.alpha, a.verdict);
+    std::printf("  keyframe %lld vs %lld: eta %.2f, %d matches, %d inliers, alpha %.4f: %s\n",
+                static_cast<long long>(id), static_cast<long long>(a.candidate), a.eta, a.matches, a.inliers, a.alpha,
+                a.verdict);
 }
 
 // Keyframes: fr1/rpy frames 20 (id 0) and 44 (id 1), then frame 28 (id 2): the previous keyframe
@@ -146,13 +148,16 @@ TEST_F(LoopDetectorTest, RefinesAtMostMaxRefinementsCandidatesBestEtaFirst) {
     LoopDetectorParameters parameters;
     parameters.verification.max_refinements = max_refinements;
     LoopDetector d(Vocabulary::load(CVO_DEFAULT_VOCABULARY), parameters);
-    for (std::size_t n = 0; n < k.size(); ++n) d.add_keyframe(static_cast<std::int64_t>(n), k[n].frame, k[n].cloud, k[n].truth);
+    for (std::size_t n = 0; n < k.size(); ++n)
+      d.add_keyframe(static_cast<std::int64_t>(n), k[n].frame, k[n].cloud, k[n].truth);
     print_attempts(static_cast<std::int64_t>(k.size() - 1), d);
     return d.last_attempts();
   };
   const auto all = run(0);
   const auto capped = run(2);
-  const auto count = [&](const std::vector<LoopAttempt>& attempts) { return std::count_if(attempts.begin(), attempts.end(), refined); };
+  const auto count = [&](const std::vector<LoopAttempt>& attempts) {
+    return std::count_if(attempts.begin(), attempts.end(), refined);
+  };
   ASSERT_GT(count(all), 2);  // frame 14 overlaps 10-22: more than two candidates reach CVO
   EXPECT_EQ(count(capped), 2);
   // The capped run tried the uncapped one's attempts in the same order, up to its second refinement.
@@ -194,7 +199,8 @@ TEST_F(LoopDetectorTest, ClosesTheLoopOfARenderedOrbitWithTheExactRelativePose) 
   print_times("orbit");
   EXPECT_GE(closing, 1);
   for (const auto& loop : all) {
-    const auto truth = k[static_cast<std::size_t>(loop.from)].truth.inverse() * k[static_cast<std::size_t>(loop.to)].truth;
+    const auto truth =
+        k[static_cast<std::size_t>(loop.from)].truth.inverse() * k[static_cast<std::size_t>(loop.to)].truth;
     const auto e = testing::pose_error(loop.measurement, truth);
     std::printf("loop %lld -> %lld: eta %.2f, alpha %.4f, %d inliers, error %.2f mm, %.3f deg\n",
                 static_cast<long long>(loop.from), static_cast<long long>(loop.to), loop.eta, loop.alpha, loop.inliers,

@@ -10,8 +10,8 @@
 #include <string>
 #include <utility>
 
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "loop_closure/loop_test_frames.hpp"
 
@@ -40,11 +40,11 @@ RealPair real_pair(std::size_t a, std::size_t b) {
 }
 
 void print(const std::string& what, const LoopVerification& v) {
-  std::printf("%s: %s, %d matches, %d inliers, alpha %.4f (<,> at ell %.3f: cvo %.4f, identity %.4f, initial %.4f, "
-              "estimate %.4f)\n",
-              what.c_str(), v.attempt.verdict, v.attempt.matches, v.attempt.inliers, v.attempt.alpha,
-              v.inner_products.ell, v.inner_products.cvo, v.inner_products.identity, v.inner_products.initial,
-              v.inner_products.estimate);
+  std::printf(
+      "%s: %s, %d matches, %d inliers, alpha %.4f (<,> at ell %.3f: cvo %.4f, identity %.4f, initial %.4f, "
+      "estimate %.4f)\n",
+      what.c_str(), v.attempt.verdict, v.attempt.matches, v.attempt.inliers, v.attempt.alpha, v.inner_products.ell,
+      v.inner_products.cvo, v.inner_products.identity, v.inner_products.initial, v.inner_products.estimate);
 }
 
 TEST(LoopVerification, RealFramesFiveAndEightApartGiveTheGroundTruthRelativePose) {
@@ -96,8 +96,8 @@ TEST(LoopVerification, InformationIsTheHessianOfThePoseGraphResidual) {
     const core::Matrix6d expected = Ad.transpose() * other.hessian * Ad;
     const double agree = relative_difference(expected, v.closure->information);
     const double raw = relative_difference(other.hessian, v.closure->information);
-    std::printf("frames %zu -> %zu: |Ad^T H' Ad - Omega| / |Omega| = %.5f, |H' - Omega| / |Omega| = %.3f\n", a, b, agree,
-                raw);
+    std::printf("frames %zu -> %zu: |Ad^T H' Ad - Omega| / |Omega| = %.5f, |H' - Omega| / |Omega| = %.3f\n", a, b,
+                agree, raw);
     EXPECT_LT(agree, 0.01);
     EXPECT_GT(raw, 0.1);
     EXPECT_TRUE(v.closure->information.isApprox(v.closure->information.transpose()));

@@ -19,7 +19,8 @@ class DefaultVocabularyOnRealFrames : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     vocabulary_ = Vocabulary::load(CVO_DEFAULT_VOCABULARY);
-    for (std::size_t i = 0; i < 50; i += 2) frames_.push_back(vocabulary_->transform(testing::orb(testing::sample_frame(i))));
+    for (std::size_t i = 0; i < 50; i += 2)
+      frames_.push_back(vocabulary_->transform(testing::orb(testing::sample_frame(i))));
   }
   static void TearDownTestSuite() {
     frames_.clear();
@@ -39,7 +40,8 @@ TEST_F(DefaultVocabularyOnRealFrames, NeighboursScoreAboveFarFramesAndUnrelatedI
   const auto& f = frames();
   const std::size_t n = f.size(), far = n / 2;  // ~0.8 s apart: the camera has rolled or pitched away
   std::vector<BowVector> unrelated;
-  for (const double t : {0.0, 3.0, 6.0, 9.0}) unrelated.push_back(vocabulary().transform(testing::orb(testing::room_frame(t))));
+  for (const double t : {0.0, 3.0, 6.0, 9.0})
+    unrelated.push_back(vocabulary().transform(testing::orb(testing::room_frame(t))));
   for (std::size_t i = 0; i + 1 < n; ++i) {
     const double neighbour = score(f[i], f[i + 1]);
     // Seen here: neighbours 0.22..0.44, far 0.06..0.09, rendered 0.07..0.14 (k 10, L 4).

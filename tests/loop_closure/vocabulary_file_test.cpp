@@ -52,7 +52,8 @@ void put_u32(std::string& bytes, std::size_t at, std::uint32_t v) {
 // Replaces the trailing checksum by the right one for the edited bytes before it.
 void reseal(std::string& bytes) {
   const std::uint64_t h = fnv1a64(std::string_view(bytes).substr(0, bytes.size() - 8));
-  for (int i = 0; i < 8; ++i) bytes[bytes.size() - 8 + static_cast<std::size_t>(i)] = static_cast<char>((h >> (8 * i)) & 0xff);
+  for (int i = 0; i < 8; ++i)
+    bytes[bytes.size() - 8 + static_cast<std::size_t>(i)] = static_cast<char>((h >> (8 * i)) & 0xff);
 }
 
 // The message of the InputError that loading `bytes` (as a file) throws; "" when none is thrown.
@@ -91,7 +92,8 @@ TEST(VocabularyFile, AnyFlippedByteIsRefused) {
   const test::TempDir dir;
   const std::string good = small_vocabulary().to_bytes();
   // A node's centre, a node's weight, a parent, and the checksum itself: the checksum catches them.
-  for (const std::size_t at : {kHeader + kNode * 3 + 20, kHeader + kNode * 2 + 6, kHeader + kNode * 4, good.size() - 3}) {
+  for (const std::size_t at :
+       {kHeader + kNode * 3 + 20, kHeader + kNode * 2 + 6, kHeader + kNode * 4, good.size() - 3}) {
     std::string bad = good;
     bad[at] = static_cast<char>(bad[at] ^ 0x10);
     EXPECT_NE(load_error(dir, bad).find("checksum mismatch"), std::string::npos) << "byte " << at;
@@ -171,7 +173,8 @@ TEST(VocabularyFile, ImpossibleTreesWithAValidChecksumAreRefused) {
   EXPECT_NE(load_error(dir, bad).find("deeper than the depth L = 1"), std::string::npos);
 
   bad = good;
-  for (int i = 0; i < 8; ++i) bad[kHeader + kNode * 7 + 4 + static_cast<std::size_t>(i)] = static_cast<char>(0xff);  // NaN weight
+  for (int i = 0; i < 8; ++i)
+    bad[kHeader + kNode * 7 + 4 + static_cast<std::size_t>(i)] = static_cast<char>(0xff);  // NaN weight
   reseal(bad);
   EXPECT_NE(load_error(dir, bad).find("weight not in [0, 64]"), std::string::npos);
 }
@@ -186,7 +189,8 @@ TEST(VocabularyFile, RandomDamageBehindAValidChecksumNeverCrashes) {
   for (int trial = 0; trial < 300; ++trial) {
     std::string bad = good;
     for (int k = rng.uniform(1, 4); k > 0; --k) {
-      const auto at = static_cast<std::size_t>(rng.uniform(8, static_cast<int>(good.size()) - 8));  // past the magic and version
+      const auto at =
+          static_cast<std::size_t>(rng.uniform(8, static_cast<int>(good.size()) - 8));  // past the magic and version
       bad[at] = static_cast<char>(rng.uniform(0, 256));
     }
     reseal(bad);
@@ -225,7 +229,7 @@ TEST(VocabularyFile, TheCommittedDefaultVocabularyLoadsAndVerifies) {
   EXPECT_GT(voc.words(), 5000u);
   EXPECT_LE(voc.words(), 10000u);
   EXPECT_GT(voc.training_images(), 100u);
-  EXPECT_LE(fs::file_size(file), 1u << 20);  // small enough to version
+  EXPECT_LE(fs::file_size(file), 1u << 20);     // small enough to version
   EXPECT_EQ(voc.to_bytes(), read_bytes(file));  // written by this format's writer, byte for byte
 }
 

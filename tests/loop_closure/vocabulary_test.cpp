@@ -60,14 +60,14 @@ TEST(Score, IsOneMinusHalfTheL1Distance) {
   EXPECT_DOUBLE_EQ(score(b, a), 0.5);
   EXPECT_DOUBLE_EQ(score(a, a), 1.0);
   EXPECT_DOUBLE_EQ(score(a, BowVector{{4, 1.0}}), 0.0);  // no common word
-  EXPECT_DOUBLE_EQ(score(a, BowVector{}), 0.0);           // no words at all
+  EXPECT_DOUBLE_EQ(score(a, BowVector{}), 0.0);          // no words at all
   EXPECT_DOUBLE_EQ(score(BowVector{}, BowVector{}), 0.0);
 }
 
 TEST(Vocabulary, IdfIsLogOfImagesOverImagesWithTheWordAndTransformIsL1Normalised) {
   // Three far-apart descriptors; k = 3, L = 1: one word each. Image 0 {A}, 1 {A, B, B}, 2 {C, A}.
-  const auto voc = Vocabulary::train({rows({0x00}), rows({0x00, 0xff, 0xff}), rows({0x0f, 0x00})},
-                                     {.branching = 3, .levels = 1});
+  const auto voc =
+      Vocabulary::train({rows({0x00}), rows({0x00, 0xff, 0xff}), rows({0x0f, 0x00})}, {.branching = 3, .levels = 1});
   ASSERT_EQ(voc.words(), 3u);
   EXPECT_EQ(voc.training_images(), 3u);
   const auto d = to_descriptors(rows({0x00, 0xff, 0x0f}));
@@ -126,8 +126,8 @@ TEST(Vocabulary, TreeHasAtMostKChildrenPerNodeAndWordsNoDeeperThanL) {
 TEST(Vocabulary, CentresAreBitwiseMajoritiesOfTheirMembers) {
   // Nine descriptors in three tight groups of three: k = 3, L = 2 splits them into the groups,
   // and each group's centre is its majority (two of three rows agree on every byte here).
-  const auto voc = Vocabulary::train({rows({0x01, 0x03, 0x01, 0xf0, 0xf8, 0xf0, 0x3c, 0x3c, 0x7c})},
-                                     {.branching = 3, .levels = 2});
+  const auto voc =
+      Vocabulary::train({rows({0x01, 0x03, 0x01, 0xf0, 0xf8, 0xf0, 0x3c, 0x3c, 0x7c})}, {.branching = 3, .levels = 2});
   std::vector<Descriptor> level1;
   for (const auto& n : voc.nodes())
     if (n.parent == 0) level1.push_back(n.centre);
@@ -169,7 +169,7 @@ TEST(Vocabulary, RejectsBadParametersAndEmptyTrainingSets) {
 TEST(Vocabulary, ScoresWithinAnImageFamilyAboveAcrossFamilies) {
   std::vector<cv::Mat> office, room;
   for (std::size_t i = 0; i < 50; i += 7) office.push_back(testing::orb(testing::sample_frame(i)));  // 8 frames
-  for (double t = 0; t < 1.0; t += 0.125) room.push_back(testing::orb(testing::room_frame(t)));        // 8 frames
+  for (double t = 0; t < 1.0; t += 0.125) room.push_back(testing::orb(testing::room_frame(t)));      // 8 frames
   std::vector<cv::Mat> training;
   for (std::size_t i = 0; i < office.size(); i += 2) training.push_back(office[i]);  // half of each family;
   for (std::size_t i = 0; i < room.size(); i += 2) training.push_back(room[i]);      // the rest is unseen

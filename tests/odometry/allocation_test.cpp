@@ -8,8 +8,8 @@
 
 #include "libcvo/odometry/frame_to_frame.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
-#include "tests/odometry/odometry_fixtures.hpp"
 #include "program/allocation_counter.hpp"
+#include "tests/odometry/odometry_fixtures.hpp"
 
 using cvo::program::process_allocations;
 

@@ -12,12 +12,12 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "tests/support/temp_dir.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/sim/sequence.hpp"
 #include "tests/odometry/odometry_fixtures.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
 
 namespace cvo::odometry {
 namespace {
@@ -138,8 +138,8 @@ TEST(CvoRunCli, UsageErrorsExitTwo) {
   const std::string data = q(CVO_TEST_DATA_DIR "/fr1_rpy_50"), out = " --out " + q(dir.path() / "t.txt");
   for (const std::string& args : std::vector<std::string>{
            "", data, "--out x.txt", data + out + " --bogus", data + out + " --max-frames 0",
-           data + out + " --max-frames ten", data + out + " --set cvo.no_such_key=1", data + out + " --set cvo.ell_init=-1",
-           data + out + " --mode fast", data + " " + data + out}) {
+           data + out + " --max-frames ten", data + out + " --set cvo.no_such_key=1",
+           data + out + " --set cvo.ell_init=-1", data + out + " --mode fast", data + " " + data + out}) {
     const ToolRun r = run_tool(dir, args);
     EXPECT_EQ(r.exit_code, 2) << "cvo-run " << args << "\n" << r.err;
     EXPECT_NE(r.err.find("usage:"), std::string::npos) << args;
@@ -160,7 +160,8 @@ TEST(CvoRunCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
 TEST(CvoRunCli, SetWithoutAnEqualsSignIsAUsageError) {
   const test::TempDir dir("cvo_run");
   cvo::testing::expect_set_needs_key_equals_value(
-      "cvo-run", q(CVO_TEST_DATA_DIR "/fr1_rpy_50") + " --out " + q(dir.path() / "t.txt") + " --max-frames 2", dir.path());
+      "cvo-run", q(CVO_TEST_DATA_DIR "/fr1_rpy_50") + " --out " + q(dir.path() / "t.txt") + " --max-frames 2",
+      dir.path());
 }
 
 // --set takes one value per occurrence: the folder after it is the SEQUENCE.
@@ -178,7 +179,8 @@ TEST(CvoRunCli, KeyframeModeEndToEnd) {
   const test::TempDir dir("cvo_run");
   const fs::path seq = write_rendered_sequence(dir);
   const fs::path traj = dir.path() / "traj.txt";
-  const ToolRun r = run_tool(dir, q(seq) + " --out " + q(traj) + " --mode kf-cvo --json --set keyframe.translation_threshold_m=0.05");
+  const ToolRun r =
+      run_tool(dir, q(seq) + " --out " + q(traj) + " --mode kf-cvo --json --set keyframe.translation_threshold_m=0.05");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(json_value(r.out, "mode"), "\"kf-cvo\"");
   EXPECT_EQ(pose_lines(traj), 40u);

@@ -206,8 +206,8 @@ TEST(KeyframeOdometry, RollingShutterRowsAreMovedToTheFramesTime) {
   std::vector<core::SE3> truth;
   for (int i = 0; i < 24; ++i) {
     const double t = i / 30.0;
-    auto frame = sim::render(scene, camera, [&](int v) { return pose_at(t + kReadout * (v / 239.0 - 0.5)); }, {}, 0,
-                             testing::fast_render());
+    auto frame = sim::render(
+        scene, camera, [&](int v) { return pose_at(t + kReadout * (v / 239.0 - 0.5)); }, {}, 0, testing::fast_render());
     frame.index = static_cast<std::uint64_t>(i);
     frame.timestamp = frame.depth_timestamp = 1000.0 + t;
     frames.push_back(std::move(frame));

@@ -19,7 +19,7 @@ namespace cvo::odometry::testing {
 inline double deg(double rad) { return rad * 180.0 / std::numbers::pi; }
 
 struct RenderedSequence {
-  core::Trajectory truth;             // T_world_camera of each frame
+  core::Trajectory truth;               // T_world_camera of each frame
   std::vector<core::RgbdFrame> frames;  // index i, stamped as truth[i]
 };
 

@@ -198,8 +198,8 @@ TEST(OpenCvOdometry, CvoRunModeEndToEnd) {
     EXPECT_EQ(json_value(r.out, "poses"), "40");
     EXPECT_EQ(json_value(r.out, "keyframes"), "0");
     EXPECT_EQ(json_value(r.out, "failed_frames"), "0");
-    for (const char* key : {"ms_per_frame_median", "ms_per_frame_p99", "points_median", "ate_rmse_m",
-                            "rpe_trans_m_s", "rpe_rot_deg_s"}) {
+    for (const char* key :
+         {"ms_per_frame_median", "ms_per_frame_p99", "points_median", "ate_rmse_m", "rpe_trans_m_s", "rpe_rot_deg_s"}) {
       const std::string v = json_value(r.out, key);
       EXPECT_TRUE(v != "<missing>" && v != "null") << key << ": " << v;
     }

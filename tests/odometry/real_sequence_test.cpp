@@ -25,8 +25,8 @@ TEST(OdometryRealData, Fr1Rpy50RelativePoseError) {
   const auto rpe = eval::relative_pose_error(sequence.groundtruth(), estimate);
   const auto ate = eval::absolute_trajectory_error(sequence.groundtruth(), estimate);
   std::printf("fr1_rpy_50: RPE %.4f m/s, %.3f deg/s over %zu pairs (max %.4f m, %.3f deg); ATE %.4f m\n",
-              rpe.translation.rmse, rpe.rotation_deg.rmse, rpe.pairs.size(), rpe.translation.max,
-              rpe.rotation_deg.max, ate.error.rmse);
+              rpe.translation.rmse, rpe.rotation_deg.rmse, rpe.pairs.size(), rpe.translation.max, rpe.rotation_deg.max,
+              ate.error.rmse);
   // 50 frames at 30 Hz give only 19 pairs 1 s apart, all overlapping (frames 0-18 to 30-48), so
   // this is one 1.6 s stretch rather than an average. Measured: 0.048 m/s and 2.30 deg/s (the
   // first 200 frames give 0.05-0.065 m/s and 2.4-2.9 deg/s, the paper 0.0457 / 3.31 on the whole

@@ -20,8 +20,8 @@ TEST(CholmodMessages, GoToStandardErrorNotStandardOutput) {
   cholmod_common common;
   cholmod_l_start(&common);
   common.supernodal = CHOLMOD_SUPERNODAL;  // the simplicial LDL' would factorise it without a word
-  cholmod_sparse* A = cholmod_l_allocate_sparse(2, 2, 3, /*sorted=*/1, /*packed=*/1, /*stype=upper*/ 1, CHOLMOD_REAL,
-                                                &common);
+  cholmod_sparse* A =
+      cholmod_l_allocate_sparse(2, 2, 3, /*sorted=*/1, /*packed=*/1, /*stype=upper*/ 1, CHOLMOD_REAL, &common);
   ASSERT_NE(A, nullptr);
   auto* p = static_cast<SuiteSparse_long*>(A->p);
   auto* i = static_cast<SuiteSparse_long*>(A->i);

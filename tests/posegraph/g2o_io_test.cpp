@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include "libcvo/core/information.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/posegraph/cost.hpp"
-#include "libcvo/core/information.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
 #include "tests/posegraph/indefinite_graph.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -141,8 +141,9 @@ TEST(G2oIo, IndefiniteInformationIsRepairedWithOneWarningNamingFileAndLine) {
 }
 
 TEST(G2oIo, AGoodFileGivesNoWarning) {
-  std::stringstream text("VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n"
-                         "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 1 0.5 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n");
+  std::stringstream text(
+      "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n"
+      "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 1 0.5 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n");
   std::ostringstream warnings;
   G2oRepairs repairs;
   parse_g2o(text, "good.g2o", warnings, &repairs);
@@ -154,8 +155,9 @@ TEST(G2oIo, AGoodFileGivesNoWarning) {
 // A NaN is not repaired towards anything: it is an error naming file and line.
 TEST(G2oIo, NanInformationIsAnInputErrorNamingFileAndLine) {
   const test::TempDir dir("g2o_io");
-  const auto file = dir.write("nan.g2o", "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n"
-                                         "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 1 0 0 0 0 0 1 0 nan 0 0 1 0 0 0 1 0 0 1 0 1\n");
+  const auto file = dir.write("nan.g2o",
+                              "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n"
+                              "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 1 0 0 0 0 0 1 0 nan 0 0 1 0 0 0 1 0 0 1 0 1\n");
   std::ostringstream warnings;
   try {
     read_g2o(file, warnings);
@@ -169,9 +171,7 @@ TEST(G2oIo, NanInformationIsAnInputErrorNamingFileAndLine) {
   EXPECT_EQ(warnings.str(), "");
 }
 
-TEST(G2oIo, MissingFileIsAnInputError) {
-  EXPECT_THROW(read_g2o("/nonexistent/graph.g2o"), io::InputError);
-}
+TEST(G2oIo, MissingFileIsAnInputError) { EXPECT_THROW(read_g2o("/nonexistent/graph.g2o"), io::InputError); }
 
 }  // namespace
 }  // namespace cvo::posegraph

@@ -13,10 +13,10 @@
 namespace cvo::posegraph {
 namespace {
 
-using core::Matrix6d;
 using core::check_information;
 using core::InformationDefect;
 using core::kInformationRepairFloor;
+using core::Matrix6d;
 using core::nearest_information;
 
 // Identity but for the translation x-y block [[1, b], [b, 1]]: eigenvalues 1 + b and 1 - b.

@@ -197,8 +197,8 @@ PoseGraph noisy_lattice(int side) {
   std::mt19937 random(7);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const auto noise = [&](double size) {
-    return pose(size * unit(random), size * unit(random), size * unit(random), size * unit(random),
-                size * unit(random), size * unit(random));
+    return pose(size * unit(random), size * unit(random), size * unit(random), size * unit(random), size * unit(random),
+                size * unit(random));
   };
   std::vector<SE3> truth;
   PoseGraph graph;

@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "libcvo/registration/registration.hpp"
-#include "tests/registration/registration_fixtures.hpp"
 #include "program/allocation_counter.hpp"
+#include "tests/registration/registration_fixtures.hpp"
 
 using cvo::program::process_allocations;
 

@@ -19,8 +19,8 @@ core::RgbdFrame rendered(sim::SceneKind kind) {
 }
 
 TEST(PointSelection, SelectsAboutTheTargetWithValidDepthAndLabels) {
-  for (const auto kind : {sim::SceneKind::textured_room, sim::SceneKind::textureless_room,
-                          sim::SceneKind::textured_wall}) {
+  for (const auto kind :
+       {sim::SceneKind::textured_room, sim::SceneKind::textureless_room, sim::SceneKind::textured_wall}) {
     const auto frame = rendered(kind);
     PointSelector selector(640, 480, core::SelectionParameters{});
     PointCloud cloud(8192);
@@ -35,7 +35,8 @@ TEST(PointSelection, SelectsAboutTheTargetWithValidDepthAndLabels) {
       ASSERT_GE(p.z(), 0.1f);
       ASSERT_LE(p.z(), 5.0f);
       const auto f = cloud.feature(i);
-      for (int c = 0; c < 3; ++c) ASSERT_TRUE(f[static_cast<std::size_t>(c)] >= 0.0f && f[static_cast<std::size_t>(c)] <= 1.0f);
+      for (int c = 0; c < 3; ++c)
+        ASSERT_TRUE(f[static_cast<std::size_t>(c)] >= 0.0f && f[static_cast<std::size_t>(c)] <= 1.0f);
       ASSERT_TRUE(std::abs(f[3]) <= 1.0f && std::abs(f[4]) <= 1.0f);
     }
   }
@@ -99,7 +100,9 @@ TEST(PointSelection, DepthTimeCompensationPutsPointsBackOnTheSurface) {
   };
   const auto plain = surface_errors(core::SE3());
   const auto compensated = surface_errors(M);
-  const auto at = [](const std::vector<double>& d, double q) { return d[static_cast<std::size_t>(q * (d.size() - 1))]; };
+  const auto at = [](const std::vector<double>& d, double q) {
+    return d[static_cast<std::size_t>(q * (d.size() - 1))];
+  };
   std::printf("distance to the surface, median / p90: as read %.1f / %.1f mm, compensated %.1f / %.1f mm\n",
               1e3 * at(plain, 0.5), 1e3 * at(plain, 0.9), 1e3 * at(compensated, 0.5), 1e3 * at(compensated, 0.9));
   EXPECT_GT(at(plain, 0.5), 0.01);

@@ -193,12 +193,14 @@ TEST(Registration, BadInputGivesAStatusAndTheInitialGuess) {
   EXPECT_EQ(r.transform.matrix(), guess.matrix());
 
   PointCloud with_nan(8192);
-  for (std::size_t i = 0; i < pair.second.size(); ++i) with_nan.push_back(pair.second.position(i), pair.second.feature(i));
+  for (std::size_t i = 0; i < pair.second.size(); ++i)
+    with_nan.push_back(pair.second.position(i), pair.second.feature(i));
   with_nan.push_back({std::numeric_limits<float>::quiet_NaN(), 0, 1}, {});
   EXPECT_EQ(registration.align(pair.first, with_nan, guess).status, RegistrationStatus::kNonFinite);
   PointCloud inf_label(8192);
   inf_label.push_back({0, 0, 1}, {std::numeric_limits<float>::infinity(), 0, 0, 0, 0});
-  for (std::size_t i = 0; i < pair.second.size(); ++i) inf_label.push_back(pair.second.position(i), pair.second.feature(i));
+  for (std::size_t i = 0; i < pair.second.size(); ++i)
+    inf_label.push_back(pair.second.position(i), pair.second.feature(i));
   EXPECT_EQ(registration.align(pair.first, inf_label, guess).status, RegistrationStatus::kNonFinite);
 
   const core::SE3 nan_guess = core::SE3::from_translation({std::nan(""), 0, 0});

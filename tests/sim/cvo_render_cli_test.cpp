@@ -6,9 +6,9 @@
 #include <string>
 
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "tests/support/cli_contract.hpp"
 

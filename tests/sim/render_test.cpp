@@ -1,8 +1,8 @@
 #include "libcvo/sim/render.hpp"
 
 #include <algorithm>
-#include <ctime>
 #include <cmath>
+#include <ctime>
 #include <iostream>
 #include <vector>
 
@@ -34,8 +34,7 @@ core::Intrinsics small_camera() {
 PathKind default_path(SceneKind kind) { return kind == SceneKind::textured_wall ? PathKind::wall : PathKind::orbit; }
 
 // Largest distance from any back-projected valid depth pixel to the scene; counts valid pixels.
-double max_backprojection_error(const Scene& scene, const core::RgbdFrame& frame, const core::SE3& pose,
-                                int& valid) {
+double max_backprojection_error(const Scene& scene, const core::RgbdFrame& frame, const core::SE3& pose, int& valid) {
   const core::Intrinsics& k = frame.intrinsics;
   double worst = 0;
   for (int v = 0; v < frame.depth.rows; ++v)
@@ -75,7 +74,8 @@ TEST(RenderBackProjection, EveryPixelWithinOneMillimetreOfTheScene) {
 }
 
 TEST(RenderBackProjection, ColourAndDepthMatchTheRequestedCamera) {
-  const core::RgbdFrame frame = render(make_scene(SceneKind::textured_room, 0), small_camera(), path_pose(PathKind::sweep, 0));
+  const core::RgbdFrame frame =
+      render(make_scene(SceneKind::textured_room, 0), small_camera(), path_pose(PathKind::sweep, 0));
   EXPECT_EQ(frame.bgr.type(), CV_8UC3);
   EXPECT_EQ(frame.depth.type(), CV_16UC1);
   EXPECT_EQ(frame.bgr.size(), cv::Size(160, 120));
@@ -198,8 +198,8 @@ TEST(RenderNoise, MatchesTheAxialModelAndDropsDepth) {
       ++n;
     }
   const double mean = sum / n, std = std::sqrt(sum2 / n - mean * mean);
-  std::cout << "wall at 2 m: noise std " << std * 1e3 << " mm (model " << axial_noise_sigma(2.0) * 1e3
-            << " mm), bias " << mean * 1e3 << " mm, valid " << 100.0 * n / (k.width * k.height) << "%\n";
+  std::cout << "wall at 2 m: noise std " << std * 1e3 << " mm (model " << axial_noise_sigma(2.0) * 1e3 << " mm), bias "
+            << mean * 1e3 << " mm, valid " << 100.0 * n / (k.width * k.height) << "%\n";
   EXPECT_NEAR(std, axial_noise_sigma(2.0), 0.05 * axial_noise_sigma(2.0));
   EXPECT_NEAR(mean, 0.0, 0.1e-3);
   EXPECT_LT(n, k.width * k.height * 995 / 1000);  // dropout

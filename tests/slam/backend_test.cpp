@@ -13,8 +13,8 @@ namespace cvo::slam {
 namespace {
 
 using testing::loop;
-using testing::pose_xy_yaw;
 using testing::make_run;
+using testing::pose_xy_yaw;
 using testing::position_error;
 using testing::square;
 using testing::SyntheticRun;
@@ -30,7 +30,8 @@ void add_all(Backend& backend, const SyntheticRun& run) {
 
 double rms_position_error(const core::Trajectory& estimate, const SyntheticRun& run) {
   double sum = 0;
-  for (const auto& p : estimate) sum += std::pow(position_error(run.truth[static_cast<std::size_t>(p.timestamp)], p.pose), 2);
+  for (const auto& p : estimate)
+    sum += std::pow(position_error(run.truth[static_cast<std::size_t>(p.timestamp)], p.pose), 2);
   return std::sqrt(sum / static_cast<double>(estimate.size()));
 }
 
@@ -71,8 +72,8 @@ TEST(Backend, OneLoopCorrectsTheDriftOfASquare) {
   const double rms = rms_position_error(backend.frame_trajectory(), run);
   const auto loops = backend.loops();
   ASSERT_EQ(loops.size(), 1u);
-  std::printf("square: end error %.4f -> %.4f m, frame RMS %.4f -> %.4f m, loop chi2 %.2f weight %.3f\n", drift_end, end,
-              drift_rms, rms, loops[0].chi2, loops[0].weight);
+  std::printf("square: end error %.4f -> %.4f m, frame RMS %.4f -> %.4f m, loop chi2 %.2f weight %.3f\n", drift_end,
+              end, drift_rms, rms, loops[0].chi2, loops[0].weight);
   EXPECT_LT(end, 0.2 * drift_end);
   EXPECT_LT(rms, 0.5 * drift_rms);
   EXPECT_GT(loops[0].weight, 0.5);  // a consistent loop keeps most of its weight
@@ -192,7 +193,8 @@ std::vector<odometry::LocalGraph> as_session(const SyntheticRun& run, std::uint6
 }
 
 void add_session(Backend& backend, core::SessionId session, const std::vector<odometry::LocalGraph>& graphs) {
-  for (const auto& g : graphs) backend.add_local_graph(session, static_cast<posegraph::NodeId>(g.keyframe().frame_index), g);
+  for (const auto& g : graphs)
+    backend.add_local_graph(session, static_cast<posegraph::NodeId>(g.keyframe().frame_index), g);
 }
 
 TEST(Backend, ASessionStaysInItsOwnFrameUntilALoopJoinsItToTheMap) {
@@ -225,8 +227,11 @@ TEST(Backend, ASessionStaysInItsOwnFrameUntilALoopJoinsItToTheMap) {
   // maps session 22's odometry into the map.
   for (std::size_t n = 0; n <= 40; n += 5)
     EXPECT_LT(position_error(backend.keyframe_poses().at(static_cast<std::int64_t>(n)),
-                             backend.keyframe_poses().at(static_cast<std::int64_t>(1000 + n))), 1e-6) << n;
-  EXPECT_LT(position_error(backend.odometry_correction(11) * elsewhere.inverse(), backend.odometry_correction(22)), 1e-6);
+                             backend.keyframe_poses().at(static_cast<std::int64_t>(1000 + n))),
+              1e-6)
+        << n;
+  EXPECT_LT(position_error(backend.odometry_correction(11) * elsewhere.inverse(), backend.odometry_correction(22)),
+            1e-6);
   EXPECT_TRUE(backend.optimise_keyframes().converged);
   EXPECT_LT(position_error(backend.keyframe_poses().at(20), backend.keyframe_poses().at(1020)), 1e-3);
 

@@ -107,8 +107,9 @@ TEST(CvoRunSlam, TwoHalvesOfASequenceAreTwoSessionsOfOneMap) {
   EXPECT_NE(sessions.find("\"session\": 1, \"frames\": 25, \"keyframes\": "), std::string::npos) << sessions;
   const std::smatch second = [&] {
     std::smatch m;
-    std::regex_search(sessions, m, std::regex("\"session\": 2, \"frames\": 25, \"keyframes\": \\d+, \"joined\": (\\w+), "
-                                              "\"joined_at_keyframe\": (\\w+)"));
+    std::regex_search(sessions, m,
+                      std::regex("\"session\": 2, \"frames\": 25, \"keyframes\": \\d+, \"joined\": (\\w+), "
+                                 "\"joined_at_keyframe\": (\\w+)"));
     return m;
   }();
   ASSERT_FALSE(second.empty()) << sessions;
@@ -116,9 +117,10 @@ TEST(CvoRunSlam, TwoHalvesOfASequenceAreTwoSessionsOfOneMap) {
   EXPECT_GE(std::stoi(second[2]), 1);  // its first keyframe has no predecessor, hence no candidates
   EXPECT_GT(loops_across_sessions(r.out), 0);
   EXPECT_EQ(json_value(r.out, "poses"), "50");
-  const double ate_two = std::stod(json_value(r.out, "ate_rmse_m")), ate_one = std::stod(json_value(one.out, "ate_rmse_m"));
-  std::printf("two sessions: ATE %.4f m (one session %.4f m), joined at keyframe %s, %d loops across sessions\n", ate_two,
-              ate_one, second[2].str().c_str(), loops_across_sessions(r.out));
+  const double ate_two = std::stod(json_value(r.out, "ate_rmse_m")),
+               ate_one = std::stod(json_value(one.out, "ate_rmse_m"));
+  std::printf("two sessions: ATE %.4f m (one session %.4f m), joined at keyframe %s, %d loops across sessions\n",
+              ate_two, ate_one, second[2].str().c_str(), loops_across_sessions(r.out));
   EXPECT_LT(ate_two, 1.5 * ate_one);
   EXPECT_EQ(json_value(r.out, "ate_rmse_m_odometry"), "null");  // two odometry frames: no one ATE
 }
@@ -149,10 +151,10 @@ TEST(CvoRunSlam, ASessionOfAnUnrelatedSceneStaysUnplaced) {
 
 TEST(CvoRunSlam, SeveralFoldersNeedSlamMode) {
   const test::TempDir dir("cvo_run_sessions");
-  const ToolRun r = run_tool("cvo-run",
-                             quoted(test::kSample) + " " + quoted(test::kSample) + " --out " + quoted(dir.path() / "t.txt") +
-                                 " --mode kf-cvo",
-                             dir.path());
+  const ToolRun r = run_tool(
+      "cvo-run",
+      quoted(test::kSample) + " " + quoted(test::kSample) + " --out " + quoted(dir.path() / "t.txt") + " --mode kf-cvo",
+      dir.path());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("need --mode slam"), std::string::npos) << r.err;
 }

@@ -24,8 +24,8 @@ TEST(LocalOptimisation, ExactEdgesGiveTheTrueRelativePosesWithTheKeyframeFixed) 
   const core::SE3 offset = core::SE3::exp((core::Vector6d() << 5, -3, 1, 0.3, 0.2, -1.0).finished());
   for (std::size_t k = 0; k < exact.nodes().size(); ++k) {
     auto node = exact.nodes()[k];
-    const core::SE3 noise = core::SE3::exp(
-        (core::Vector6d() << 0.03, -0.02, 0.01, 0.02, -0.03, 0.04).finished() * static_cast<double>(k));
+    const core::SE3 noise =
+        core::SE3::exp((core::Vector6d() << 0.03, -0.02, 0.01, 0.02, -0.03, 0.04).finished() * static_cast<double>(k));
     node.pose = offset * node.pose * noise;
     graph.add_node(node);
   }

@@ -43,8 +43,8 @@ TEST(Mapper, AKeyframeRepeatedWithOtherContentIsRefusedAndTheMapperGoesOn) {
   EXPECT_TRUE(mapper.add_keyframe({kSession, 0, a.frame, core::SE3(), a.cloud}).duplicate);  // re-sent
 
   const std::string moved = refusal(mapper, {kSession, 0, a.frame, core::SE3::from_translation({0.1, 0, 0}), a.cloud});
-  EXPECT_NE(moved.find("keyframe 0 of session 0x0000000000005e55 is known with other content"),
-            std::string::npos) << moved;
+  EXPECT_NE(moved.find("keyframe 0 of session 0x0000000000005e55 is known with other content"), std::string::npos)
+      << moved;
   EXPECT_FALSE(refusal(mapper, {kSession, 0, b.frame, core::SE3(), b.cloud}).empty());  // another frame
 
   EXPECT_FALSE(mapper.add_keyframe({kSession, 2, b.frame, core::SE3(), b.cloud}).duplicate);
@@ -74,7 +74,7 @@ TEST(Mapper, ALocalGraphThatDoesNotStartAtItsKeyframeIsRefused) {
   graph.add_node({3, 0.0, core::SE3()});
   graph.add_node({4, 0.1, core::SE3()});
   graph.add_edge({3, 4, core::SE3(), core::Matrix6d::Identity()});
-  EXPECT_THROW(mapper.add_local_graph(7, 0, graph), MapperError);  // keyframe 0 is frame 0
+  EXPECT_THROW(mapper.add_local_graph(7, 0, graph), MapperError);                    // keyframe 0 is frame 0
   EXPECT_THROW(mapper.add_local_graph(7, 1, odometry::LocalGraph(1)), MapperError);  // empty
   EXPECT_EQ(mapper.backend().local_graphs(), 0u);
   EXPECT_NO_THROW(mapper.add_local_graph(7, 3, graph));  // keyframe 3 not here yet: the graph is

@@ -34,9 +34,9 @@ inline std::vector<core::SE3> square(std::size_t per_side = 10, double side = 2.
 }
 
 struct SyntheticRun {
-  std::vector<core::SE3> truth;               // T_world_camera per frame
-  std::vector<core::SE3> odometry;            // the tracker's poses
-  std::vector<odometry::LocalGraph> graphs;   // in closing order; the last one is the open graph
+  std::vector<core::SE3> truth;              // T_world_camera per frame
+  std::vector<core::SE3> odometry;           // the tracker's poses
+  std::vector<odometry::LocalGraph> graphs;  // in closing order; the last one is the open graph
 };
 
 /// Keyframes every `stride` frames (0, stride, ...). A measurement over k frames is the true

@@ -30,7 +30,8 @@ nlohmann::json property(const nlohmann::json& test, const std::string& name) {
 
 TEST(Suite, EveryRegisteredCaseReportsSkippedByExit77) {
   const cvo::test::TempDir dir;
-  const ToolRun listing = run_program(CVO_CTEST_COMMAND, "--test-dir '" CVO_BUILD_DIR "' --show-only=json-v1", dir.path());
+  const ToolRun listing =
+      run_program(CVO_CTEST_COMMAND, "--test-dir '" CVO_BUILD_DIR "' --show-only=json-v1", dir.path());
   ASSERT_EQ(listing.exit_code, 0) << listing.err;
   const auto json = nlohmann::json::parse(listing.out);
   std::string without;

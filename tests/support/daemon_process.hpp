@@ -21,7 +21,8 @@ namespace cvo::testing {
 class DaemonProcess {
  public:
   DaemonProcess(const std::filesystem::path& executable, const std::vector<std::string>& args,
-                const std::filesystem::path& stderr_file, const std::vector<std::pair<std::string, std::string>>& env = {}) {
+                const std::filesystem::path& stderr_file,
+                const std::vector<std::pair<std::string, std::string>>& env = {}) {
     pid_ = fork();
     if (pid_ == 0) {
       const int fd = open(stderr_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);

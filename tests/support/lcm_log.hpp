@@ -30,7 +30,8 @@ struct PublishedLog {
 template <class T>
 void add_decoded(const ::lcm::LogEvent& e, std::vector<T>& out, int& undecodable) {
   std::string error;
-  if (auto m = cvo::lcm::decode<T>(e.data, e.datalen, &error)) out.push_back(std::move(*m));
+  if (auto m = cvo::lcm::decode<T>(e.data, e.datalen, &error))
+    out.push_back(std::move(*m));
   else {
     ++undecodable;
     ADD_FAILURE() << e.channel << ": " << error;
@@ -57,11 +58,16 @@ inline PublishedLog read_published(const std::filesystem::path& file) {
     return log;
   }
   while (const ::lcm::LogEvent* e = in.readNextEvent()) {
-    if (e->channel == "CVO_POSE") add_decoded(*e, log.poses, log.undecodable);
-    else if (e->channel == "CVO_KEYFRAME") add_decoded(*e, log.keyframes, log.undecodable);
-    else if (e->channel == "CVO_LOCAL_GRAPH") add_decoded(*e, log.local_graphs, log.undecodable);
-    else if (e->channel == "CVO_STATUS") add_decoded(*e, log.statuses, log.undecodable);
-    else if (e->channel == "CVO_MAP") add_decoded(*e, log.maps, log.undecodable);
+    if (e->channel == "CVO_POSE")
+      add_decoded(*e, log.poses, log.undecodable);
+    else if (e->channel == "CVO_KEYFRAME")
+      add_decoded(*e, log.keyframes, log.undecodable);
+    else if (e->channel == "CVO_LOCAL_GRAPH")
+      add_decoded(*e, log.local_graphs, log.undecodable);
+    else if (e->channel == "CVO_STATUS")
+      add_decoded(*e, log.statuses, log.undecodable);
+    else if (e->channel == "CVO_MAP")
+      add_decoded(*e, log.maps, log.undecodable);
   }
   return log;
 }

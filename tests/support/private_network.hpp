@@ -27,8 +27,10 @@ inline std::filesystem::path which(const std::string& tool) {
 /// Why a UDP multicast test cannot run here (outside in-private-netns, or without the LCM tools),
 /// or empty when it can.
 inline std::string udp_test_skip_reason() {
-  if (!in_private_network_namespace()) return "runs only in a private network namespace (tests/support/in-private-netns)";
-  if (which("lcm-logger").empty() || which("lcm-logplayer").empty()) return "lcm-logger/lcm-logplayer missing (liblcm-bin)";
+  if (!in_private_network_namespace())
+    return "runs only in a private network namespace (tests/support/in-private-netns)";
+  if (which("lcm-logger").empty() || which("lcm-logplayer").empty())
+    return "lcm-logger/lcm-logplayer missing (liblcm-bin)";
   return {};
 }
 

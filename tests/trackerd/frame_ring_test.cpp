@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include "program/allocation_counter.hpp"
 #include "daemon/trackerd/frame_ring.hpp"
+#include "program/allocation_counter.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {

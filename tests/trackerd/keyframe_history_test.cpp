@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "program/allocation_counter.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
+#include "program/allocation_counter.hpp"
 
 namespace cvo::daemon::trackerd {
 namespace {

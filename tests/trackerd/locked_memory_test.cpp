@@ -23,7 +23,9 @@ constexpr std::size_t kBytes = std::size_t{32} << 20;
 
 // An anonymous mapping of its own, as the tracker's large buffers are (malloc maps them).
 struct Mapping {
-  Mapping() : data(static_cast<std::uint8_t*>(mmap(nullptr, kBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0))) {}
+  Mapping()
+      : data(static_cast<std::uint8_t*>(
+            mmap(nullptr, kBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0))) {}
   ~Mapping() { munmap(data, kBytes); }
   Mapping(const Mapping&) = delete;
   Mapping& operator=(const Mapping&) = delete;

@@ -69,15 +69,18 @@ std::int64_t logged_session(const fs::path& stderr_file) {
 Replay replay(const fs::path& dir, const fs::path& recording, const std::string& name, const MapsFor& maps) {
   Replay r;
   const auto out = dir / (name + ".lcmlog");
-  DaemonProcess logger(which("lcm-logger"), {"--lcm-url=" + std::string(kUrl), "-c", "CVO_(POSE|KEYFRAME|LOCAL_GRAPH|STATUS)", "-f", out.string()},
-                       dir / (name + ".logger.txt"));
+  DaemonProcess logger(
+      which("lcm-logger"),
+      {"--lcm-url=" + std::string(kUrl), "-c", "CVO_(POSE|KEYFRAME|LOCAL_GRAPH|STATUS)", "-f", out.string()},
+      dir / (name + ".logger.txt"));
   DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
                          {"--source", std::string("lcm:") + kUrl, "--lcm-url", kUrl, "--deterministic", "--set",
                           "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
                          dir / (name + ".trackerd.txt"));
   std::this_thread::sleep_for(scaled(700ms));  // both subscribed
   r.session = logged_session(dir / (name + ".trackerd.txt"));
-  DaemonProcess player(which("lcm-logplayer"), {"--lcm-url=" + std::string(kUrl), "-s", std::to_string(0.5 / kSlowdown), recording.string()},
+  DaemonProcess player(which("lcm-logplayer"),
+                       {"--lcm-url=" + std::string(kUrl), "-s", std::to_string(0.5 / kSlowdown), recording.string()},
                        dir / (name + ".player.txt"));
   std::this_thread::sleep_for(scaled(500ms));
   ::lcm::LCM lcm(kUrl);
@@ -187,7 +190,7 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   // be applied), and one says it is schema version 1: refused and counted, never applied.
   const auto second = replay(dir.path(), recording, "second", [&](std::int64_t session) {
     return std::vector<std::vector<std::uint8_t>>{map_message(1, {{session, true, session, 1, 0, placed}}, 1),
-                                                   map_message(1, {{session, false, session, 1, -1, elsewhere}})};
+                                                  map_message(1, {{session, false, session, 1, -1, elsewhere}})};
   });
   EXPECT_EQ(second.trackerd_exit, 0);
   expect_one_complete_session(second);

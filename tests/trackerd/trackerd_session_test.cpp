@@ -69,8 +69,9 @@ TEST(TrackerdSessions, CameraThatComesBackIsANewSessionFromFrameZero) {
   int opened = 0;
   const auto camera = [&opened]() -> std::unique_ptr<drivers::FrameSource> {
     const bool first = opened++ == 0;
-    return std::make_unique<ScriptedCamera>(first ? 0 : kPerConnection, kPerConnection,
-                                            first ? drivers::ReadStatus::kDisconnected : drivers::ReadStatus::kEndOfStream);
+    return std::make_unique<ScriptedCamera>(
+        first ? 0 : kPerConnection, kPerConnection,
+        first ? drivers::ReadStatus::kDisconnected : drivers::ReadStatus::kEndOfStream);
   };
   block_stop_signals();
   ::testing::internal::CaptureStderr();

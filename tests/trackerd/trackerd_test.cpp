@@ -25,10 +25,10 @@
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
-#include "tests/support/daemon_process.hpp"
-#include "tests/support/lcm_log.hpp"
 #include "tests/lcm/image_bombs.hpp"
 #include "tests/support/cli_contract.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/slowdown.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -46,8 +46,10 @@ const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
 // Settings every test uses: no realtime priority or locked memory (tests share a small machine),
 // results into an LCM log file.
 std::vector<std::string> base_args(const fs::path& out_log) {
-  return {"--lcm-url", "file://" + out_log.string() + "?mode=w", "--set", "trackerd.realtime_priority=0",
-          "--set", "trackerd.lock_memory=false", "--set", "trackerd.paced=false"};
+  return {"--lcm-url", "file://" + out_log.string() + "?mode=w",
+          "--set",     "trackerd.realtime_priority=0",
+          "--set",     "trackerd.lock_memory=false",
+          "--set",     "trackerd.paced=false"};
 }
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
@@ -91,7 +93,8 @@ fs::path record_clip(const fs::path& dir) {
 TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   cvo::test::TempDir dir;
   const auto out = dir.path() / "out.lcmlog";
-  DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic"}),
+  DaemonProcess d(kTrackerd,
+                  with(base_args(out), {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic"}),
                   dir.path() / "stderr.txt");
   const auto code = d.wait_for(120s);
   ASSERT_TRUE(code) << "still running";
@@ -101,7 +104,8 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   ASSERT_EQ(log.poses.size(), 50u) << "every frame of the clip gets a pose";
   for (std::size_t i = 0; i < log.poses.size(); ++i) {
     EXPECT_EQ(log.poses[i].frame_index, static_cast<std::int64_t>(i));
-    EXPECT_TRUE(log.poses[i].status == cvo_lcm::pose_t::STATUS_OK || log.poses[i].status == cvo_lcm::pose_t::STATUS_FIRST_FRAME)
+    EXPECT_TRUE(log.poses[i].status == cvo_lcm::pose_t::STATUS_OK ||
+                log.poses[i].status == cvo_lcm::pose_t::STATUS_FIRST_FRAME)
         << "frame " << i;
     EXPECT_GE(log.poses[i].latency_ms, 0);
   }
@@ -154,8 +158,9 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   EXPECT_LT(ate.error.rmse, 0.06);
 
   // cvo-log turns the recording into what scripts use: a TUM trajectory and the last status.
-  const auto poses = cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(out) + " --out " +
-                                                           cvo::testing::quoted(dir.path() / "t.txt"), dir.path());
+  const auto poses = cvo::testing::run_tool(
+      "cvo-log", "poses " + cvo::testing::quoted(out) + " --out " + cvo::testing::quoted(dir.path() / "t.txt"),
+      dir.path());
   ASSERT_EQ(poses.exit_code, 0) << poses.err;
   EXPECT_EQ(io::read_tum_trajectory(dir.path() / "t.txt").size(), 50u);
   const auto status = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(out) + " --json", dir.path());
@@ -166,8 +171,12 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   const auto text = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(out), dir.path());
   ASSERT_EQ(text.exit_code, 0) << text.err;
   EXPECT_NE(text.out.find("session: " + hex(session)), std::string::npos) << text.out;
-  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n"), std::string::npos) << "all fourteen kinds\n" << text.out;
-  EXPECT_EQ(cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(dir.path() / "missing.lcm") + " --out x", dir.path()).exit_code, 1);
+  EXPECT_NE(text.out.find("bad_messages: 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n"), std::string::npos) << "all fourteen kinds\n"
+                                                                                             << text.out;
+  EXPECT_EQ(cvo::testing::run_tool("cvo-log", "poses " + cvo::testing::quoted(dir.path() / "missing.lcm") + " --out x",
+                                   dir.path())
+                .exit_code,
+            1);
   EXPECT_EQ(cvo::testing::run_tool("cvo-log", "frobnicate", dir.path()).exit_code, 2);
 }
 
@@ -223,28 +232,31 @@ TEST(Trackerd, BadMessagesAreCountedAndSkipped) {
       const auto good = lcm::encode(*lcm::to_message(frame, png, nullptr));
       write(good);
       switch (i) {
-        case 2: write({1, 2, 3}); break;                                         // too short
-        case 3: write(std::vector<std::uint8_t>(good.begin(), good.begin() + static_cast<long>(good.size() / 2))); break;  // truncated
-        case 4: {                                                                // oversized: trailing bytes
+        case 2: write({1, 2, 3}); break;  // too short
+        case 3:
+          write(std::vector<std::uint8_t>(good.begin(), good.begin() + static_cast<long>(good.size() / 2)));
+          break;   // truncated
+        case 4: {  // oversized: trailing bytes
           auto big = good;
           big.resize(big.size() + 100, 0);
           write(big);
           break;
         }
-        case 5: {                                                                // a foreign type
+        case 5: {  // a foreign type
           cvo_lcm::pose3d_t p{};
           p.orientation[0] = 1;
           write(lcm::encode(p));
           break;
         }
-        case 6: {                                                                // another schema version
+        case 6: {  // another schema version
           auto m = *lcm::to_message(frame, png, nullptr);
           m.version = 99;
           write(lcm::encode(m));
           break;
         }
-        case 7: {                                                                // raw colour of the wrong size
-          auto m = *lcm::to_message(frame, lcm::RgbdEncoding{lcm::ColourEncoding::kRawBgr8, lcm::DepthEncoding::kPng}, nullptr);
+        case 7: {  // raw colour of the wrong size
+          auto m = *lcm::to_message(frame, lcm::RgbdEncoding{lcm::ColourEncoding::kRawBgr8, lcm::DepthEncoding::kPng},
+                                    nullptr);
           m.colour.resize(m.colour.size() - 30);
           m.colour_size = static_cast<std::int32_t>(m.colour.size());
           write(lcm::encode(m));
@@ -263,7 +275,8 @@ TEST(Trackerd, BadMessagesAreCountedAndSkipped) {
 
   const auto out = dir.path() / "out.lcmlog";
   DaemonProcess d(kTrackerd,
-                  with(base_args(out), {"--source", "lcm:file://" + log_path.string() + "?speed=0", "--exit-on-eof", "--deterministic"}),
+                  with(base_args(out), {"--source", "lcm:file://" + log_path.string() + "?speed=0", "--exit-on-eof",
+                                        "--deterministic"}),
                   dir.path() / "stderr.txt");
   const auto code = d.wait_for(60s);
   ASSERT_TRUE(code);
@@ -289,8 +302,8 @@ TEST(Trackerd, ShutdownUnderLoadIsCleanAndFastAndDropsAreCounted) {
   const auto recording = record_clip(dir.path());
   const auto out = dir.path() / "out.lcmlog";
   DaemonProcess d(kTrackerd,
-                  with(base_args(out), {"--source", "lcm:file://" + recording.string() + "?speed=0", "--set",
-                                        "trackerd.ring_slots=1"}),
+                  with(base_args(out),
+                       {"--source", "lcm:file://" + recording.string() + "?speed=0", "--set", "trackerd.ring_slots=1"}),
                   dir.path() / "stderr.txt");
   std::this_thread::sleep_for(1500ms);
   ASSERT_TRUE(d.running()) << cvo::testing::slurp(dir.path() / "stderr.txt");
@@ -309,7 +322,8 @@ TEST(Trackerd, ShutdownUnderLoadIsCleanAndFastAndDropsAreCounted) {
   // Frames still unread at SIGTERM are neither: the recording simply stopped being played.
   EXPECT_LE(log.poses.size() + static_cast<std::size_t>(log.statuses.back().dropped_frames), 50u);
   EXPECT_NE(err.find("tracked " + std::to_string(log.poses.size()) + " frames"), std::string::npos)
-      << "every tracked frame's pose was flushed before exit\n" << err;
+      << "every tracked frame's pose was flushed before exit\n"
+      << err;
 }
 
 // SIGHUP (a terminal closing, or `systemctl kill -s HUP`) is a stop like SIGTERM: exit 0, the open
@@ -509,8 +523,8 @@ Replayed replay_recording(const fs::path& dir, const fs::path& recording, const 
   const auto out = dir / (name + ".out.lcmlog");
   const auto err = dir / (name + ".stderr.txt");
   DaemonProcess d(kTrackerd,
-                  with(with(base_args(out), {"--source", "lcm:file://" + recording.string() + "?speed=0", "--exit-on-eof",
-                                             "--deterministic"}),
+                  with(with(base_args(out), {"--source", "lcm:file://" + recording.string() + "?speed=0",
+                                             "--exit-on-eof", "--deterministic"}),
                        extra),
                   err);
   Replayed r;
@@ -617,13 +631,15 @@ TEST(Trackerd, ACameraOfAnotherSizeIsTrackedAfterAFewFrames) {
   ASSERT_FALSE(clip.empty());
   EXPECT_EQ(clip.front().frame_index, 0) << "frame indices count from 0 in the new session";
   EXPECT_EQ(clip.back().frame_index, static_cast<std::int64_t>(clip.size()));  // the lone frame took an index
-  const auto tracked = std::count_if(clip.begin(), clip.end(), [](const auto& p) { return p.status == cvo_lcm::pose_t::STATUS_OK; });
+  const auto tracked =
+      std::count_if(clip.begin(), clip.end(), [](const auto& p) { return p.status == cvo_lcm::pose_t::STATUS_OK; });
   EXPECT_EQ(static_cast<std::size_t>(tracked), clip.size() - 1) << "all but the first registered";
   ASSERT_FALSE(r.log.statuses.empty());
   const auto& s = r.log.statuses.back();
   EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_CONTENT], (kChangeFrames - 1) + 1)
       << "4 clip frames before the change, and the lone 8x6 frame";
-  EXPECT_EQ(s.allocations_after_warmup, 0) << "the new pipeline's allocations are the camera change's, then warm-up again";
+  EXPECT_EQ(s.allocations_after_warmup, 0)
+      << "the new pipeline's allocations are the camera change's, then warm-up again";
   const auto note = r.err.find("camera changed (8x6 to 640x480");
   ASSERT_NE(note, std::string::npos) << r.err;
   std::printf("%s\n", r.err.substr(note, r.err.find('\n', note) - note).c_str());
@@ -641,9 +657,9 @@ TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
   early.keyframes = {{kFirst, 0, 100.0, at(9)}};
   slam::Map last;
   last.revision = 2;
-  last.sessions = {{kFirst, true, kFirst, 2, 0, {}}, {kJoined, true, kFirst, 2, 1, at(1)},
-                   {kAlone, false, kAlone, 3, -1, at(5)}};
-  last.keyframes = {{kFirst, 0, 100.0, at(1)}, {kFirst, 1, 103.0, at(2)}, {kJoined, 0, 101.5, at(3)},
+  last.sessions = {
+      {kFirst, true, kFirst, 2, 0, {}}, {kJoined, true, kFirst, 2, 1, at(1)}, {kAlone, false, kAlone, 3, -1, at(5)}};
+  last.keyframes = {{kFirst, 0, 100.0, at(1)},  {kFirst, 1, 103.0, at(2)}, {kJoined, 0, 101.5, at(3)},
                     {kJoined, 1, 104.0, at(4)}, {kAlone, 0, 100.5, at(7)}, {kAlone, 1, 102.0, at(7)},
                     {kAlone, 2, 105.0, at(7)}};
   const auto log_path = dir.path() / "map.lcmlog";
@@ -671,7 +687,8 @@ TEST(CvoLog, MapWritesTheLastMapsPlacedKeyframesSortedByTime) {
     EXPECT_NEAR(written[i].timestamp, expected[i].first, 1e-6) << i;
     EXPECT_NEAR(written[i].pose.translation().x(), expected[i].second, 1e-9) << i;
   }
-  EXPECT_NE(r.err.find("session " + hex(kAlone) + " not placed in the map: its 3 keyframes left out"), std::string::npos)
+  EXPECT_NE(r.err.find("session " + hex(kAlone) + " not placed in the map: its 3 keyframes left out"),
+            std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("skipped"), std::string::npos) << "the broken event is reported\n" << r.err;
 

@@ -30,11 +30,11 @@ const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
 cvo::testing::PublishedLog track(const fs::path& dir, const std::string& name, const std::string& source) {
   const auto out = dir / (name + ".lcmlog");
   const auto err = dir / (name + ".txt");
-  cvo::testing::DaemonProcess d(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
-                                {"--source", source, "--exit-on-eof", "--deterministic", "--lcm-url",
-                                 "file://" + out.string() + "?mode=w", "--set", "trackerd.realtime_priority=0", "--set",
-                                 "trackerd.lock_memory=false", "--set", "trackerd.paced=false"},
-                                err);
+  cvo::testing::DaemonProcess d(
+      fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
+      {"--source", source, "--exit-on-eof", "--deterministic", "--lcm-url", "file://" + out.string() + "?mode=w",
+       "--set", "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false", "--set", "trackerd.paced=false"},
+      err);
   const auto code = d.wait_for(120s);
   EXPECT_TRUE(code) << name << " still running";
   EXPECT_EQ(code.value_or(-9), 0) << cvo::testing::slurp(err);

@@ -105,8 +105,7 @@ void print_table(const Arguments& args, std::size_t gt_poses, std::size_t est_po
               args.estimate.c_str(), est_poses);
   std::printf("%-20s %11s %11s %11s %11s  %s\n", "", "rmse", "mean", "median", "max", "pairs");
   const auto row = [](const std::string& name, const eval::ErrorStatistics& s, const std::string& note) {
-    std::printf("%-20s %11.6f %11.6f %11.6f %11.6f  %s\n", name.c_str(), s.rmse, s.mean, s.median, s.max,
-                note.c_str());
+    std::printf("%-20s %11.6f %11.6f %11.6f %11.6f  %s\n", name.c_str(), s.rmse, s.mean, s.median, s.max, note.c_str());
   };
   char note[96];
   std::snprintf(note, sizeof note, "%zu (|dt| < %g s)", ate.pairs.size(), args.max_dt);
@@ -137,8 +136,7 @@ int run(const Arguments& args) {
   } catch (const std::invalid_argument& e) {
     std::cerr << "cvo-eval: warning: " << args.estimate.string() << ": no RPE: " << e.what() << "\n";
   }
-  if (args.plot)
-    eval::write_evaluation_plot(*args.plot, gt, est, ate, {.title = args.estimate.filename().string()});
+  if (args.plot) eval::write_evaluation_plot(*args.plot, gt, est, ate, {.title = args.estimate.filename().string()});
   if (args.json)
     print_json(args, ate, rpe);
   else

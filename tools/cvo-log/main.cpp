@@ -68,8 +68,8 @@ void add_commands(CLI::App& app, Arguments& args) {
   CLI::App* map = add_command(app, "map", "the last CVO_MAP of LOG as a TUM trajectory of its placed keyframes",
                               "cvo-log map LOG --out TRAJ.txt", args);
   map->add_option("--out", args.out, "the TUM trajectory to write")->required()->type_name("TRAJ.txt");
-  CLI::App* status = add_command(app, "status", "the last CVO_STATUS of each process in LOG",
-                                 "cvo-log status LOG [--json]", args);
+  CLI::App* status =
+      add_command(app, "status", "the last CVO_STATUS of each process in LOG", "cvo-log status LOG [--json]", args);
   status->add_flag("--json", args.json, "one JSON object keyed by process, with the status_t field names");
   app.require_subcommand(1);
 }
@@ -84,7 +84,8 @@ void for_each_event(const fs::path& file, Visit visit) {
 
 // Bad events are named (the first ten) and skipped.
 void skipped(const Arguments& a, const ::lcm::LogEvent& e, const std::string& error, int& bad) {
-  if (++bad <= 10) std::cerr << "cvo-log: " << a.log.string() << ": event " << e.eventnum << " skipped: " << error << "\n";
+  if (++bad <= 10)
+    std::cerr << "cvo-log: " << a.log.string() << ": event " << e.eventnum << " skipped: " << error << "\n";
 }
 
 int write_poses(const Arguments& a) {
@@ -122,16 +123,16 @@ int write_map(const Arguments& a) {
   for (const auto& session : last->sessions) {
     const auto in_session = [&](const slam::MapKeyframe& k) { return k.session == session.session; };
     if (!session.placed) {
-      std::cerr << "cvo-log: session " << core::session_name(session.session)
-                << " not placed in the map: its " << std::count_if(last->keyframes.begin(), last->keyframes.end(), in_session)
-                << " keyframes left out\n";
+      std::cerr << "cvo-log: session " << core::session_name(session.session) << " not placed in the map: its "
+                << std::count_if(last->keyframes.begin(), last->keyframes.end(), in_session) << " keyframes left out\n";
       continue;
     }
     for (const auto& k : last->keyframes)
       if (in_session(k)) trajectory.push_back({k.timestamp, k.pose});
   }
   if (trajectory.empty())
-    throw io::InputError(a.log, "the last CVO_MAP (revision " + std::to_string(last->revision) + ") places no keyframe");
+    throw io::InputError(a.log,
+                         "the last CVO_MAP (revision " + std::to_string(last->revision) + ") places no keyframe");
   std::stable_sort(trajectory.begin(), trajectory.end(),
                    [](const core::StampedPose& x, const core::StampedPose& y) { return x.timestamp < y.timestamp; });
   io::write_tum_trajectory(a.out, trajectory);
@@ -189,8 +190,10 @@ int print_statuses(const Arguments& a) {
   for_each_event(a.log, [&](const ::lcm::LogEvent& e) {
     if (e.channel != "CVO_STATUS") return;
     std::string error;
-    if (auto m = cvo::lcm::decode<cvo_lcm::status_t>(e.data, e.datalen, &error)) last[m->process] = std::move(*m);
-    else skipped(a, e, error, bad);
+    if (auto m = cvo::lcm::decode<cvo_lcm::status_t>(e.data, e.datalen, &error))
+      last[m->process] = std::move(*m);
+    else
+      skipped(a, e, error, bad);
   });
   if (last.empty()) throw io::InputError(a.log, "no CVO_STATUS messages");
   program::Json statuses;

@@ -47,9 +47,15 @@ int run(const Arguments& args) {
   std::string why = "stopped";
   while (g_stop == 0 && (args.frames == 0 || recorded < args.frames)) {
     const auto r = source->read(frame, std::chrono::milliseconds(200));
-    if (r.status == drivers::ReadStatus::kFrame) ++recorded;
-    else if (r.status == drivers::ReadStatus::kEndOfStream) { why = "the device ended"; break; }
-    else if (r.status == drivers::ReadStatus::kDisconnected) { why = r.message; break; }
+    if (r.status == drivers::ReadStatus::kFrame)
+      ++recorded;
+    else if (r.status == drivers::ReadStatus::kEndOfStream) {
+      why = "the device ended";
+      break;
+    } else if (r.status == drivers::ReadStatus::kDisconnected) {
+      why = r.message;
+      break;
+    }
   }
   if (args.frames != 0 && recorded == args.frames) why = "--frames reached";
   std::printf("recorded %llu frames of %s into %s (%s)\n", static_cast<unsigned long long>(recorded),
@@ -65,7 +71,6 @@ int main(int argc, char** argv) {
   program::describe(app, "cvo-oni-record URI OUT.oni [--frames N]");
   app.add_option("URI", args.uri, "the OpenNI2 device")->required();
   app.add_option("OUT.oni", args.out, "the recording to write")->required();
-  app.add_option("--frames", args.frames, "stop after N frames (0: at the device's end)")
-      ->transform(program::kDecimal);
+  app.add_option("--frames", args.frames, "stop after N frames (0: at the device's end)")->transform(program::kDecimal);
   return program::cli_main(app, argc, argv, [&] { return run(args); });
 }

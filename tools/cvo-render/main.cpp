@@ -30,8 +30,8 @@ constexpr const char* kNotes = "The same arguments always give byte-identical fi
 struct Arguments {
   std::string out_dir;
   std::string scene{sim::scene_name(sim::SequenceOptions{}.scene)};
-  std::optional<std::string> path;     // default: the scene's
-  std::optional<std::size_t> frames;   // default: one period of the path
+  std::optional<std::string> path;    // default: the scene's
+  std::optional<std::size_t> frames;  // default: one period of the path
   std::uint64_t seed = 0;
   bool noise = false;
   double readout_s = 0;
@@ -72,12 +72,13 @@ int run(const Arguments& args) {
   const auto start = std::chrono::steady_clock::now();
   const sim::SequenceSummary summary = sim::write_sequence(args.out_dir, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("cvo-render: %zu frames (%s, %s, seed %llu, noise %s; %.1f s of motion, %.2f m, %.1f%% valid depth) "
-              "-> %s in %.1f s\n",
-              summary.frames, std::string(sim::scene_name(options.scene)).c_str(),
-              std::string(sim::path_name(options.path)).c_str(), static_cast<unsigned long long>(options.seed),
-              options.noise.enabled ? "on" : "off", summary.duration_s, summary.path_length_m,
-              100.0 * summary.valid_depth_fraction, args.out_dir.c_str(), seconds);
+  std::printf(
+      "cvo-render: %zu frames (%s, %s, seed %llu, noise %s; %.1f s of motion, %.2f m, %.1f%% valid depth) "
+      "-> %s in %.1f s\n",
+      summary.frames, std::string(sim::scene_name(options.scene)).c_str(),
+      std::string(sim::path_name(options.path)).c_str(), static_cast<unsigned long long>(options.seed),
+      options.noise.enabled ? "on" : "off", summary.duration_s, summary.path_length_m,
+      100.0 * summary.valid_depth_fraction, args.out_dir.c_str(), seconds);
   return 0;
 }
 

@@ -140,7 +140,8 @@ std::optional<core::Intrinsics> choose_camera(const Arguments& args, const confi
 
 // --vocabulary, else the default (an InputError when the file is missing or bad).
 loop_closure::Vocabulary load_vocabulary(const Arguments& args) {
-  return loop_closure::Vocabulary::load(args.vocabulary ? fs::path(*args.vocabulary) : loop_closure::default_vocabulary_file());
+  return loop_closure::Vocabulary::load(args.vocabulary ? fs::path(*args.vocabulary)
+                                                        : loop_closure::default_vocabulary_file());
 }
 
 // One tracker per mode; a mode is one more alternative and one more branch. The slam mode is
@@ -199,8 +200,9 @@ core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::T
     all.insert(all.end(), gt.begin(), gt.end());
   }
   std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.timestamp < b.timestamp; });
-  all.erase(std::unique(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.timestamp == b.timestamp; }),
-            all.end());
+  all.erase(
+      std::unique(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.timestamp == b.timestamp; }),
+      all.end());
   return all;
 }
 
@@ -257,7 +259,8 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
     const auto& camera = sequences[k].intrinsics();
     pipeline.begin_session(session, camera.width, camera.height);
     tools::SessionEntry entry{args.sequences[k].string(), session, report.frames, 0, false, std::nullopt};
-    odometry[k] = stream(sequences[k], [&](const core::RgbdFrame& f) { return pipeline.track(f); }, report, entry.keyframes);
+    odometry[k] = stream(
+        sequences[k], [&](const core::RgbdFrame& f) { return pipeline.track(f); }, report, entry.keyframes);
     entry.frames = report.frames - entry.frames;
     report.keyframes += entry.keyframes;
     report.slam->sessions.push_back(entry);
@@ -317,8 +320,8 @@ void evaluate(const Arguments& args, const core::Trajectory& groundtruth, const 
 
 int run(const Arguments& args) {
   if (args.sequences.size() > 1 && args.mode != "slam")
-    throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " + std::to_string(args.sequences.size()) +
-                     " for mode '" + args.mode + "'");
+    throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " +
+                     std::to_string(args.sequences.size()) + " for mode '" + args.mode + "'");
   const config::Config config = make_config(args);
   std::vector<io::TumSequence> sequences = open_sequences(args, config);
 
@@ -331,7 +334,8 @@ int run(const Arguments& args) {
   if (!std::ofstream(args.out)) throw io::InputError(args.out, "cannot write the trajectory here");
   report.mode = args.mode;
   // append(), not operator+ of short strings: GCC 12 warns falsely (-Wrestrict) on that.
-  for (const auto& folder : args.sequences) report.sequence.append(report.sequence.empty() ? "" : " ").append(folder.string());
+  for (const auto& folder : args.sequences)
+    report.sequence.append(report.sequence.empty() ? "" : " ").append(folder.string());
   report.trajectory = args.out.string();
 
   core::Trajectory trajectory;
@@ -339,8 +343,12 @@ int run(const Arguments& args) {
     trajectory = run_slam(args, config, sequences, groundtruth, report);
   } else {
     Tracker tracker = make_tracker(args, config, sequences.front().intrinsics());
-    trajectory = stream(sequences.front(), [&](const core::RgbdFrame& f) { return std::visit([&](auto& t) -> odometry::TrackResult { return t.track(f); }, tracker); },
-                        report, report.keyframes);
+    trajectory = stream(
+        sequences.front(),
+        [&](const core::RgbdFrame& f) {
+          return std::visit([&](auto& t) -> odometry::TrackResult { return t.track(f); }, tracker);
+        },
+        report, report.keyframes);
   }
   if (trajectory.empty() && (report.slam == std::nullopt || report.frames == report.failed.size())) {
     io::write_tum_trajectory(args.out, trajectory);

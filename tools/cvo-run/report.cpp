@@ -79,12 +79,13 @@ void print_text(std::FILE* out, const RunReport& r) {
   if (!r.points.empty()) std::fprintf(out, "points      median %.0f per frame\n", median(r.points));
   if (!r.iterations.empty()) std::fprintf(out, "iterations  median %.0f per registration\n", median(r.iterations));
   if (r.slam) {
-    const auto outliers = std::count_if(r.slam->loops.begin(), r.slam->loops.end(),
-                                        [](const LoopEntry& l) { return l.weight < 0.1; });
+    const auto outliers =
+        std::count_if(r.slam->loops.begin(), r.slam->loops.end(), [](const LoopEntry& l) { return l.weight < 0.1; });
     std::fprintf(out, "loops       %zu accepted of %zu tried, %td down-weighted (Cauchy weight < 0.1)\n",
                  r.slam->loops_accepted, r.slam->loops_tried, outliers);
-    std::fprintf(out, "back end    %.0f ms in the run (local graphs, loop detection, keyframe optimisations), final %.0f ms\n",
-                 r.slam->backend_ms, r.slam->final_optimisation_ms);
+    std::fprintf(
+        out, "back end    %.0f ms in the run (local graphs, loop detection, keyframe optimisations), final %.0f ms\n",
+        r.slam->backend_ms, r.slam->final_optimisation_ms);
     if (r.slam->sessions.size() > 1)
       for (const auto& s : r.slam->sessions) {
         const std::string at = s.joined_at_keyframe ? " at its keyframe " + std::to_string(*s.joined_at_keyframe) : "";

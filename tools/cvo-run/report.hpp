@@ -42,33 +42,32 @@ struct SessionEntry {
 /// What --mode slam adds: loops, the back end's time, and kf-cvo's own ATE on the same run.
 struct SlamReport {
   std::size_t loops_accepted = 0;
-  std::size_t loops_tried = 0;              // candidates verified (matches, RANSAC, CVO, α)
-  double backend_ms = 0;                    // local graphs, loop detection, keyframe optimisations
-  double final_optimisation_ms = 0;         // the last local graph and the global optimisation
+  std::size_t loops_tried = 0;                  // candidates verified (matches, RANSAC, CVO, α)
+  double backend_ms = 0;                        // local graphs, loop detection, keyframe optimisations
+  double final_optimisation_ms = 0;             // the last local graph and the global optimisation
   std::optional<eval::AteResult> ate_odometry;  // of the tracker's poses, before the back end
-  std::vector<LoopEntry> loops;             // in acceptance order
-  std::vector<SessionEntry> sessions;       // one per folder, in order
+  std::vector<LoopEntry> loops;                 // in acceptance order
+  std::vector<SessionEntry> sessions;           // one per folder, in order
 };
 
 struct RunReport {
   std::string mode;
   std::string sequence, trajectory;
-  std::string groundtruth;     // where the ground truth came from; empty when there was none
-  std::size_t frames = 0;      // frames of the sequence attempted, unreadable ones included
-  std::size_t poses = 0;       // lines written to the trajectory
-  std::size_t keyframes = 0;   // 0 in frame-to-frame mode, which has no keyframes
+  std::string groundtruth;    // where the ground truth came from; empty when there was none
+  std::size_t frames = 0;     // frames of the sequence attempted, unreadable ones included
+  std::size_t poses = 0;      // lines written to the trajectory
+  std::size_t keyframes = 0;  // 0 in frame-to-frame mode, which has no keyframes
   std::vector<FailedFrame> failed;
-  std::vector<double> track_ms;         // whole track() step, per frame tracked
-  std::vector<double> points;           // selected per frame tracked
-  std::vector<double> iterations;       // per registration run
-  double wall_s = 0;                    // the whole loop, reading images included
-  std::optional<eval::AteResult> ate;   // with ground truth (and >= 3 associated poses)
-  std::optional<eval::RpeResult> rpe;   // with ground truth (and >= 2 pairs 1 s apart)
-  std::optional<SlamReport> slam;       // --mode slam only
+  std::vector<double> track_ms;        // whole track() step, per frame tracked
+  std::vector<double> points;          // selected per frame tracked
+  std::vector<double> iterations;      // per registration run
+  double wall_s = 0;                   // the whole loop, reading images included
+  std::optional<eval::AteResult> ate;  // with ground truth (and >= 3 associated poses)
+  std::optional<eval::RpeResult> rpe;  // with ground truth (and >= 2 pairs 1 s apart)
+  std::optional<SlamReport> slam;      // --mode slam only
 };
 
 void print_text(std::FILE* out, const RunReport& report);
 program::Json to_json(const RunReport& report);
-
 
 }  // namespace cvo::tools

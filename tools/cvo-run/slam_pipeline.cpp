@@ -44,7 +44,8 @@ odometry::TrackResult SlamPipeline::track(const core::RgbdFrame& frame) {
 
 void SlamPipeline::end_session() {
   if (!session_) return;
-  if (const auto open = session_->tracker.finish()) mapper_.add_local_graph(session_->id, open->keyframe_id, *open->graph);
+  if (const auto open = session_->tracker.finish())
+    mapper_.add_local_graph(session_->id, open->keyframe_id, *open->graph);
   session_.reset();
 }
 

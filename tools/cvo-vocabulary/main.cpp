@@ -36,11 +36,12 @@ constexpr const char* kTrainNotes =
 images), written to OUT.voc. Each INPUT is an image file, a TUM-layout folder (its rgb.txt is read)
 or a folder of image files. The same images and options always give the same file.)";
 
-constexpr const char* kInfoDescription = "Loads FILE.voc, verifies it (format, checksum, tree) and prints what it holds.";
+constexpr const char* kInfoDescription =
+    "Loads FILE.voc, verifies it (format, checksum, tree) and prints what it holds.";
 
 struct Arguments {
   std::string command;
-  fs::path file;               // OUT.voc or FILE.voc
+  fs::path file;  // OUT.voc or FILE.voc
   std::vector<fs::path> inputs;
   loop_closure::VocabularyParameters vocabulary;
   core::LoopVerificationParameters orb;  // its orb_* (extract_orb)

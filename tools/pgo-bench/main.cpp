@@ -9,10 +9,10 @@
 // The two solvers minimise nearly the same residual (Ceres' example: [R_a^T (p_b - p_a) - p_ab;
 // 2 vec(q_ab q_est^-1)], error in a's frame; ours, posegraph/residual.hpp: [t_E; 2 vec(q_E)] of
 // E = T_ab^-1 T_a^-1 T_b, error in the measured b's frame). With an anisotropic information matrix
-// the two frames weigh differently, so their own final costs are not exactly comparable. Every cost this tool prints is therefore posegraph::cost() evaluated on each
-// solver's final poses: 1/2 sum rho(e^T Omega e) with our residual. Ceres' own figure is in the
-// JSON as solver_cost. --robust puts a Cauchy kernel (delta = 2, Ceres' CauchyLoss(2)) on every
-// edge in both.
+// the two frames weigh differently, so their own final costs are not exactly comparable. Every cost this tool prints is
+// therefore posegraph::cost() evaluated on each solver's final poses: 1/2 sum rho(e^T Omega e) with our residual.
+// Ceres' own figure is in the JSON as solver_cost. --robust puts a Cauchy kernel (delta = 2, Ceres' CauchyLoss(2)) on
+// every edge in both.
 //
 // Information matrices that are not positive semi-definite are repaired by the reader, with one
 // warning on standard error (g2o_io.hpp); --json counts them (repaired_information). CHOLMOD's
@@ -35,8 +35,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
+#include <Eigen/Eigenvalues>
 
 #include "libcvo/core/parameters.hpp"
 #include "libcvo/io/input_error.hpp"
@@ -134,8 +134,8 @@ Result run_ceres(PoseGraph graph, const Options& options) {
   ceres::EigenQuaternionManifold quaternion_manifold;
   const double delta = cvo::core::PoseGraphParameters{}.cauchy_delta;
   for (const Edge& e : graph.edges()) {
-    auto* cost = new ceres::AutoDiffCostFunction<PoseGraph3dErrorTerm, 6, 3, 4, 3, 4>(new PoseGraph3dErrorTerm{
-        e.measurement.translation(), e.measurement.rotation(), square_root(e.information)});
+    auto* cost = new ceres::AutoDiffCostFunction<PoseGraph3dErrorTerm, 6, 3, 4, 3, 4>(
+        new PoseGraph3dErrorTerm{e.measurement.translation(), e.measurement.rotation(), square_root(e.information)});
     ceres::LossFunction* loss = e.robust ? new ceres::CauchyLoss(delta) : nullptr;
     Block& a = blocks.at(e.from);
     Block& b = blocks.at(e.to);
@@ -243,14 +243,10 @@ program::Json report_json(const Options& options, const PoseGraph& graph, const 
   o["repeat"] = options.repeat;
   program::Json& solvers = o["solvers"] = program::Json::object();
   for (const Result& r : results)
-    solvers[r.solver] = {{"initial_cost", r.initial_cost},
-                         {"final_cost", r.final_cost},
-                         {"iterations", r.iterations},
-                         {"factorizations", r.factorizations},
-                         {"seconds", r.seconds},
-                         {"converged", r.converged},
-                         {"solver_cost", r.solver_cost},
-                         {"stop_reason", r.stop_reason}};
+    solvers[r.solver] = {{"initial_cost", r.initial_cost}, {"final_cost", r.final_cost},
+                         {"iterations", r.iterations},     {"factorizations", r.factorizations},
+                         {"seconds", r.seconds},           {"converged", r.converged},
+                         {"solver_cost", r.solver_cost},   {"stop_reason", r.stop_reason}};
   return o;
 }
 

@@ -26,7 +26,9 @@ const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
 // OpenNI once per test program, as the library allows.
 class OpenNiEnvironment : public ::testing::Environment {
  public:
-  void SetUp() override { ASSERT_EQ(openni::OpenNI::initialize(), openni::STATUS_OK) << openni::OpenNI::getExtendedError(); }
+  void SetUp() override {
+    ASSERT_EQ(openni::OpenNI::initialize(), openni::STATUS_OK) << openni::OpenNI::getExtendedError();
+  }
   void TearDown() override { openni::OpenNI::shutdown(); }
 };
 const auto* const kEnvironment = ::testing::AddGlobalTestEnvironment(new OpenNiEnvironment);

@@ -27,10 +27,10 @@
 #include "drivers/open_source.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/tum_dataset.hpp"
-#include "tests/support/daemon_process.hpp"
-#include "tests/support/lcm_log.hpp"
 #include "tests/drivers/tum_copy.hpp"
 #include "tests/support/cli_contract.hpp"
+#include "tests/support/daemon_process.hpp"
+#include "tests/support/lcm_log.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/slowdown.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -82,9 +82,9 @@ TrackerdRun run_trackerd(const fs::path& dir, const std::string& name, const std
   const auto out = dir / (name + ".lcmlog");
   const auto err = dir / (name + ".stderr");
   cvo::testing::DaemonProcess d(kTrackerd,
-                                {"--lcm-url", "file://" + out.string() + "?mode=w", "--set", "trackerd.realtime_priority=0",
-                                 "--set", "trackerd.lock_memory=false", "--set", "trackerd.paced=false", "--source", spec,
-                                 "--exit-on-eof", "--deterministic"},
+                                {"--lcm-url", "file://" + out.string() + "?mode=w", "--set",
+                                 "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false", "--set",
+                                 "trackerd.paced=false", "--source", spec, "--exit-on-eof", "--deterministic"},
                                 err, env);
   TrackerdRun run;
   const auto code = d.wait_for(300s);
@@ -108,7 +108,8 @@ void expect_same_poses(const std::vector<cvo_lcm::pose_t>& a, const std::vector<
     for (int c = 0; c < 3; ++c)
       worst_position = std::max(worst_position, std::abs(a[i].odom_pose.position[c] - b[i].odom_pose.position[c]));
     for (int c = 0; c < 4; ++c)
-      worst_orientation = std::max(worst_orientation, std::abs(a[i].odom_pose.orientation[c] - b[i].odom_pose.orientation[c]));
+      worst_orientation =
+          std::max(worst_orientation, std::abs(a[i].odom_pose.orientation[c] - b[i].odom_pose.orientation[c]));
   }
   std::printf("%s: %zu poses, largest difference %.3g m, %.3g in a quaternion component\n", what, a.size(),
               worst_position, worst_orientation);
@@ -182,7 +183,8 @@ TEST(VirtualDevice, AnOniRecordingHoldsTheFoldersFrames) {
   const auto folder = copy_with_camera(dir.path() / "fr1_copy", 5, k, true);
   const auto oni = dir.path() / "five.oni";
   const auto rec = cvo::testing::run_tool(
-      "cvo-oni-record", cvo::testing::quoted("cvo-virtual:" + folder.string()) + " " + cvo::testing::quoted(oni), dir.path());
+      "cvo-oni-record", cvo::testing::quoted("cvo-virtual:" + folder.string()) + " " + cvo::testing::quoted(oni),
+      dir.path());
   ASSERT_EQ(rec.exit_code, 0) << rec.err;
   SourceOptions options;
   options.realtime = false;
@@ -256,7 +258,8 @@ TEST(VirtualDevice, AnOniRecordingReplaysToTheSamePoses) {
   const auto folder = copy_with_camera(dir.path() / "fr1_centred", 50, camera(517.3, 516.5, 320, 240), true);
   const auto oni = dir.path() / "clip.oni";
   const auto rec = cvo::testing::run_tool(
-      "cvo-oni-record", cvo::testing::quoted("cvo-virtual:" + folder.string()) + " " + cvo::testing::quoted(oni), dir.path());
+      "cvo-oni-record", cvo::testing::quoted("cvo-virtual:" + folder.string()) + " " + cvo::testing::quoted(oni),
+      dir.path());
   ASSERT_EQ(rec.exit_code, 0) << rec.err;
   EXPECT_NE(rec.out.find("recorded 50 frames"), std::string::npos) << rec.out;
 
@@ -269,9 +272,10 @@ TEST(VirtualDevice, AnOniRecordingReplaysToTheSamePoses) {
   expect_same_poses(tum.log.poses, replay.log.poses, "tum vs .oni replay");
 
   // --frames stops early; a missing device is exit 1 naming it, a missing argument exit 2.
-  const auto five = cvo::testing::run_tool(
-      "cvo-oni-record", cvo::testing::quoted("cvo-virtual:" + folder.string()) + " " +
-                            cvo::testing::quoted(dir.path() / "five.oni") + " --frames 5", dir.path());
+  const auto five = cvo::testing::run_tool("cvo-oni-record",
+                                           cvo::testing::quoted("cvo-virtual:" + folder.string()) + " " +
+                                               cvo::testing::quoted(dir.path() / "five.oni") + " --frames 5",
+                                           dir.path());
   EXPECT_EQ(five.exit_code, 0) << five.err;
   EXPECT_NE(five.out.find("recorded 5 frames"), std::string::npos) << five.out;
   const auto missing = cvo::testing::run_tool("cvo-oni-record", "cvo-virtual:/nonexistent/fr1 x.oni", dir.path());
@@ -282,7 +286,8 @@ TEST(VirtualDevice, AnOniRecordingReplaysToTheSamePoses) {
 
 TEST(CvoOniRecord, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   cvo::test::TempDir dir;
-  cvo::testing::expect_cli_contract("cvo-oni-record", "", {"URI", "OUT.oni", "--frames", "cvo-virtual:DIR"}, dir.path());
+  cvo::testing::expect_cli_contract("cvo-oni-record", "", {"URI", "OUT.oni", "--frames", "cvo-virtual:DIR"},
+                                    dir.path());
 }
 
 TEST(VirtualDevice, UnplugAndReturnIsAGapAndANewSession) {
@@ -323,7 +328,8 @@ class NotifySocket {
       char buffer[4096];
       while (!stop_) {
         const auto n = ::recv(fd_, buffer, sizeof buffer, 0);
-        if (n > 0) received_.emplace_back(std::chrono::steady_clock::now(), std::string(buffer, static_cast<std::size_t>(n)));
+        if (n > 0)
+          received_.emplace_back(std::chrono::steady_clock::now(), std::string(buffer, static_cast<std::size_t>(n)));
       }
     });
   }

@@ -13,8 +13,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "tests/support/v4l2_emulator/stats.h"
 #include "libcvo/io/tum_dataset.hpp"
+#include "tests/support/v4l2_emulator/stats.h"
 
 namespace cvo::testing {
 

@@ -21,9 +21,9 @@
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
+#include "tests/drivers/v4l2_emulator/emulated.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
-#include "tests/drivers/v4l2_emulator/emulated.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/slowdown.hpp"
 #include "tests/support/temp_dir.hpp"
@@ -60,7 +60,8 @@ Run track(const std::string& camera, int departures) {
   cvo::test::TempDir dir;
   const auto out = dir.path() / "out.lcmlog", err = dir.path() / "stderr.txt";
   const std::string emulated = "colour=" + kNodes.substr(0, kNodes.find(',')) +
-                               ",depth=" + kNodes.substr(kNodes.find(',') + 1) + ",tum=" + cvo::testing::kEmulatedClip.string() +
+                               ",depth=" + kNodes.substr(kNodes.find(',') + 1) +
+                               ",tum=" + cvo::testing::kEmulatedClip.string() +
                                ",colour_size=640x480,depth_size=640x480,lossless=1,at_end=unplug" + camera;
   DaemonProcess d(kTrackerd,
                   {"--lcm-url", "file://" + out.string() + "?mode=w", "--set", "trackerd.realtime_priority=0", "--set",

@@ -11,9 +11,9 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <chrono>
 #include <cstring>
 #include <string>
 #include <thread>
@@ -41,9 +41,11 @@ constexpr const char* kCameras[][2] = {
     {"CVO_V4L2_EMULATOR", "colour=/dev/video90,depth=/dev/video91,depth_size=640x480,depth_fps=15"},
     {"CVO_V4L2_EMULATOR_2", "colour=/dev/video92,depth=/dev/video93,depth_size=640x480,colour_format=mjpeg"},
     {"CVO_V4L2_EMULATOR_3", "colour=/dev/video94,depth=/dev/video95"},
-    {"CVO_V4L2_EMULATOR_4", "colour=/dev/video96,depth=/dev/video97,depth_size=640x480,unplug_after=20,replug_after_s=0.3"},
+    {"CVO_V4L2_EMULATOR_4",
+     "colour=/dev/video96,depth=/dev/video97,depth_size=640x480,unplug_after=20,replug_after_s=0.3"},
     {"CVO_V4L2_EMULATOR_5", "colour=/dev/video98,depth=/dev/video99,depth_size=640x480"},
-    {"CVO_V4L2_EMULATOR_6", "colour=/dev/video100,depth=/dev/video101,depth_size=640x480,unplug_after=5,replug_after_s=-1"},
+    {"CVO_V4L2_EMULATOR_6",
+     "colour=/dev/video100,depth=/dev/video101,depth_size=640x480,unplug_after=5,replug_after_s=-1"},
     {"CVO_V4L2_EMULATOR_7", "colour=/dev/video102,depth=/dev/video103,depth_size=640x480,error_every=3"},
 };
 
@@ -90,7 +92,8 @@ ReadResult read_frame(FrameSource& source, core::RgbdFrame& frame) {
 }
 
 // Which clip entry each read frame shows: colour and depth must show the same one.
-void expect_frames_of_one_entry(FrameSource& source, const ClipImages& clip, int frames, std::vector<std::size_t>& entries) {
+void expect_frames_of_one_entry(FrameSource& source, const ClipImages& clip, int frames,
+                                std::vector<std::size_t>& entries) {
   core::RgbdFrame frame;
   for (int i = 0; i < frames; ++i) {
     const auto r = read_frame(source, frame);
@@ -208,7 +211,8 @@ TEST(EmulatedV4l2, UnplugIsDisconnectionAndTheCameraIsReopened) {
   EXPECT_EQ(after, 10) << "frames again after the camera came back";
   EXPECT_EQ(source.reconnects(), 1u);
   EXPECT_EQ(emulator_stats(node(kReplugs, 0)).unplugs, 1u);
-  EXPECT_TRUE(why.find(node(kReplugs, 0)) != std::string::npos || why.find(node(kReplugs, 1)) != std::string::npos) << why;
+  EXPECT_TRUE(why.find(node(kReplugs, 0)) != std::string::npos || why.find(node(kReplugs, 1)) != std::string::npos)
+      << why;
 }
 
 TEST(EmulatedV4l2, FrameTheDriverMarksCorruptIsBadInputAndStreamingGoesOn) {
@@ -221,7 +225,8 @@ TEST(EmulatedV4l2, FrameTheDriverMarksCorruptIsBadInputAndStreamingGoesOn) {
     if (r.status != ReadStatus::kBadInput) continue;
     ++corrupt;
     EXPECT_EQ(r.bad_input, core::BadKind::kContent);
-    EXPECT_NE(r.message.find(node(kCorrupt, 0) + ": the driver marks the frame corrupt"), std::string::npos) << r.message;
+    EXPECT_NE(r.message.find(node(kCorrupt, 0) + ": the driver marks the frame corrupt"), std::string::npos)
+        << r.message;
   }
   EXPECT_GE(frames, 6);
   EXPECT_GE(corrupt, 2) << "V4L2_BUF_FLAG_ERROR on every third colour frame";
@@ -245,7 +250,8 @@ TEST(EmulatedV4l2Config, ABadDescriptionIsReportedAndThatCameraIsNotEmulated) {
                           ",depth_fps=fast")
                 .find("cvo-v4l2-emulator: CVO_V4L2_EMULATOR ignored: depth_fps: 'fast' is not a number"),
             std::string::npos);
-  EXPECT_NE(emulator_says("colour=/dev/video120,tum=x").find("colour=, depth= and tum= are required"), std::string::npos);
+  EXPECT_NE(emulator_says("colour=/dev/video120,tum=x").find("colour=, depth= and tum= are required"),
+            std::string::npos);
   EXPECT_NE(emulator_says("colour=/dev/video120,depth=/dev/video121,tum=x,fps=30").find("'fps=30': expected key=value"),
             std::string::npos);
   EXPECT_NE(emulator_says("colour=/dev/video120,depth=/dev/video121,tum=/nonexistent")

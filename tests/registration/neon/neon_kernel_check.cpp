@@ -149,7 +149,8 @@ void trial(std::mt19937& rng, const std::vector<std::uint32_t>& lengths, Mode mo
       for (int d = 0; d < 3; ++d) mag[1 + d] += a * std::fabs(double(cols[d]->data()[i]) - w[d]);
     }
 
-  const FixedCloudView view{x.data(), y.data(), z.data(), {f[0]->data(), f[1]->data(), f[2]->data(), f[3]->data(), f[4]->data()}};
+  const FixedCloudView view{
+      x.data(), y.data(), z.data(), {f[0]->data(), f[1]->data(), f[2]->data(), f[3]->data(), f[4]->data()}};
   const int count = static_cast<int>(ranges.size());
   const PointSums s = point_scalar(view, ranges.data(), count, w, feature, k);
   const PointSums v = point_neon(view, ranges.data(), count, w, feature, k);
@@ -172,10 +173,11 @@ void trial(std::mt19937& rng, const std::vector<std::uint32_t>& lengths, Mode mo
     ++st.passed;
   } else {
     ++st.failed;
-    std::printf("FAIL %s mode=%s ranges=%d points=%zu pairs scalar=%u neon=%u expected=%u\n"
-                "     a %.9g vs %.9g  dx %.9g vs %.9g  dy %.9g vs %.9g  dz %.9g vs %.9g\n",
-                label, name(mode), count, logs.size(), s.pairs, v.pairs, expect_pairs, s.a, v.a, s.dx, v.dx, s.dy,
-                v.dy, s.dz, v.dz);
+    std::printf(
+        "FAIL %s mode=%s ranges=%d points=%zu pairs scalar=%u neon=%u expected=%u\n"
+        "     a %.9g vs %.9g  dx %.9g vs %.9g  dy %.9g vs %.9g  dz %.9g vs %.9g\n",
+        label, name(mode), count, logs.size(), s.pairs, v.pairs, expect_pairs, s.a, v.a, s.dx, v.dx, s.dy, v.dy, s.dz,
+        v.dz);
   }
   for (auto* p : owned) delete p;
 }
@@ -215,8 +217,9 @@ int main(int argc, char** argv) {
     trial(rng, lengths, modes[t % 4], false, st, "random");
   }
 
-  std::printf("neon_kernel_check (seed %u): %d passed, %d failed; %ld points, %ld pairs kept; "
-              "worst error %.3f of tolerance\n",
-              seed, st.passed, st.failed, st.points, st.pairs, st.worst);
+  std::printf(
+      "neon_kernel_check (seed %u): %d passed, %d failed; %ld points, %ld pairs kept; "
+      "worst error %.3f of tolerance\n",
+      seed, st.passed, st.failed, st.points, st.pairs, st.worst);
   return st.failed == 0 ? 0 : 1;
 }

@@ -445,8 +445,10 @@ void Camera::refresh() {
     const bool ready = events_locked(*f) != 0;
     if (ready == f->signalled) continue;
     eventfd_t value = 0;
-    if (ready) ::eventfd_write(f->fd, 1);
-    else ::eventfd_read(f->fd, &value);
+    if (ready)
+      ::eventfd_write(f->fd, 1);
+    else
+      ::eventfd_read(f->fd, &value);
     f->signalled = ready;
   }
 }

@@ -41,7 +41,7 @@ class Camera;
 /// poll() should report something for the file, so a real poll() waits on it.
 struct OpenFile {
   Camera* camera = nullptr;
-  int role = 0;  // 0 colour, 1 depth
+  int role = 0;                  // 0 colour, 1 depth
   std::uint64_t generation = 0;  // the plug it was opened on
   bool nonblocking = false;
   int fd = -1;
@@ -151,9 +151,9 @@ class Camera {
   bool gone_ = false;
   std::optional<double> back_at_;  // while gone: when the nodes reappear (nullopt: never)
   bool unplugged_once_ = false;
-  double start_ = 0;                // the grid's origin, seconds of CLOCK_MONOTONIC
-  std::size_t scene_base_ = 0;      // the entry shown at start_
-  std::size_t next_scene_ = 0;      // where the next streaming will start
+  double start_ = 0;                 // the grid's origin, seconds of CLOCK_MONOTONIC
+  std::size_t scene_base_ = 0;       // the entry shown at start_
+  std::size_t next_scene_ = 0;       // where the next streaming will start
   std::uint64_t colour_frames_ = 0;  // made since the camera was first plugged in
   std::uint64_t unplugs_ = 0;
   bool shutdown_ = false;

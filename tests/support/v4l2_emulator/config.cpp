@@ -34,9 +34,12 @@ T number(std::string_view key, std::string_view text) {
 std::vector<std::uint32_t> formats(std::string_view key, std::string_view text) {
   std::vector<std::uint32_t> out;
   for (const auto name : split(text, '+')) {
-    if (name == "yuyv") out.push_back(V4L2_PIX_FMT_YUYV);
-    else if (name == "mjpeg") out.push_back(V4L2_PIX_FMT_MJPEG);
-    else throw std::invalid_argument(std::string(key) + ": '" + std::string(name) + "' (yuyv, mjpeg)");
+    if (name == "yuyv")
+      out.push_back(V4L2_PIX_FMT_YUYV);
+    else if (name == "mjpeg")
+      out.push_back(V4L2_PIX_FMT_MJPEG);
+    else
+      throw std::invalid_argument(std::string(key) + ": '" + std::string(name) + "' (yuyv, mjpeg)");
   }
   return out;
 }
@@ -60,7 +63,8 @@ std::vector<std::uint32_t> rates(std::string_view key, std::string_view text) {
   std::vector<std::uint32_t> out;
   for (const auto rate : split(text, '+')) {
     out.push_back(number<std::uint32_t>(key, rate));
-    if (out.back() < 1 || out.back() > 1000) throw std::invalid_argument(std::string(key) + ": 1 to 1000 frames per second");
+    if (out.back() < 1 || out.back() > 1000)
+      throw std::invalid_argument(std::string(key) + ": 1 to 1000 frames per second");
   }
   return out;
 }

@@ -79,13 +79,15 @@ void Camera::produce(Node& n, std::unique_lock<std::mutex>& lock) {
     encoded_ = true;
     if (generation != generation_ || gone_ || !n.streaming || n.memory != memory || n.queued.empty()) return;
     if (bytes.size() > n.length) bytes.resize(n.length), flags = V4L2_BUF_FLAG_ERROR;
-    if (colour && config_.error_every != 0 && (colour_frames_ + 1) % config_.error_every == 0) flags = V4L2_BUF_FLAG_ERROR;
+    if (colour && config_.error_every != 0 && (colour_frames_ + 1) % config_.error_every == 0)
+      flags = V4L2_BUF_FLAG_ERROR;
     const unsigned index = n.queued.front();
     n.queued.pop_front();
     Buffer& b = n.buffers[index];
     if (!bytes.empty()) std::memcpy(n.memory + b.offset, bytes.data(), bytes.size());
-    b = Buffer{b.offset, Buffer::kDone, static_cast<std::uint32_t>(bytes.size()),
-               static_cast<std::uint32_t>(n.stats.produced), flags, due_time(n)};
+    b = Buffer{
+        b.offset, Buffer::kDone, static_cast<std::uint32_t>(bytes.size()), static_cast<std::uint32_t>(n.stats.produced),
+        flags,    due_time(n)};
     n.done.push_back(index);
     ++n.stats.delivered;
   } else {

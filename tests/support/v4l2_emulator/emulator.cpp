@@ -312,7 +312,8 @@ __attribute__((visibility("default"))) ssize_t __read_chk(int fd, void* buffer, 
   return read(fd, buffer, size);
 }
 
-__attribute__((visibility("default"))) int cvo_v4l2_emulator_stats(const char* node, cvo_v4l2_emulator_node_stats* out) {
+__attribute__((visibility("default"))) int cvo_v4l2_emulator_stats(const char* node,
+                                                                   cvo_v4l2_emulator_node_stats* out) {
   Emulator* e = emulator.load();
   int role = -1;
   Camera* camera = e == nullptr || node == nullptr ? nullptr : e->camera_of(node, role);

@@ -16,7 +16,8 @@ std::uint8_t clamp_byte(double v) { return static_cast<std::uint8_t>(std::clamp(
 cv::Mat at_size(const cv::Mat& image, FrameSize size, int interpolation) {
   if (image.cols == static_cast<int>(size.width) && image.rows == static_cast<int>(size.height)) return image;
   cv::Mat resized;
-  cv::resize(image, resized, cv::Size(static_cast<int>(size.width), static_cast<int>(size.height)), 0, 0, interpolation);
+  cv::resize(image, resized, cv::Size(static_cast<int>(size.width), static_cast<int>(size.height)), 0, 0,
+             interpolation);
   return resized;
 }
 
@@ -88,7 +89,8 @@ std::vector<std::uint8_t> Scene::encode(std::size_t entry, std::uint32_t fourcc,
   const auto& frame = read(entry);
   std::vector<std::uint8_t> out;
   if (fourcc == V4L2_PIX_FMT_Z16)
-    depth_to_z16(at_size(frame.depth, size, cv::INTER_NEAREST), frame.intrinsics.depth_scale, depth_units_per_metre_, out);
+    depth_to_z16(at_size(frame.depth, size, cv::INTER_NEAREST), frame.intrinsics.depth_scale, depth_units_per_metre_,
+                 out);
   else if (fourcc == V4L2_PIX_FMT_MJPEG)
     out = encode_mjpeg(at_size(frame.bgr, size, cv::INTER_AREA));
   else

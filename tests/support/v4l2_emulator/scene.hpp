@@ -12,8 +12,8 @@
 
 #include <opencv2/core/mat.hpp>
 
-#include "tests/support/v4l2_emulator/config.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "tests/support/v4l2_emulator/config.hpp"
 
 namespace cvo::drivers::v4l2_emulator {
 
