@@ -48,7 +48,7 @@ struct BlockPattern;
 struct OptimizerOptions {
   // Of the core struct (libcvo/core/parameters.hpp) max_iterations, and cauchy_delta for the edges
   // marked robust; bridge_information is the back end's.
-  core::PoseGraphParameters pose_graph;
+  core::PoseGraphParameters pose_graph{};
   double relative_decrease = 1e-6;  // stop when an accepted step lowers the cost by less than this fraction
   double step_tolerance = 1e-10;    // stop when |delta| falls below this
   double initial_lambda = 1e-5;
