@@ -234,8 +234,11 @@ TEST(BackenddPoison, StoredRecordsOfAnOlderSchemaAreSkippedWithAMessage) {
       store.append(keyframe ? backendd::RecordKind::kKeyframe : backendd::RecordKind::kLocalGraph, e.bytes);
     }
   }
-  { ::lcm::LogFile((dir.path() / "empty.lcmlog").string(), "w"); }
-  const Outcome o = run_backendd(dir.path(), "old", dir.path() / "empty.lcmlog");
+  {  // an input with nothing for the back end (LCM cannot open a log without an event)
+    ::lcm::LogFile log((dir.path() / "idle.lcmlog").string(), "w");
+    cvo::testing::write_event(log, "ANOTHER_CHANNEL", {0}, 1000);
+  }
+  const Outcome o = run_backendd(dir.path(), "old", dir.path() / "idle.lcmlog");
   ASSERT_EQ(o.exit_code, 0) << o.log;
   EXPECT_NE(o.log.find("(" + std::to_string(good.size() + 1) + " records recovered)"), std::string::npos) << o.log;
   EXPECT_NE(o.log.find("stored record skipped: cvo_lcm.keyframe_t: wrong fingerprint"), std::string::npos) << o.log;
