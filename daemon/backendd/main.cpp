@@ -26,9 +26,9 @@ restart resumes every session received; a keyframe repeated with other content i
 detects and verifies loop closures across every session (ORB bag of words, RANSAC + SVD, CVO
 refinement, the alpha test), joins a new session to the map at its first verified loop, optimises
 the keyframe pose graph with a Cauchy kernel on loops, and publishes the multi-session map on
-CVO_MAP after each change, with a CVO_STATUS heartbeat. On SIGTERM/SIGINT/SIGHUP it runs a final global
-optimisation, publishes the final map and exits 0. Under systemd it sends READY, STATUS and
-WATCHDOG notifications.)";
+CVO_MAP after each change, with a CVO_STATUS heartbeat. On SIGTERM, SIGINT or SIGHUP it runs a
+final global optimisation, publishes the final map and exits 0. Under systemd it sends READY,
+STATUS and WATCHDOG notifications.)";
 
 struct Arguments {
   bool print_config = false;

@@ -23,7 +23,8 @@ CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes on
 one at the end) and CVO_STATUS (once a second). Every start, and every camera that comes back
 after a disconnection, is a new session with a random id carried by every message. The map pose
 follows the newest CVO_MAP from cvo-backendd once it places this session. Stops cleanly on
-SIGTERM, SIGINT or SIGHUP (stop signals are blocked from the first instant); under systemd it sends READY, STATUS and WATCHDOG notifications.)";
+SIGTERM, SIGINT or SIGHUP, even in the first instant; under systemd it sends READY, STATUS and
+WATCHDOG notifications.)";
 
 constexpr const char* kSources = R"(sources (--source, trackerd.source):
   tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)
