@@ -107,18 +107,18 @@ TEST(Supervise, ServesTheWatchdogOnlyWhileEveryWorkerBeats) {
     }
   });
   const Heartbeat* const beats[] = {&alive, &hung};
-  std::thread supervisor([&] { supervise(systemd, {beats, 100ms}, [&] { return done.load(); }); });
+  std::thread supervisor([&] { supervise(systemd, {beats, 200ms}, [&] { return done.load(); }); });
   std::this_thread::sleep_for(500ms);
   const std::string beating = systemd_socket.drain();
-  hang = true;  // one worker stops beating: after 100 ms of silence no more pings
-  std::this_thread::sleep_for(150ms);
+  hang = true;  // one worker stops beating: after 200 ms of silence no more pings
+  std::this_thread::sleep_for(300ms);
   systemd_socket.drain();
   std::this_thread::sleep_for(500ms);
   const std::string hung_log = systemd_socket.drain();
   done = true;
   supervisor.join();
   worker.join();
-  EXPECT_GE(count(beating, "WATCHDOG=1"), 5) << beating;
+  EXPECT_GE(count(beating, "WATCHDOG=1"), 2) << beating;  // every 50 ms when the machine is idle
   EXPECT_EQ(count(hung_log, "WATCHDOG=1"), 0) << "pinged while a worker was hung:\n" << hung_log;
   EXPECT_EQ(count(systemd_socket.drain(), "STOPPING=1"), 1);
   unsetenv("NOTIFY_SOCKET");
