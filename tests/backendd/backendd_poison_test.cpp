@@ -182,9 +182,7 @@ TEST(Backendd, SigHupStopsCleanlyWithTheFinalMap) {
                          {"--lcm-url", "file://" + (dir.path() / "in.lcmlog").string() + "?speed=0", "--publish-url",
                           "file://" + out.string() + "?mode=w", "--store", (dir.path() / "s.store").string()},
                          err_file);
-  for (const auto until = std::chrono::steady_clock::now() + 300s;
-       cvo::testing::slurp(err_file).find("end of") == std::string::npos && std::chrono::steady_clock::now() < until;)
-    std::this_thread::sleep_for(50ms);
+  cvo::testing::wait_for_text(err_file, "end of", 300s);  // the source was read to its end
   ASSERT_TRUE(backendd.running()) << cvo::testing::slurp(err_file);
   backendd.signal(SIGHUP);
   const auto code = backendd.wait_for(120s);

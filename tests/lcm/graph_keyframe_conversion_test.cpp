@@ -14,18 +14,10 @@
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/registration/point_selection.hpp"
+#include "tests/lcm/through_bytes.hpp"
 
 namespace cvo::lcm {
 namespace {
-
-template <class T>
-std::optional<T> through_bytes(const T& message) {
-  const auto bytes = encode(message);
-  std::string error;
-  auto decoded = decode<T>(bytes.data(), static_cast<int>(bytes.size()), &error);
-  EXPECT_TRUE(decoded) << error;
-  return decoded;
-}
 
 TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
   Keyframe k;

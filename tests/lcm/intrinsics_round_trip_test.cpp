@@ -14,6 +14,7 @@
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
+#include "tests/lcm/through_bytes.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -75,15 +76,6 @@ core::RgbdFrame frame_of(const core::Intrinsics& k) {
   frame.bgr = cv::Mat(k.height, k.width, CV_8UC3, cv::Scalar(10, 20, 30));
   frame.depth = cv::Mat(k.height, k.width, CV_16UC1, cv::Scalar(5000));
   return frame;
-}
-
-template <class T>
-std::optional<T> through_bytes(const T& message) {
-  const auto bytes = encode(message);
-  std::string error;
-  auto decoded = decode<T>(bytes.data(), static_cast<int>(bytes.size()), &error);
-  EXPECT_TRUE(decoded) << error;
-  return decoded;
 }
 
 TEST(IntrinsicsRoundTrip, ThroughCvoRgbdEveryFieldComesBack) {

@@ -3,11 +3,13 @@
 // stderr and the exit code: the CLI tests check the contracts others script against.
 #include <sys/wait.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -23,6 +25,17 @@ inline std::string slurp(const std::filesystem::path& file) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+/// Waits until `file` contains `text` (a daemon's stderr saying it got somewhere), at most `timeout`;
+/// whether it does.
+inline bool wait_for_text(const std::filesystem::path& file, const std::string& text,
+                          std::chrono::milliseconds timeout) {
+  for (const auto until = std::chrono::steady_clock::now() + timeout; std::chrono::steady_clock::now() < until;) {
+    if (slurp(file).find(text) != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return slurp(file).find(text) != std::string::npos;
 }
 
 /// The first "key" in document order, depth first, or nullptr.

@@ -333,9 +333,7 @@ TEST(Trackerd, SigHupStopsCleanlyAndPublishesTheOpenLocalGraph) {
   const auto out = dir.path() / "out.lcmlog";
   const auto err_file = dir.path() / "stderr.txt";
   DaemonProcess d(kTrackerd, with(base_args(out), {"--source", "tum:" + kClip.string(), "--deterministic"}), err_file);
-  for (const auto until = std::chrono::steady_clock::now() + cvo::testing::scaled(120s);
-       cvo::testing::slurp(err_file).find("end of") == std::string::npos && std::chrono::steady_clock::now() < until;)
-    std::this_thread::sleep_for(50ms);
+  cvo::testing::wait_for_text(err_file, "end of", cvo::testing::scaled(120s));  // the source was read to its end
   ASSERT_TRUE(d.running()) << cvo::testing::slurp(err_file);
   d.signal(SIGHUP);
   const auto code = d.wait_for(cvo::testing::scaled(5000ms));
