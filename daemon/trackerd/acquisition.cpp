@@ -83,13 +83,13 @@ bool Acquisition::read_into(drivers::FrameSource& source, RingSlot& slot) {
     case drivers::ReadStatus::kBadInput:
       shared_.count_bad(static_cast<int>(result.bad_input), "skipped bad input", result.message);
       return false;
-    case drivers::ReadStatus::kDisconnected: disconnected(source, result.message); return false;
+    case drivers::ReadStatus::kDisconnected: disconnected(result.message); return false;
     case drivers::ReadStatus::kEndOfStream: ended(source); return false;
   }
   return false;
 }
 
-void Acquisition::disconnected(const drivers::FrameSource& /*source*/, const std::string& message) {
+void Acquisition::disconnected(const std::string& message) {
   if (!connected_) return;
   connected_ = false;
   shared_.counters.source_connected = false;

@@ -24,7 +24,7 @@ class Acquisition {
 
  private:
   bool read_into(drivers::FrameSource& source, RingSlot& slot);
-  void disconnected(const drivers::FrameSource& source, const std::string& message);
+  void disconnected(const std::string& message);
   void ended(const drivers::FrameSource& source);
 
   Shared& shared_;
