@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <functional>
@@ -53,14 +54,43 @@ constexpr Range kAtLeastThree{3, kInf};
 constexpr Range kAboveOne{1, kInf, true, false};
 constexpr Range kHalfTurnDegOrZero{0, 180};
 constexpr Range kUint32{0, 4294967295.0};
+constexpr Range kHalfToOne{0.5, 1, true, true};
+constexpr Range kZeroToHalf{0, 0.5, true, true};
 
 template <class T>
 using Get = std::function<T&(Config&)>;
 
+// A pose key: none, or [x, y, z, qx, qy, qz, qw].
+using Pose = std::optional<core::PoseParameter>;
+
+// "none", or 7 numbers separated by commas or blanks, in brackets or not; the quaternion must be
+// unit length to 1e-6 (a pose typed by hand is checked, not silently normalised).
+std::string parse_pose(std::string_view text, Pose& pose) {
+  if (text == "none" || text == "null" || text == "~") return pose.reset(), std::string{};
+  std::string s(text);
+  if (s.size() >= 2 && s.front() == '[' && s.back() == ']') s = s.substr(1, s.size() - 2);
+  std::replace(s.begin(), s.end(), ',', ' ');
+  std::istringstream in(s);
+  core::PoseParameter values{};
+  std::size_t n = 0;
+  for (std::string word; in >> word; ++n) {
+    const auto v = io::to_finite(word);
+    if (!v || n >= values.size()) return "expected none or [x, y, z, qx, qy, qz, qw], got '" + std::string(text) + "'";
+    values[n] = *v;
+  }
+  if (n != values.size()) return "expected none or [x, y, z, qx, qy, qz, qw], got '" + std::string(text) + "'";
+  const double norm2 = values[3] * values[3] + values[4] * values[4] + values[5] * values[5] + values[6] * values[6];
+  if (std::abs(norm2 - 1.0) > 2e-6)
+    return "the quaternion qx qy qz qw must have unit length, got '" + std::string(text) + "'";
+  pose = values;
+  return {};
+}
+
 // One row of the table: everything the loader, the overrides and the dump know about a key.
 struct Field {
   std::string key;  // "section.member", or "member" at the top level
-  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<std::uint32_t>, Get<bool>, Get<std::string>> member;
+  std::variant<Get<double>, Get<int>, Get<std::size_t>, Get<std::uint32_t>, Get<bool>, Get<std::string>, Get<Pose>>
+      member;
   Range range;           // numeric keys only
   std::string_view doc;  // the dump's comment: paper symbol and meaning
 };
@@ -73,6 +103,7 @@ Field row(std::string key, S Config::*section, T S::*member, Range range, std::s
 using core::CvoParameters, core::SelectionParameters, core::KeyframeParameters, core::LoopClosureParameters,
     core::PoseGraphParameters, core::DatasetParameters, core::OdometryParameters, core::KeyframeTrackingParameters,
     core::LoopVerificationParameters;
+using core::MappingParameters;
 
 constexpr Range kRealtimePriority{0, 99};  // SCHED_FIFO priorities; 0 = do not ask for one
 constexpr Range kCpu{-1, 4095};            // -1 = no affinity
@@ -174,6 +205,25 @@ const std::vector<Field>& table() {
           "Levenberg-Marquardt iterations per optimisation"),
       row("dataset.max_association_dt", &Config::dataset, &DatasetParameters::max_association_dt, kPositive,
           "colour-depth timestamp association window (s)"),
+      row("mapping.cell_size", &Config::mapping, &MappingParameters::cell_size, kPositive,
+          "occupancy grid cell and OctoMap voxel edge (m)"),
+      row("mapping.voxel_size", &Config::mapping, &MappingParameters::voxel_size, kPositive,
+          "coloured cloud voxel edge (m)"),
+      row("mapping.obstacle_min_height", &Config::mapping, &MappingParameters::obstacle_min_height, kNonNegative,
+          "points lower than this above the floor are floor (m)"),
+      row("mapping.obstacle_max_height", &Config::mapping, &MappingParameters::obstacle_max_height, kPositive,
+          "points higher than this above the floor are no obstacle (m)"),
+      row("mapping.max_range", &Config::mapping, &MappingParameters::max_range, kPositive,
+          "depth beyond this is not mapped (m)"),
+      row("mapping.pixel_stride", &Config::mapping, &MappingParameters::pixel_stride, kAtLeastOne,
+          "every stride-th pixel of each row and column is mapped"),
+      row("mapping.hit_probability", &Config::mapping, &MappingParameters::hit_probability, kHalfToOne,
+          "occupancy probability a keyframe that sees a surface in a cell gives it"),
+      row("mapping.miss_probability", &Config::mapping, &MappingParameters::miss_probability, kZeroToHalf,
+          "occupancy probability a keyframe whose rays cross a cell gives it"),
+      Field{"mapping.base_T_camera", Get<Pose>([](Config& c) -> Pose& { return c.mapping.base_T_camera; }), kAny,
+            "the camera's pose on a base with z up, origin on the floor: x, y, z, qx, qy, qz, qw (none: gravity "
+            "from the recording's accelerometer, else the floor plane)"},
       row("trackerd.source", &Config::trackerd, &TrackerdParameters::source, kAny,
           "frame source: tum:DIR, lcm:URL, openni2:URI (openni2:any), v4l2:COLOUR[,DEPTH]"),
       row("trackerd.lcm_url", &Config::trackerd, &TrackerdParameters::lcm_url, kAny,
@@ -257,7 +307,9 @@ std::string assign(const Field& field, Config& config, std::string_view text) {
   return std::visit(
       [&](const auto& get) -> std::string {
         using T = std::remove_reference_t<decltype(get(config))>;
-        if constexpr (std::is_same_v<T, std::string>) {
+        if constexpr (std::is_same_v<T, Pose>) {
+          return parse_pose(text, get(config));
+        } else if constexpr (std::is_same_v<T, std::string>) {
           if (text.empty()) return "must not be empty";
           get(config) = std::string(text);
           return {};
@@ -289,7 +341,9 @@ std::string kind_of(const Field& field) {
   return std::visit(
       [](const auto& get) -> std::string {
         using T = std::remove_reference_t<std::invoke_result_t<decltype(get), Config&>>;
-        if constexpr (std::is_same_v<T, std::string>)
+        if constexpr (std::is_same_v<T, Pose>)
+          return "none or [x, y, z, qx, qy, qz, qw]";
+        else if constexpr (std::is_same_v<T, std::string>)
           return "a string";
         else if constexpr (std::is_same_v<T, bool>)
           return "true or false";
@@ -306,7 +360,12 @@ std::string format_value(const Field& field, Config& config) {
       [&](const auto& get) -> std::string {
         const auto& v = get(config);
         using T = std::remove_cvref_t<decltype(v)>;
-        if constexpr (std::is_same_v<T, std::string>) {
+        if constexpr (std::is_same_v<T, Pose>) {
+          if (!v) return "none";
+          std::string text = "[";
+          for (std::size_t i = 0; i < v->size(); ++i) text.append(i ? ", " : "").append(shortest((*v)[i]));
+          return text + "]";
+        } else if constexpr (std::is_same_v<T, std::string>) {
           YAML::Emitter out;  // quotes the string when YAML needs it
           out << v;
           return out.c_str();
@@ -364,6 +423,10 @@ void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.selection.min_depth_m >= c.selection.max_depth_m)
     throw ConfigError(source, "selection.min_depth_m (" + shortest(c.selection.min_depth_m) +
                                   ") must be below selection.max_depth_m (" + shortest(c.selection.max_depth_m) + ")");
+  if (c.mapping.obstacle_min_height >= c.mapping.obstacle_max_height)
+    throw ConfigError(source, "mapping.obstacle_min_height (" + shortest(c.mapping.obstacle_min_height) +
+                                  ") must be below mapping.obstacle_max_height (" +
+                                  shortest(c.mapping.obstacle_max_height) + ")");
   if (c.cvo.ell_min > c.cvo.ell_init)
     throw ConfigError(source, "cvo.ell_min (" + shortest(c.cvo.ell_min) + ") must not exceed cvo.ell_init (" +
                                   shortest(c.cvo.ell_init) + ")");
@@ -380,9 +443,22 @@ std::string node_kind(const YAML::Node& node) {
 // Errors point at the key's line: a missing value has no place of its own.
 void set_from_node(const Field& field, const YAML::Node& value, std::size_t line, Config& config,
                    const std::filesystem::path& source) {
-  if (!value.IsScalar())
+  std::string text;
+  if (value.IsSequence() && std::holds_alternative<Get<Pose>>(field.member)) {
+    for (const auto& element : value) {
+      if (!element.IsScalar())
+        throw ConfigError(source, line,
+                          field.key + ": expected " + kind_of(field) + ", got a nested " + node_kind(element));
+      text.append(text.empty() ? "" : " ").append(element.Scalar());
+    }
+  } else if (value.IsNull() && std::holds_alternative<Get<Pose>>(field.member)) {
+    text = "none";
+  } else if (!value.IsScalar()) {
     throw ConfigError(source, line, field.key + ": expected " + kind_of(field) + ", got " + node_kind(value));
-  if (const auto error = assign(field, config, value.Scalar()); !error.empty())
+  } else {
+    text = value.Scalar();
+  }
+  if (const auto error = assign(field, config, text); !error.empty())
     throw ConfigError(source, line, field.key + ": " + error);
 }
 

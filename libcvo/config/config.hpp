@@ -77,6 +77,7 @@ struct Config {
   core::LoopVerificationParameters loop_verification;  // YAML section loop_closure
   core::PoseGraphParameters pose_graph;
   core::DatasetParameters dataset;
+  core::MappingParameters mapping;
   TrackerdParameters trackerd;
   BackenddParameters backendd;
   std::string camera = "tum_fr1";  // a preset name or a path to an intrinsics file (io::load_camera)

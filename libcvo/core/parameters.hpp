@@ -12,8 +12,10 @@
 //
 // These are plain values: libcvo/config reads them from YAML (one section per struct, or two
 // structs sharing one section where noted); equality is member by member, doubles exactly.
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 
 namespace cvo::core {
 
@@ -156,6 +158,30 @@ struct DatasetParameters {
   double max_association_dt = 0.02;  // s, colour-depth timestamp association (TUM's default)
 
   bool operator==(const DatasetParameters&) const = default;
+};
+
+/// A rigid pose as the configuration gives it: x y z (m), qx qy qz qw (unit quaternion).
+using PoseParameter = std::array<double, 7>;
+
+/// The map a robot navigates by (libcvo/mapping): every keyframe's local map, placed at its pose.
+/// Defaults are a ground robot's (Nav2's usual 5 cm costmap cells; obstacles from above a
+/// doorsill to above a person's head); the occupancy probabilities are OctoMap's defaults.
+struct MappingParameters {
+  double cell_size = 0.05;            // m: grid cells and OctoMap voxels
+  double voxel_size = 0.02;           // m: the coloured cloud's voxels
+  double obstacle_min_height = 0.10;  // m above the floor: lower points are floor, seen free
+  double obstacle_max_height = 1.80;  // m above the floor: higher points are no obstacle
+  // m: depth beyond this is not mapped; a Kinect-class sensor's depth error grows with z² (about
+  // 4 cm at 4 m), as large as a cell.
+  double max_range = 4.0;
+  int pixel_stride = 2;           // every stride-th pixel of each row and column is mapped
+  double hit_probability = 0.7;   // a keyframe that sees a surface in a cell (OctoMap: 0.7)
+  double miss_probability = 0.4;  // a keyframe whose rays cross a cell (OctoMap: 0.4)
+  // The camera's pose on a base whose z is up and whose origin is on the floor (a robot's
+  // base_link): when given, it says which way is up and where the floor is.
+  std::optional<PoseParameter> base_T_camera;
+
+  bool operator==(const MappingParameters&) const = default;
 };
 
 }  // namespace cvo::core
