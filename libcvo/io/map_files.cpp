@@ -51,7 +51,7 @@ void write_grid(const fs::path& pgm, const fs::path& yaml, const mapping::MapGri
   const auto& t = map.frame.map_T_grid.translation();
   const auto& q = map.frame.map_T_grid.rotation();
   YAML::Emitter out;
-  out.SetDoublePrecision(17);
+  out.SetDoublePrecision(15);  // sub-nanometre, and 0.05 reads 0.05
   out << YAML::BeginMap << YAML::Key << "image" << YAML::Value << pgm.filename().string() << YAML::Key << "mode"
       << YAML::Value << "trinary" << YAML::Key << "resolution" << YAML::Value << grid.resolution << YAML::Key
       << "origin" << YAML::Value << YAML::Flow << YAML::BeginSeq << grid.origin.x() << grid.origin.y() << 0.0

@@ -32,7 +32,7 @@ inline constexpr double kOccupiedThreshold = 0.65, kFreeThreshold = 0.196;
 MapFiles write_map_files(const std::filesystem::path& dir, const mapping::Mapping& mapping);
 
 /// The grid (free white, occupied black, unknown grey) with `trajectory` (map-frame camera
-/// centres, in order) drawn on it, its start marked; at least 800 px wide.
+/// centres, in order) drawn on it, its start marked; at least 800 px on its longer side.
 void write_map_plot(const std::filesystem::path& png, const mapping::MapGrid& grid,
                     const std::vector<Eigen::Vector3d>& trajectory);
 

@@ -183,13 +183,14 @@ TEST(Config, DumpRoundTripsEveryKey) {
   c.loop_verification.orb_scale_factor = 1.25;
   c.odometry.max_points = 100000;
   c.pose_graph.bridge_information = 1e-3;
+  c.mapping.base_T_camera = core::PoseParameter{0.1, -0.02, 0.45, -0.5, 0.5, -0.5, 0.5};
   const auto text = dump_config(c);
   EXPECT_TRUE(parse_config(text) == c) << text;
   for (const auto& key : config_keys()) {
     const auto member = key.substr(key.find('.') + 1);
     EXPECT_NE(text.find(member + ": "), std::string::npos) << key << " missing from\n" << text;
   }
-  EXPECT_EQ(config_keys().size(), 71u) << "a new parameter? add a row to the table and regenerate default.yaml";
+  EXPECT_EQ(config_keys().size(), 80u) << "a new parameter? add a row to the table and regenerate default.yaml";
 }
 
 // The values the code was tuned with are keys too (issue 15): the trackers' capacities, KF-CVO's
@@ -299,6 +300,42 @@ TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
     }
     EXPECT_TRUE(untouched == Config{}) << bad;
   }
+}
+
+// The map's keys (issue 24): a ground robot's defaults, and the camera's mount as a pose.
+TEST(Config, MappingKeysHaveAGroundRobotsDefaultsAndTheMountIsAPose) {
+  const Config defaults;
+  EXPECT_EQ(defaults.mapping.cell_size, 0.05);
+  EXPECT_EQ(defaults.mapping.obstacle_min_height, 0.1);
+  EXPECT_EQ(defaults.mapping.obstacle_max_height, 1.8);
+  EXPECT_FALSE(defaults.mapping.base_T_camera);
+
+  const auto c = parse_config("mapping:\n  base_T_camera: [0.1, 0, 0.45, -0.5, 0.5, -0.5, 0.5]\n");
+  ASSERT_TRUE(c.mapping.base_T_camera);
+  EXPECT_EQ((*c.mapping.base_T_camera)[2], 0.45);
+  EXPECT_EQ((*c.mapping.base_T_camera)[6], 0.5);
+  Config o;
+  apply_override(o, "mapping.base_T_camera=0.1 0 0.45 -0.5 0.5 -0.5 0.5");
+  EXPECT_TRUE(o == c);
+  apply_override(o, "mapping.base_T_camera=none");
+  EXPECT_FALSE(o.mapping.base_T_camera);
+
+  const auto error_of = [](const std::string& yaml) {
+    try {
+      parse_config(yaml);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of("mapping: {base_T_camera: [0, 0, 1, 0, 0, 0]}").find("expected none or [x, y, z"),
+            std::string::npos);
+  EXPECT_NE(error_of("mapping: {base_T_camera: [0, 0, 1, 0, 0, 0, 2]}").find("unit length"), std::string::npos);
+  EXPECT_NE(error_of("mapping: {base_T_camera: [0, 0, nan, 0, 0, 0, 1]}").find("mapping.base_T_camera"),
+            std::string::npos);
+  EXPECT_NE(error_of("mapping: {obstacle_min_height: 2.0}").find("must be below mapping.obstacle_max_height"),
+            std::string::npos);
+  EXPECT_NE(error_of("mapping: {hit_probability: 0.4}").find("mapping.hit_probability"), std::string::npos);
 }
 
 TEST(Config, DefaultYamlIsInSync) {

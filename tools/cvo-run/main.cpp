@@ -29,8 +29,10 @@
 #include "libcvo/eval/ate.hpp"
 #include "libcvo/eval/plot.hpp"
 #include "libcvo/eval/rpe.hpp"
+#include "libcvo/io/accelerometer.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
+#include "libcvo/io/map_files.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
@@ -91,7 +93,7 @@ struct Arguments {
   fs::path out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
-  std::optional<fs::path> groundtruth, plot, config, vocabulary;
+  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot;
   std::vector<std::string> sets;
   bool json = false;
 };
@@ -110,6 +112,11 @@ void add_options(CLI::App& app, Arguments& args) {
       ->default_str("SEQUENCE/groundtruth.txt");
   app.add_option("--plot", args.plot, "write the evaluation figure (needs ground truth)")->type_name("PNG");
   app.add_flag("--json", args.json, "print one JSON object on stdout; the summary then goes to stderr");
+  app.add_option("--map", args.map,
+                 "--mode slam: write the final map here: grid.pgm + grid.yaml (Nav2 map_server), cloud.ply, octomap.bt")
+      ->type_name("DIR");
+  app.add_option("--map-plot", args.map_plot, "--mode slam with --map: the grid with the keyframe trajectory on it")
+      ->type_name("PNG");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
   app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
@@ -246,18 +253,46 @@ core::Trajectory stream(io::TumSequence& sequence, Track&& track, tools::RunRepo
   return trajectory;
 }
 
+// --map DIR (and --map-plot PNG): the final map's files; the plot's trajectory is the keyframes of
+// the sessions in the map.
+tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mapping, const slam::Map& map,
+                           double place_ms) {
+  io::write_map_files(*args.map, mapping);
+  const auto grid = mapping.grid();  // write_map_files throws without one
+  if (args.map_plot) {
+    std::vector<Eigen::Vector3d> centres;
+    for (const auto& session : map.sessions)
+      for (const auto& k : map.keyframes)
+        if (session.placed && k.session == session.session) centres.push_back(k.pose.translation());
+    io::write_map_plot(*args.map_plot, *grid, centres);
+  }
+  const auto statistics = mapping.statistics();
+  tools::MapReport m{args.map->string(), std::string(mapping::up_source_name(grid->frame.up)), grid->grid.width,
+                     grid->grid.height, grid->grid.resolution};
+  for (const auto c : grid->grid.cells) m.occupied += c == 100, m.free += c == 0;
+  m.keyframes = statistics.placed;
+  m.bytes_per_keyframe =
+      statistics.keyframes ? static_cast<double>(statistics.local_map_bytes) / statistics.keyframes : 0;
+  m.cloud_points = mapping.cloud().size();
+  m.place_ms = place_ms;
+  return m;
+}
+
 // --mode slam: every folder a session (ids 1, 2, ... in order) of one mapper; the trajectory is
 // every joined session's frames in the map frame, kf-cvo's own poses corrected by the back end
 // (slam::correct_trajectory fills in the frames it never saw).
 core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
                           const core::Trajectory& groundtruth, tools::RunReport& report) {
-  tools::SlamPipeline pipeline(config, load_vocabulary(args));
+  tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value());
   std::vector<core::Trajectory> odometry(sequences.size());
   report.slam = tools::SlamReport{};
   for (std::size_t k = 0; k < sequences.size(); ++k) {
     const auto session = static_cast<core::SessionId>(k + 1);
     const auto& camera = sequences[k].intrinsics();
-    pipeline.begin_session(session, camera.width, camera.height);
+    const fs::path accelerometer = args.sequences[k] / "accelerometer.txt";
+    pipeline.begin_session(session, camera.width, camera.height,
+                           args.map && fs::exists(accelerometer) ? io::read_tum_accelerometer(accelerometer)
+                                                                 : std::vector<io::AccelerometerSample>{});
     tools::SessionEntry entry{args.sequences[k].string(), session, report.frames, 0, false, std::nullopt};
     odometry[k] = stream(
         sequences[k], [&](const core::RgbdFrame& f) { return pipeline.track(f); }, report, entry.keyframes);
@@ -286,6 +321,7 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
   s.final_optimisation_ms = pipeline.statistics().final_ms;
   for (const auto& l : map.loops)
     s.loops.push_back({l.from_frame, l.to_frame, l.chi2, l.weight, l.from_session, l.to_session});
+  if (args.map) s.map = write_map(args, *pipeline.mapping(), map, pipeline.statistics().map_ms);
   // kf-cvo's own ATE: one session only (several have several odometry frames).
   if (!groundtruth.empty() && sequences.size() == 1 && !odometry[0].empty()) {
     try {
@@ -328,6 +364,9 @@ int run(const Arguments& args) {
   // Everything that can fail on input is checked before the (long) run.
   tools::RunReport report;
   const core::Trajectory groundtruth = load_groundtruth(args, sequences, report.groundtruth);
+  if ((args.map || args.map_plot) && args.mode != "slam")
+    throw UsageError("--map and --map-plot need --mode slam (the map is made from the SLAM map's keyframes)");
+  if (args.map_plot && !args.map) throw UsageError("--map-plot needs --map DIR");
   if (args.plot && groundtruth.empty())
     throw UsageError("--plot needs ground truth: " + args.sequences.front().string() +
                      " has no groundtruth.txt and no --groundtruth was given");

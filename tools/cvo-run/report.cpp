@@ -32,6 +32,22 @@ program::Json loop_list(const RunReport& r) {
 }
 
 // One object per folder, in order; null outside slam mode.
+program::Json map_object(const MapReport& m) {
+  program::Json o;
+  o["dir"] = m.dir;
+  o["up"] = m.up;
+  o["width"] = m.width;
+  o["height"] = m.height;
+  o["resolution_m"] = m.resolution;
+  o["occupied_cells"] = m.occupied;
+  o["free_cells"] = m.free;
+  o["keyframes"] = m.keyframes;
+  o["bytes_per_keyframe"] = m.bytes_per_keyframe;
+  o["cloud_points"] = m.cloud_points;
+  o["place_ms"] = m.place_ms;
+  return o;
+}
+
 program::Json session_list(const RunReport& r) {
   if (!r.slam) return nullptr;
   program::Json list = program::Json::array();
@@ -86,6 +102,12 @@ void print_text(std::FILE* out, const RunReport& r) {
     std::fprintf(
         out, "back end    %.0f ms in the run (local graphs, loop detection, keyframe optimisations), final %.0f ms\n",
         r.slam->backend_ms, r.slam->final_optimisation_ms);
+    if (const auto& m = r.slam->map)
+      std::fprintf(out,
+                   "map         %s: %d x %d cells of %.0f cm (%zu occupied, %zu free), up from the %s, %zu keyframes "
+                   "of %.0f kB, %zu cloud points, placed in %.1f ms\n",
+                   m->dir.c_str(), m->width, m->height, m->resolution * 100, m->occupied, m->free, m->up.c_str(),
+                   m->keyframes, m->bytes_per_keyframe / 1000, m->cloud_points, m->place_ms);
     if (r.slam->sessions.size() > 1)
       for (const auto& s : r.slam->sessions) {
         const std::string at = s.joined_at_keyframe ? " at its keyframe " + std::to_string(*s.joined_at_keyframe) : "";
@@ -150,6 +172,7 @@ program::Json to_json(const RunReport& r) {
   o["sessions"] = session_list(r);
   o["backend_ms_total"] = slam([](const auto& s) { return s.backend_ms; });
   o["final_optimisation_ms"] = slam([](const auto& s) { return s.final_optimisation_ms; });
+  o["map"] = r.slam && r.slam->map ? map_object(*r.slam->map) : program::Json();
   o["ate_rmse_m_odometry"] =
       r.slam && r.slam->ate_odometry ? program::Json(r.slam->ate_odometry->error.rmse) : program::Json();
   return o;

@@ -40,6 +40,19 @@ struct SessionEntry {
 };
 
 /// What --mode slam adds: loops, the back end's time, and kf-cvo's own ATE on the same run.
+/// What --map wrote (cvo-run --mode slam --map DIR).
+struct MapReport {
+  std::string dir;
+  std::string up;  // which way up came from (mapping::up_source_name)
+  int width = 0, height = 0;
+  double resolution = 0;
+  std::size_t occupied = 0, free = 0;  // cells
+  std::size_t keyframes = 0;           // placed in the grid
+  double bytes_per_keyframe = 0;       // local map (cloud and footprint)
+  std::size_t cloud_points = 0;
+  double place_ms = 0;  // placing every local map at its final pose
+};
+
 struct SlamReport {
   std::size_t loops_accepted = 0;
   std::size_t loops_tried = 0;                  // candidates verified (matches, RANSAC, CVO, α)
@@ -48,6 +61,7 @@ struct SlamReport {
   std::optional<eval::AteResult> ate_odometry;  // of the tracker's poses, before the back end
   std::vector<LoopEntry> loops;                 // in acceptance order
   std::vector<SessionEntry> sessions;           // one per folder, in order
+  std::optional<MapReport> map;
 };
 
 struct RunReport {

@@ -16,20 +16,27 @@ using core::ms_since;
 }  // namespace
 
 struct SlamPipeline::Session {
-  Session(core::SessionId session, int width, int height, const config::Config& config)
-      : id(session), tracker(width, height, config::keyframe_odometry_parameters(config)) {}
+  Session(core::SessionId session, int width, int height, const config::Config& config,
+          std::vector<io::AccelerometerSample> samples)
+      : id(session),
+        tracker(width, height, config::keyframe_odometry_parameters(config)),
+        accelerometer(std::move(samples)) {}
   core::SessionId id;
   odometry::KeyframeOdometry tracker;
+  std::vector<io::AccelerometerSample> accelerometer;
 };
 
-SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary)
-    : config_(config), mapper_(std::move(vocabulary), config::mapper_parameters(config)) {}
+SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map)
+    : config_(config),
+      mapper_(std::move(vocabulary), config::mapper_parameters(config)),
+      mapping_(map ? std::make_unique<mapping::Mapping>(config.mapping) : nullptr) {}
 
 SlamPipeline::~SlamPipeline() = default;
 
-void SlamPipeline::begin_session(core::SessionId session, int width, int height) {
+void SlamPipeline::begin_session(core::SessionId session, int width, int height,
+                                 std::vector<io::AccelerometerSample> accelerometer) {
   end_session();
-  session_ = std::make_unique<Session>(session, width, height, config_);
+  session_ = std::make_unique<Session>(session, width, height, config_, std::move(accelerometer));
 }
 
 odometry::TrackResult SlamPipeline::track(const core::RgbdFrame& frame) {
@@ -37,7 +44,11 @@ odometry::TrackResult SlamPipeline::track(const core::RgbdFrame& frame) {
   const odometry::TrackStep step = s.tracker.track(frame);
   const auto start = Clock::now();
   if (const auto& g = step.closed_graph) mapper_.add_local_graph(s.id, g->keyframe_id, *g->graph);
-  if (const auto& k = step.new_keyframe) mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
+  if (const auto& k = step.new_keyframe) {
+    mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
+    if (mapping_)
+      mapping_->add_keyframe({s.id, k->id}, k->frame, io::mean_specific_force(s.accelerometer, k->frame.timestamp));
+  }
   statistics_.backend_ms += ms_since(start);
   return step;
 }
@@ -54,6 +65,11 @@ void SlamPipeline::finish() {
   end_session();
   mapper_.finish();
   statistics_.final_ms = ms_since(start);
+  if (mapping_) {
+    const auto placing = Clock::now();
+    mapping_->place(mapper_.map());
+    statistics_.map_ms = ms_since(placing);
+  }
 }
 
 }  // namespace cvo::tools

@@ -8,17 +8,22 @@
 //                     keyframe (with the tracker's own keyframe cloud, as cvo-trackerd sends it);
 //                     both go to slam::Mapper, the back end cvo-backendd runs too;
 //   end_session()     the session's open local graph (the tracker's finish()) goes to the mapper;
-//   finish()          the global optimisation.
+//   finish()          the global optimisation; with a map (--map), every keyframe's local map
+//                     (made as it became a keyframe, levelled by the session's accelerometer
+//                     where the folder has one) placed at its final pose.
 // The tracker never sees the corrections: it runs in its own odometry frame, and the back end
 // works on relative poses.
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "libcvo/config/config.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/trajectory.hpp"
+#include "libcvo/io/accelerometer.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/mapping/mapping.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/slam/mapper.hpp"
@@ -28,15 +33,19 @@ namespace cvo::tools {
 struct SlamStatistics {
   double backend_ms = 0;  // local graphs, loop detection, keyframe optimisations: whole run
   double final_ms = 0;    // end of the last session (its open local graph) and the global optimisation
+  double map_ms = 0;      // placing every keyframe's local map at its final pose (--map)
 };
 
 class SlamPipeline {
  public:
-  SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary);
+  /// With `map`, keyframes are mapped too (mapping()).
+  SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map = false);
   ~SlamPipeline();
 
-  /// Starts session `session` with frames of width x height (ends the previous one first).
-  void begin_session(core::SessionId session, int width, int height);
+  /// Starts session `session` with frames of width x height (ends the previous one first);
+  /// `accelerometer`: its camera's samples, when the recording has them.
+  void begin_session(core::SessionId session, int width, int height,
+                     std::vector<io::AccelerometerSample> accelerometer = {});
   /// Tracks the frame, then does the back end's share of work for it (see above).
   odometry::TrackResult track(const core::RgbdFrame& frame);
   /// Hands the session's open local graph to the mapper (nothing when none is open).
@@ -46,12 +55,15 @@ class SlamPipeline {
 
   [[nodiscard]] const SlamStatistics& statistics() const { return statistics_; }
   [[nodiscard]] const slam::Mapper& mapper() const { return mapper_; }
+  /// nullptr without a map.
+  [[nodiscard]] const mapping::Mapping* mapping() const { return mapping_.get(); }
 
  private:
   struct Session;
 
   config::Config config_;
   slam::Mapper mapper_;
+  std::unique_ptr<mapping::Mapping> mapping_;
   std::unique_ptr<Session> session_;
   SlamStatistics statistics_;
 };
