@@ -8,9 +8,10 @@
 namespace cvo::mapping {
 namespace {
 
-// Voxel indices packed into one sortable key (21 bits each: ±1 M voxels, far beyond max_range).
+// Voxel indices packed into one key that sorts by i, then j, then k (21 bits each: ±1 M voxels,
+// far beyond max_range).
+constexpr std::int64_t kOffset = 1 << 20, kMask = (1 << 21) - 1;
 std::uint64_t pack(std::int64_t i, std::int64_t j, std::int64_t k) {
-  constexpr std::int64_t kOffset = 1 << 20;
   return (static_cast<std::uint64_t>(i + kOffset) << 42) | (static_cast<std::uint64_t>(j + kOffset) << 21) |
          static_cast<std::uint64_t>(k + kOffset);
 }
@@ -20,6 +21,10 @@ struct Sample {
   float x, y, z;
   std::uint8_t b, g, r;
 };
+
+std::int64_t unpack_i(std::uint64_t key) { return static_cast<std::int64_t>(key >> 42) - kOffset; }
+std::int64_t unpack_j(std::uint64_t key) { return static_cast<std::int64_t>((key >> 21) & kMask) - kOffset; }
+std::int64_t unpack_k(std::uint64_t key) { return static_cast<std::int64_t>(key & kMask) - kOffset; }
 
 bool fits_int16_mm(float v) { return std::abs(v) < 32.0f; }
 
@@ -75,8 +80,38 @@ std::vector<CloudPoint> make_local_cloud(const core::RgbdFrame& frame, const std
     cloud.push_back({mm(x), mm(y), mm(z), byte(r), byte(g), byte(b)});
     first = last;
   }
+  cloud.shrink_to_fit();  // kept for the map's life
   return cloud;
 }
+
+namespace {
+
+// The lowest crossing, by a ray from the camera, of every half-cell column within `reach` (a
+// side x side lattice centred on the camera): rays go to the lowest surface voxel of every column,
+// sampled every half-cell and stopping one cell short of it. A ray to a higher voxel of the same
+// column runs above that one all the way (both start at the camera), so it would lower no crossing.
+std::vector<std::int16_t> lowest_crossings(const std::vector<std::uint64_t>& keys, double h, std::int64_t reach) {
+  const std::int64_t side = 2 * reach + 1;
+  std::vector<std::int16_t> lowest(static_cast<std::size_t>(side * side), FootprintColumn::kNoRay);
+  const auto index = [h](double v) { return static_cast<std::int64_t>(std::floor(v / h)); };
+  for (std::size_t n = 0; n < keys.size(); ++n) {
+    if (n > 0 && (keys[n - 1] >> 21) == (keys[n] >> 21)) continue;  // not the column's lowest
+    const Eigen::Vector3d end((unpack_i(keys[n]) + 0.5) * h, (unpack_j(keys[n]) + 0.5) * h,
+                              (unpack_k(keys[n]) + 0.5) * h);
+    const double length = end.norm();
+    const auto steps = static_cast<int>(std::floor((length - 2 * h) / h));
+    for (int step = 0; step <= steps; ++step) {
+      const Eigen::Vector3d q = end * (step * h / length);
+      const std::int64_t i = index(q.x()) + reach, j = index(q.y()) + reach;
+      if (i < 0 || j < 0 || i >= side || j >= side) continue;
+      auto& k = lowest[static_cast<std::size_t>(i * side + j)];  // by i, then j, as the columns
+      k = std::min<std::int16_t>(k, static_cast<std::int16_t>(index(q.z())));
+    }
+  }
+  return lowest;
+}
+
+}  // namespace
 
 Footprint make_footprint(const std::vector<CloudPoint>& cloud, const Eigen::Matrix3d& level_R_camera,
                          const core::MappingParameters& parameters) {
@@ -87,10 +122,10 @@ Footprint make_footprint(const std::vector<CloudPoint>& cloud, const Eigen::Matr
   const auto index = [h](double v) { return static_cast<std::int64_t>(std::floor(v / h)); };
   // Half-cells within max_range (plus a margin for the cloud's rounding) in each direction.
   const std::int64_t reach = static_cast<std::int64_t>(std::ceil(parameters.max_range * 1.01 / h)) + 1;
-  if (reach >= std::numeric_limits<std::int16_t>::max())
+  if (reach >= std::numeric_limits<std::int16_t>::max() / 2)
     throw std::invalid_argument("footprint: max_range / cell_size too large");
 
-  std::vector<std::uint64_t> keys;
+  std::vector<std::uint64_t> keys;  // surface voxels, sorted by i, j, k
   keys.reserve(cloud.size());
   const Eigen::Matrix3f rotation = level_R_camera.cast<float>();
   for (const auto& p : cloud) {
@@ -99,35 +134,28 @@ Footprint make_footprint(const std::vector<CloudPoint>& cloud, const Eigen::Matr
   }
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  constexpr std::int64_t kOffset = 1 << 20, kMask = (1 << 21) - 1;
-  for (const auto key : keys)
-    footprint.surfaces.push_back({static_cast<std::int16_t>(static_cast<std::int64_t>(key >> 42) - kOffset),
-                                  static_cast<std::int16_t>(static_cast<std::int64_t>((key >> 21) & kMask) - kOffset),
-                                  static_cast<std::int16_t>(static_cast<std::int64_t>(key & kMask) - kOffset)});
+  const auto lowest = lowest_crossings(keys, h, reach);
 
-  // Rays from the camera to every surface voxel's centre, sampled every half-cell, stopping one
-  // cell short of the surface: the lowest crossing of each column.
+  // Columns in (i, j) order: the lattice's, merged with the surfaces' (already in that order).
   const std::int64_t side = 2 * reach + 1;
-  constexpr std::int16_t kNone = std::numeric_limits<std::int16_t>::max();
-  std::vector<std::int16_t> lowest(static_cast<std::size_t>(side * side), kNone);
-  for (const auto& s : footprint.surfaces) {
-    const Eigen::Vector3d end((s.i + 0.5) * h, (s.j + 0.5) * h, (s.k + 0.5) * h);
-    const double length = end.norm();
-    const auto steps = static_cast<int>(std::floor((length - 2 * h) / h));
-    for (int step = 0; step <= steps; ++step) {
-      const Eigen::Vector3d q = end * (step * h / length);
-      const std::int64_t i = index(q.x()) + reach, j = index(q.y()) + reach;
-      if (i < 0 || j < 0 || i >= side || j >= side) continue;
-      auto& k = lowest[static_cast<std::size_t>(j * side + i)];
-      k = std::min<std::int16_t>(k, static_cast<std::int16_t>(index(q.z())));
+  std::size_t next = 0;
+  for (std::int64_t i = 0; i < side; ++i)
+    for (std::int64_t j = 0; j < side; ++j) {
+      FootprintColumn column{static_cast<std::int16_t>(i - reach), static_cast<std::int16_t>(j - reach),
+                             lowest[static_cast<std::size_t>(i * side + j)], 0};
+      for (; next < keys.size() && unpack_i(keys[next]) == column.i && unpack_j(keys[next]) == column.j; ++next) {
+        footprint.surface_k.push_back(static_cast<std::int16_t>(unpack_k(keys[next])));
+        ++column.surfaces;
+      }
+      if (column.surfaces == 0 && column.ray_k_min == FootprintColumn::kNoRay) continue;
+      footprint.columns.push_back(column);
+      if (footprint.i_max < footprint.i_min)
+        footprint.i_min = footprint.i_max = column.i, footprint.j_min = footprint.j_max = column.j;
+      footprint.i_min = std::min(footprint.i_min, column.i), footprint.i_max = std::max(footprint.i_max, column.i);
+      footprint.j_min = std::min(footprint.j_min, column.j), footprint.j_max = std::max(footprint.j_max, column.j);
     }
-  }
-  for (std::int64_t j = 0; j < side; ++j)
-    for (std::int64_t i = 0; i < side; ++i)
-      if (const auto k = lowest[static_cast<std::size_t>(j * side + i)]; k != kNone)
-        footprint.rays.push_back({static_cast<std::int16_t>(i - reach), static_cast<std::int16_t>(j - reach), k});
-  footprint.surfaces.shrink_to_fit();
-  footprint.rays.shrink_to_fit();
+  footprint.columns.shrink_to_fit();
+  footprint.surface_k.shrink_to_fit();
   return footprint;
 }
 

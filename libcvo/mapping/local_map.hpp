@@ -7,12 +7,12 @@
 //              undistorted pixel rays. Millimetres and 8-bit colour: 10 bytes a voxel.
 //   footprint  the keyframe's levelled frame (origin the camera centre, z up, x the optical axis
 //              made horizontal) on a lattice of half-cells, so that a footprint placed at any yaw
-//              samples every grid cell it covers:
-//                surfaces  every half-cell voxel holding a cloud point;
-//                rays      every half-cell column that a ray from the camera to a cloud point
-//                          crosses before the point's own cell, with the lowest height it crosses
-//                          it at. Which heights are obstacles and which are floor is decided where
-//                          the footprint is placed: the floor's height is known only there.
+//              samples every grid cell it covers; of every half-cell column:
+//                its surface voxels  the heights of the half-cell voxels holding cloud points;
+//                its lowest ray      the lowest height at which a ray from the camera to a
+//                                    surface voxel crossed it before reaching that voxel's cell.
+//              Which heights are obstacles and which are floor is decided where the footprint is
+//              placed: the floor's height is known only there.
 //
 // Both are bounded: the cloud by the image (pixels / stride²) and by max_range, the footprint by
 // max_range² / half-cell².
@@ -34,23 +34,24 @@ struct CloudPoint {
   [[nodiscard]] Eigen::Vector3f position() const { return Eigen::Vector3f(x, y, z) * 1e-3f; }
 };
 
-struct SurfaceVoxel {
-  std::int16_t i = 0, j = 0, k = 0;  // half-cell indices along x, y, z of the levelled frame
-};
-
-struct RayColumn {
-  std::int16_t i = 0, j = 0;  // half-cell column
-  std::int16_t k_min = 0;     // lowest half-cell height a ray crossed it at
+/// A half-cell column of the footprint: what lies in it.
+struct FootprintColumn {
+  static constexpr std::int16_t kNoRay = INT16_MAX;
+  std::int16_t i = 0, j = 0;        // half-cell indices along x, y of the levelled frame
+  std::int16_t ray_k_min = kNoRay;  // lowest half-cell height a ray crossed it at
+  std::uint16_t surfaces = 0;       // its surface voxels (their heights in Footprint::surface_k)
 };
 
 struct Footprint {
   double half_cell = 0.025;  // m
   Eigen::Matrix3d level_R_camera = Eigen::Matrix3d::Identity();
-  std::vector<SurfaceVoxel> surfaces;
-  std::vector<RayColumn> rays;
+  std::vector<FootprintColumn> columns;  // by i, then j
+  std::vector<std::int16_t> surface_k;   // each column's surface voxel heights, ascending, columns in order
+  std::int16_t i_min = 0, i_max = -1, j_min = 0, j_max = -1;  // bounds of the columns (empty: i_max < i_min)
 
   [[nodiscard]] std::size_t bytes() const {
-    return sizeof(Footprint) + surfaces.capacity() * sizeof(SurfaceVoxel) + rays.capacity() * sizeof(RayColumn);
+    return sizeof(Footprint) + columns.capacity() * sizeof(FootprintColumn) +
+           surface_k.capacity() * sizeof(std::int16_t);
   }
 };
 

@@ -28,6 +28,15 @@ double angle_between(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 
 }  // namespace
 
+std::vector<const slam::MapKeyframe*> placed_keyframes(const slam::Map& map) {
+  std::vector<const slam::MapKeyframe*> keyframes;
+  for (const auto& session : map.sessions)
+    if (session.placed)
+      for (const auto& k : map.keyframes)
+        if (k.session == session.session) keyframes.push_back(&k);
+  return keyframes;
+}
+
 Mapping::Mapping(const core::MappingParameters& parameters) : parameters_(parameters), counts_(parameters) {}
 Mapping::~Mapping() = default;
 Mapping::Mapping(Mapping&&) noexcept = default;
@@ -96,15 +105,11 @@ Eigen::Matrix3d Mapping::level_of(const Keyframe& keyframe) const {
 bool Mapping::place(const slam::Map& map) {
   const auto started = std::chrono::steady_clock::now();
   std::vector<Keyframe*> in_map;
-  for (const auto& session : map.sessions) {
-    if (!session.placed) continue;
-    for (const auto& k : map.keyframes) {
-      if (k.session != session.session) continue;
-      const auto it = keyframes_.find({k.session, k.id});
-      if (it == keyframes_.end()) continue;
-      it->second->map_T_camera = k.pose;
-      in_map.push_back(it->second.get());
-    }
+  for (const auto* k : placed_keyframes(map)) {
+    const auto it = keyframes_.find({k->session, k->id});
+    if (it == keyframes_.end()) continue;
+    it->second->map_T_camera = k->pose;
+    in_map.push_back(it->second.get());
   }
   revision_ = map.revision;
   const auto decided = decide_frame(in_map);

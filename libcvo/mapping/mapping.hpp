@@ -64,6 +64,10 @@ struct MappingStatistics {
   double place_ms_last = 0;   // wall time of the last place()
 };
 
+/// The keyframes of the map's placed sessions (in the map frame), sessions in the map's order:
+/// what the map is made of, and the trajectory drawn on it.
+std::vector<const slam::MapKeyframe*> placed_keyframes(const slam::Map& map);
+
 class Mapping {
  public:
   explicit Mapping(const core::MappingParameters& parameters);

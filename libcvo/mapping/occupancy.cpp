@@ -54,6 +54,7 @@ void OccupancyCounts::cover(std::int64_t i_min, std::int64_t j_min, std::int64_t
 }
 
 void OccupancyCounts::apply(const Footprint& footprint, const FootprintPlacement& placement, int sign) {
+  if (footprint.i_max < footprint.i_min) return;  // an empty footprint
   const double h = footprint.half_cell, inverse_cell = 1.0 / parameters_.cell_size;
   const double c = std::cos(placement.yaw), s = std::sin(placement.yaw);
   const Eigen::Vector3d& t = placement.translation;
@@ -63,54 +64,45 @@ void OccupancyCounts::apply(const Footprint& footprint, const FootprintPlacement
         static_cast<std::int64_t>(std::floor((c * x - s * y + t.x()) * inverse_cell)),
         static_cast<std::int64_t>(std::floor((s * x + c * y + t.y()) * inverse_cell))};
   };
-  // The footprint's half-cell bounds, placed: the grid must cover them first.
-  std::int64_t lo_i = std::numeric_limits<std::int64_t>::max(), lo_j = lo_i,
-               hi_i = std::numeric_limits<std::int64_t>::min(), hi_j = hi_i;
-  std::int16_t a_i = std::numeric_limits<std::int16_t>::max(), a_j = a_i,
-               b_i = std::numeric_limits<std::int16_t>::min(), b_j = b_i;
-  for (const auto& r : footprint.rays)
-    a_i = std::min(a_i, r.i), a_j = std::min(a_j, r.j), b_i = std::max(b_i, r.i), b_j = std::max(b_j, r.j);
-  for (const auto& v : footprint.surfaces)
-    a_i = std::min(a_i, v.i), a_j = std::min(a_j, v.j), b_i = std::max(b_i, v.i), b_j = std::max(b_j, v.j);
-  if (a_i > b_i) return;  // an empty footprint
-  for (const auto i : {a_i, b_i})
-    for (const auto j : {a_j, b_j}) {
+  std::int64_t lo_i = std::numeric_limits<std::int64_t>::max(), lo_j = lo_i;
+  std::int64_t hi_i = std::numeric_limits<std::int64_t>::min(), hi_j = hi_i;
+  for (const auto i : {footprint.i_min, footprint.i_max})
+    for (const auto j : {footprint.j_min, footprint.j_max}) {
       const auto [ci, cj] = cell_of(i, j);
-      lo_i = std::min(lo_i, ci - 1), lo_j = std::min(lo_j, cj - 1), hi_i = std::max(hi_i, ci + 1),
-      hi_j = std::max(hi_j, cj + 1);
+      lo_i = std::min(lo_i, ci - 1), lo_j = std::min(lo_j, cj - 1);
+      hi_i = std::max(hi_i, ci + 1), hi_j = std::max(hi_j, cj + 1);
     }
   cover(lo_i, lo_j, hi_i, hi_j);
-
   if (++serial_ == 0) {  // the stamps wrapped: none may look like this placement's
     for (auto& count : counts_) count.stamp = 0;
     serial_ = 1;
   }
   changed_last_ = 0;
-  const auto mark = [&](std::int64_t i, std::int64_t j, bool hit) {
+
+  // A voxel of height k lies at (k + 1/2) h + t.z above the floor: obstacle heights are [k_low, k_high].
+  const auto k_low = static_cast<std::int64_t>(std::ceil((parameters_.obstacle_min_height - t.z()) / h - 0.5));
+  const auto k_high = static_cast<std::int64_t>(std::floor((parameters_.obstacle_max_height - t.z()) / h - 0.5));
+  std::size_t next = 0;
+  for (const auto& column : footprint.columns) {
+    const std::int16_t* k = footprint.surface_k.data() + next;
+    next += column.surfaces;
+    const std::int16_t* k_end = footprint.surface_k.data() + next;
+    const std::int16_t* above_floor = std::lower_bound(k, k_end, k_low);
+    const bool hit = above_floor != k_end && *above_floor <= k_high;
+    const bool floor = above_floor != k;  // a surface below obstacle_min_height: the floor, seen
+    const bool crossed = column.ray_k_min <= k_high;
+    if (!hit && !floor && !crossed) continue;
+    const auto [i, j] = cell_of(column.i, column.j);
     auto& count = counts_[static_cast<std::size_t>((j - j0_) * width_ + (i - i0_))];
-    if (count.stamp == serial_) return;  // hits are marked first: a cell this placement hit stays a hit
-    count.stamp = serial_;
-    (hit ? count.hits : count.misses) += sign;
-    ++changed_last_;
-  };
-  const double low = parameters_.obstacle_min_height, high = parameters_.obstacle_max_height;
-  for (const auto& v : footprint.surfaces) {
-    const double z = (v.k + 0.5) * h + t.z();
-    if (z >= low && z <= high) {
-      const auto [i, j] = cell_of(v.i, v.j);
-      mark(i, j, true);
+    if (count.stamp != serial_) {  // this placement's first word on the cell
+      count.stamp = serial_, count.hit = hit;
+      (hit ? count.hits : count.misses) += sign;
+      ++changed_last_;
+    } else if (hit && !count.hit) {  // a hit outweighs the misses of the same placement
+      count.hit = 1;
+      count.misses -= sign, count.hits += sign;
     }
   }
-  for (const auto& v : footprint.surfaces)
-    if ((v.k + 0.5) * h + t.z() < low) {
-      const auto [i, j] = cell_of(v.i, v.j);
-      mark(i, j, false);
-    }
-  for (const auto& r : footprint.rays)
-    if ((r.k_min + 0.5) * h + t.z() <= high) {
-      const auto [i, j] = cell_of(r.i, r.j);
-      mark(i, j, false);
-    }
 }
 
 OccupancyGrid OccupancyCounts::grid() const {

@@ -259,22 +259,24 @@ tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mappin
                            double place_ms) {
   io::write_map_files(*args.map, mapping);
   const auto grid = mapping.grid();  // write_map_files throws without one
+  const auto keyframes = mapping::placed_keyframes(map);
   if (args.map_plot) {
     std::vector<Eigen::Vector3d> centres;
-    for (const auto& session : map.sessions)
-      for (const auto& k : map.keyframes)
-        if (session.placed && k.session == session.session) centres.push_back(k.pose.translation());
+    for (const auto* k : keyframes) centres.push_back(k->pose.translation());
     io::write_map_plot(*args.map_plot, *grid, centres);
   }
   const auto statistics = mapping.statistics();
-  tools::MapReport m{args.map->string(), std::string(mapping::up_source_name(grid->frame.up)), grid->grid.width,
-                     grid->grid.height, grid->grid.resolution};
+  tools::MapReport m;
+  m.dir = args.map->string();
+  m.up = mapping::up_source_name(grid->frame.up);
+  m.width = grid->grid.width, m.height = grid->grid.height, m.resolution = grid->grid.resolution;
   for (const auto c : grid->grid.cells) m.occupied += c == 100, m.free += c == 0;
   m.keyframes = statistics.placed;
   m.bytes_per_keyframe =
       statistics.keyframes ? static_cast<double>(statistics.local_map_bytes) / statistics.keyframes : 0;
   m.cloud_points = mapping.cloud().size();
   m.place_ms = place_ms;
+  for (const auto* k : keyframes) m.keyframe_timestamps.push_back(k->timestamp);
   return m;
 }
 

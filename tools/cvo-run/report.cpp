@@ -45,6 +45,7 @@ program::Json map_object(const MapReport& m) {
   o["bytes_per_keyframe"] = m.bytes_per_keyframe;
   o["cloud_points"] = m.cloud_points;
   o["place_ms"] = m.place_ms;
+  o["keyframe_timestamps"] = m.keyframe_timestamps;
   return o;
 }
 

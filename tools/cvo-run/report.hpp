@@ -50,7 +50,8 @@ struct MapReport {
   std::size_t keyframes = 0;           // placed in the grid
   double bytes_per_keyframe = 0;       // local map (cloud and footprint)
   std::size_t cloud_points = 0;
-  double place_ms = 0;  // placing every local map at its final pose
+  double place_ms = 0;                      // placing every local map at its final pose
+  std::vector<double> keyframe_timestamps;  // of the keyframes in the map (their colour stamps), in map order
 };
 
 struct SlamReport {
