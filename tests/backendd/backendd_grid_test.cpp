@@ -123,7 +123,7 @@ TEST_F(BackenddGrid, EveryGridDecodesAndIsAGridOfTheRoom) {
   EXPECT_GT(occupied, 50u);
   EXPECT_GT(free, 200u);
   std::printf("CVO_GRID: %zu sent; the last %d x %d cells, %d bytes encoded, %zu occupied, %zu free\n", grids.size(),
-              last.width, last.height, last.getEncodedSize() + 8, occupied, free);
+              last.width, last.height, last.getEncodedSize(), occupied, free);
 }
 
 TEST_F(BackenddGrid, EachGridShowsTheMapOfItsRevisionAndTheLastTheFinalMap) {
