@@ -90,6 +90,7 @@ int main(int argc, char** argv) try {
   write(out / "local_graph/sample", graph);
   write(out / "map/sample", encode(cvo::test::sample_map()));
   write(out / "status/sample", encode(cvo::test::sample_status()));
+  write(out / "grid/sample", encode(cvo::test::sample_grid()));
 
   // A keyframe store as cvo-backendd leaves it, then the same cut short in its last record (what a
   // crash during a write leaves).

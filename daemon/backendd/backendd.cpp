@@ -14,6 +14,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/grid_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
@@ -29,11 +30,13 @@
 #include "libcvo/core/units.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
+#include "libcvo/lcm/grid_conversion.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/tracker_messages.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/mapping/mapping.hpp"
 #include "libcvo/slam/mapper.hpp"
 
 namespace cvo::daemon::backendd {
@@ -48,6 +51,9 @@ constexpr int kMaxDrainMessages = 10000;
 // Records that may wait in the store for the back end (each queued as a few bytes): hours of a
 // tracker's keyframes; beyond it live input is refused and counted (queue_drops).
 constexpr std::int64_t kMaxWaitingInStore = 16384;
+// CVO_GRID at most this often while the grid changes (a loop closure's goes out at once): a grid
+// is tens of kilobytes, and a planner replans on each.
+constexpr auto kGridPeriod = 1s;
 
 std::string fixed(double value, int digits) {
   char text[64];
@@ -92,6 +98,47 @@ std::string text(const MapSummary& s) {
          std::to_string(s.loops_across) + " across sessions), map revision " + std::to_string(s.revision);
 }
 
+// What CVO_GRID has sent, and what the mapping costs, for CVO_STATUS, systemd and the closing note.
+struct GridSummary {
+  std::optional<Clock::time_point> last;  // when the last CVO_GRID went
+  std::int64_t revision = -1;             // of the last CVO_GRID
+  std::size_t published = 0, bytes = 0;   // CVO_GRIDs sent; the last one's encoded size
+  std::size_t not_mapped = 0;             // keyframes the mapping refused
+  std::size_t places = 0;                 // place() calls that changed the grid
+  double place_ms_total = 0, place_ms_max = 0;
+};
+
+std::string text(const GridSummary& g, const mapping::MappingStatistics& s) {
+  if (g.published == 0) return "no grid yet (" + std::to_string(s.keyframes) + " keyframes mapped)";
+  return "grid revision " + std::to_string(g.revision) + " (" + std::to_string(s.placed) + " of " +
+         std::to_string(s.keyframes) + " keyframes mapped, " + fixed(static_cast<double>(s.local_map_bytes) / 1e6, 1) +
+         " MB of local maps, " + std::to_string(g.bytes) + " bytes on CVO_GRID)";
+}
+
+using KeyframePoses = std::map<mapping::KeyframeKey, core::SE3>;
+
+KeyframePoses placed_poses(const slam::Map& map) {
+  KeyframePoses poses;
+  for (const auto& s : map.sessions)
+    if (s.placed)
+      for (const auto& k : map.keyframes)
+        if (k.session == s.session) poses.emplace(mapping::KeyframeKey{k.session, k.id}, k.pose);
+  return poses;
+}
+
+// Whether some keyframe of `before` is at least half a cell or half a degree from where `now` has
+// it: a loop closure that moved it so far changed what a planner sees.
+bool moved_visibly(const KeyframePoses& before, const KeyframePoses& now, double cell_size) {
+  for (const auto& [key, pose] : before) {
+    const auto at = now.find(key);
+    if (at == now.end()) continue;
+    const core::SE3 delta = pose.inverse() * at->second;
+    if (delta.translation().norm() >= cell_size / 2 || Eigen::AngleAxisd(delta.rotation()).angle() >= 0.5 * M_PI / 180)
+      return true;
+  }
+  return false;
+}
+
 // How long a new session took to find its place in the map, after its first keyframe: in sensor
 // time (what the robot had to see) and on this machine (what the back end took, with its queue).
 std::string join_text(const slam::Map& map, core::SessionId session, std::optional<Clock::time_point> first_arrival) {
@@ -120,10 +167,13 @@ std::filesystem::path resolve_vocabulary(const std::string& setting) {
 // Everything the cvo-backend thread owns.
 struct Backendd::Work {
   Work(loop_closure::Vocabulary vocabulary, const config::Config& config)
-      : mapper(std::move(vocabulary), config::mapper_parameters(config)), lcm(publish_url(config.backendd)) {}
+      : mapper(std::move(vocabulary), config::mapper_parameters(config)),
+        mapping(config.mapping),
+        lcm(publish_url(config.backendd)) {}
 
   slam::Mapper mapper;
-  ::lcm::LCM lcm;  // CVO_MAP and CVO_STATUS
+  mapping::Mapping mapping;  // the occupancy grid of the mapper's map (CVO_GRID)
+  ::lcm::LCM lcm;            // CVO_MAP, CVO_GRID and CVO_STATUS
   // CVO_MAP's epoch: revisions count from the start of this process, and a tracker takes a newer
   // epoch's maps after a restart of the back end instead of refusing them as stale.
   const std::int64_t epoch = core::wall_utime();
@@ -131,6 +181,10 @@ struct Backendd::Work {
   std::map<core::SessionId, std::optional<Clock::time_point>> first_arrival;
   std::vector<std::string> joins;  // every join noted, repeated in the closing note
   MapSummary summary;              // of the last map published
+  GridSummary grid;
+  bool grid_due = false;  // the grid changed since the last CVO_GRID
+  // The placed keyframes' poses at the last place(), and in the last CVO_GRID.
+  KeyframePoses placed_poses, grid_poses;
   std::int64_t local_graphs = 0, processed = 0, processed_at_last_status = 0;
   Clock::time_point last_status = Clock::now();
 };
@@ -410,6 +464,7 @@ void Backendd::work_loop() {
       process(*queued);
     else if (receiver_done && queue_.size() == 0)
       break;
+    if (work_->grid_due && (!work_->grid.last || Clock::now() - *work_->grid.last >= kGridPeriod)) publish_grid(false);
     if (Clock::now() - work_->last_status >= status_period)
       publish_status(work_->summary.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT
                                                    : cvo_lcm::status_t::STATE_RUNNING);
@@ -465,16 +520,23 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_
   for (const auto& loop : outcome.loops)
     notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
                 keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
-  publish_map(outcome.joined);
+  // The keyframe is in the SLAM map whether or not the occupancy grid can use it.
+  try {
+    w.mapping.add_keyframe({k.session, k.id}, k.frame);
+  } catch (const std::invalid_argument& e) {
+    ++w.grid.not_mapped;
+    notes_.note_limited("not mapped", keyframe_name(k.session, k.id) + " left out of the grid: " + e.what());
+  }
+  publish_map(outcome.joined, !outcome.loops.empty() || !outcome.joined.empty());
 }
 
 void Backendd::apply_local_graph(const LocalGraphRecord& record) {
   const auto joined = work_->mapper.add_local_graph(record.session, record.keyframe_id, record.graph);
   ++work_->local_graphs;
-  publish_map(joined);
+  publish_map(joined, !joined.empty());
 }
 
-void Backendd::publish_map(const std::vector<std::int64_t>& joined) {
+void Backendd::publish_map(const std::vector<std::int64_t>& joined, bool after_loop) {
   Work& w = *work_;
   const slam::Map map = w.mapper.map();
   const auto message = lcm::to_message(map, core::wall_utime(), w.epoch);
@@ -485,6 +547,48 @@ void Backendd::publish_map(const std::vector<std::int64_t>& joined) {
     w.joins.push_back(join_text(map, session, arrived != w.first_arrival.end() ? arrived->second : std::nullopt));
     notes_.note(w.joins.back());
   }
+  place_in_grid(map, after_loop);
+}
+
+// The map's keyframes into the grid at their new poses. A changed grid goes out at once when it is
+// the first, or a loop closure moved keyframes of the last one visibly (a robot must not plan on
+// the grid of before the loop); else when a second has passed since the last (work_loop).
+void Backendd::place_in_grid(const slam::Map& map, bool after_loop) {
+  Work& w = *work_;
+  if (!w.mapping.place(map)) return;
+  const auto s = w.mapping.statistics();
+  ++w.grid.places;
+  w.grid.place_ms_total += s.place_ms_last;
+  w.grid.place_ms_max = std::max(w.grid.place_ms_max, s.place_ms_last);
+  w.grid_due = true;
+  w.placed_poses = placed_poses(map);
+  const bool moved = after_loop && moved_visibly(w.grid_poses, w.placed_poses, config_.mapping.cell_size);
+  if (!w.grid.last || moved || Clock::now() - *w.grid.last >= kGridPeriod) publish_grid(moved);
+}
+
+void Backendd::publish_grid(bool after_loop) {
+  Work& w = *work_;
+  const auto grid = w.mapping.grid();
+  if (!grid) return;
+  const auto message = lcm::to_message(*grid, core::wall_utime(), w.epoch);
+  w.lcm.publish("CVO_GRID", &message);
+  const bool first = w.grid.published == 0;
+  w.grid.last = Clock::now();
+  w.grid.revision = message.revision;
+  w.grid.bytes = static_cast<std::size_t>(message.getEncodedSize());
+  ++w.grid.published;
+  w.grid_due = false;
+  w.grid_poses = w.placed_poses;
+  const auto s = w.mapping.statistics();
+  if (first)
+    notes_.note("first CVO_GRID: " + std::to_string(grid->grid.width) + " x " + std::to_string(grid->grid.height) +
+                " cells of " + fixed(grid->grid.resolution, 3) + " m, up from the " +
+                std::string(mapping::up_source_name(grid->frame.up)));
+  else if (after_loop)
+    notes_.note_limited("grid after loop", "CVO_GRID revision " + std::to_string(grid->revision) +
+                                               " after a loop: " + std::to_string(s.replaced_last) +
+                                               " keyframes re-placed in " + fixed(s.place_ms_last, 1) + " ms" +
+                                               (s.rebuilt_last ? " (rebuilt)" : ""));
 }
 
 void Backendd::publish_status(std::int8_t state) {
@@ -507,7 +611,8 @@ void Backendd::publish_status(std::int8_t state) {
   s.keyframes_lost = keyframes_lost_;
   const cvo_lcm::status_t message = status_message(std::move(s), notes_);
   w.lcm.publish("CVO_STATUS", &message);
-  systemd_.status(store.degraded() ? "degraded: " + describe(store) + "; " + text(w.summary) : text(w.summary));
+  const std::string summary = text(w.summary) + "; " + text(w.grid, w.mapping.statistics());
+  systemd_.status(store.degraded() ? "degraded: " + describe(store) + "; " + summary : summary);
   w.processed_at_last_status = w.processed;
   w.last_status = now;
 }
@@ -521,13 +626,20 @@ void Backendd::finish() {
       notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
                   std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
     }
-    publish_map({});
+    publish_map({}, false);
   } catch (const std::exception& e) {
     notes_.note(std::string("final optimisation failed, the last map stands: ") + e.what());
   }
+  publish_grid(false);  // the final grid, changed or not: what a recording of the run ends with
   notes_.note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
               std::to_string(w.mapper.loops_accepted()) + " loops accepted of " +
               std::to_string(w.mapper.loops_tried()) + " tried");
+  const auto& g = w.grid;
+  notes_.note(text(g, w.mapping.statistics()) + "; " + std::to_string(g.published) + " CVO_GRIDs sent; place " +
+              std::to_string(g.places) + " times, " +
+              fixed(g.places > 0 ? g.place_ms_total / static_cast<double>(g.places) : 0.0, 1) + " ms on average, " +
+              fixed(g.place_ms_max, 1) + " ms at most" +
+              (g.not_mapped > 0 ? "; " + std::to_string(g.not_mapped) + " keyframes not mapped" : ""));
   for (const auto& join : w.joins) notes_.note(join);
   if (const auto waited = waited_in_store_.load(); waited > 0)
     notes_.note(std::to_string(waited) +

@@ -11,13 +11,15 @@
 //                 a local graph or CVO_POSE naming an unknown keyframe) is asked for again on
 //                 CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
 //   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
-//                 keyframe-graph optimisation) -> CVO_MAP after each change; CVO_STATUS once a
-//                 period
+//                 keyframe-graph optimisation) -> CVO_MAP after each change; beside it
+//                 mapping::Mapping, each keyframe's local map placed at the map's poses -> CVO_GRID
+//                 at most once a second while it changes, at once after a loop closure that moved
+//                 keyframes; CVO_STATUS once a period
 //
 // At start-up the store is read back and every record goes through the same door and path, so a
 // restart resumes every session received before. On SIGTERM/SIGINT/SIGHUP: what is already in the socket
 // is taken in, the queue is drained, a final global optimisation runs, the final CVO_MAP is
-// published, exit 0. No record can stop the daemon: what the mapper cannot apply is noted and
+// published, then the final CVO_GRID, exit 0. No record can stop the daemon: what the mapper cannot apply is noted and
 // skipped.
 #include <atomic>
 #include <chrono>
@@ -43,6 +45,9 @@
 
 namespace lcm {
 class LCM;
+}
+namespace cvo::slam {
+struct Map;
 }
 
 namespace cvo::daemon::backendd {
@@ -88,7 +93,9 @@ class Backendd {
   std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
   void apply_keyframe(const lcm::Keyframe& keyframe, std::optional<std::chrono::steady_clock::time_point> arrived);
   void apply_local_graph(const LocalGraphRecord& record);
-  void publish_map(const std::vector<std::int64_t>& joined);
+  void publish_map(const std::vector<std::int64_t>& joined, bool after_loop);
+  void place_in_grid(const slam::Map& map, bool after_loop);
+  void publish_grid(bool after_loop);
   void publish_status(std::int8_t state);
   void finish();
 

@@ -32,6 +32,9 @@ constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession},
                                 CountField{"num_keyframes", 32, kMapKeyframe}, CountField{"num_loops", 36, kMapLoop}};
 // keyframe_request_t: version, utime, session (20), then the count of int64 ids.
 constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}};
+// grid_t: version, utime, revision, epoch (28), map_T_grid (84), up (85), resolution (93),
+// origin[3] (117), width height (125), then the count of int8 cells, and the string frame after them.
+constexpr std::array kGridCounts{CountField{"num_cells", 125, 1}};
 
 std::int32_t read_be32(const std::uint8_t* p) {
   return static_cast<std::int32_t>((std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) |
@@ -46,6 +49,7 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
   if (type_name == "map_t") return {40, kMapCounts};
   if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
+  if (type_name == "grid_t") return {129, kGridCounts, kStringsAfterArrays, 1};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
   // (93), rss_bytes (101), bad_messages[14] (213), 5 int64 (253), then the strings process and detail.
   if (type_name == "status_t") return {253, {}, 253, 2};
@@ -54,7 +58,18 @@ WireLayout wire_layout(std::string_view type_name) {
 
 std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int size) {
   if (size < layout.header_bytes) return {};
-  for (int i = 0, at = layout.strings_at; i < layout.num_strings; ++i) {
+  std::int64_t needed = layout.header_bytes;  // 64-bit: counts up to 2^31 times up to 376 bytes
+  for (const auto& field : layout.counts) {
+    const std::int32_t count = read_be32(body + field.offset);
+    if (count < 0) return "negative count " + std::string(field.name) + " = " + std::to_string(count);
+    needed += std::int64_t{count} * field.bytes_per_element;
+  }
+  if (needed > size)
+    return "truncated body: its counts need at least " + std::to_string(needed) + " bytes, it has " +
+           std::to_string(size);
+  // needed <= size: the arrays end within the body.
+  const int strings_at = layout.strings_at == kStringsAfterArrays ? static_cast<int>(needed) : layout.strings_at;
+  for (int i = 0, at = strings_at; i < layout.num_strings; ++i) {
     if (size - at < 4) return {};                      // truncated: the lcm-gen decoder says so
     const std::int32_t length = read_be32(body + at);  // includes the terminating NUL
     if (length < 1 || length > size - at - 4)
@@ -66,16 +81,6 @@ std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int
       return "string at body offset " + std::to_string(at) + " is not one NUL-terminated text";
     at += 4 + length;
   }
-  if (layout.counts.empty()) return {};
-  std::int64_t needed = layout.header_bytes;  // 64-bit: counts up to 2^31 times up to 376 bytes
-  for (const auto& field : layout.counts) {
-    const std::int32_t count = read_be32(body + field.offset);
-    if (count < 0) return "negative count " + std::string(field.name) + " = " + std::to_string(count);
-    needed += std::int64_t{count} * field.bytes_per_element;
-  }
-  if (needed > size)
-    return "truncated body: its counts need at least " + std::to_string(needed) + " bytes, it has " +
-           std::to_string(size);
   return {};
 }
 

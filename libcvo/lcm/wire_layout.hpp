@@ -25,12 +25,14 @@ struct CountField {
 struct WireLayout {
   int header_bytes = 0;                // body bytes before the first variable-length array
   std::span<const CountField> counts;  // empty: the type has no variable-length arrays
-  // Strings, consecutive, from this body offset to the end (-1: none). lcm-gen's decoder reads a
-  // zero or negative string length as a huge size (undefined behaviour for INT32_MIN), so each
-  // length is checked to be in 1..remaining bytes first, and the text to end at its only NUL.
+  // Strings, consecutive, from this body offset to the end (-1: none; kStringsAfterArrays: right
+  // after the arrays the counts size). lcm-gen's decoder reads a zero or negative string length as
+  // a huge size (undefined behaviour for INT32_MIN), so each length is checked to be in
+  // 1..remaining bytes first, and the text to end at its only NUL.
   int strings_at = -1;
   int num_strings = 0;
 };
+inline constexpr int kStringsAfterArrays = -2;
 
 /// The layout of the type named by lcm-gen's getTypeName() ("rgbd_frame_t", ...); an empty layout
 /// for types with neither arrays nor strings.

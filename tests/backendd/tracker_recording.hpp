@@ -21,19 +21,19 @@ struct Message {
   std::vector<std::uint8_t> bytes;
 };
 
-/// cvo-trackerd --deterministic on tests/data/fr1_rpy_50, unpaced, with `settings` ("key=value",
-/// each passed as --set) on top; its log and stderr go to `dir`.
-inline std::vector<Message> tracker_recording(const std::filesystem::path& dir,
-                                              const std::vector<std::string>& settings = {}) {
+/// cvo-trackerd --deterministic on `folder` (tests/data/fr1_rpy_50 unless told), unpaced, with
+/// `settings` ("key=value", each passed as --set) on top; its log and stderr go to `dir`.
+inline std::vector<Message> tracker_recording(
+    const std::filesystem::path& dir, const std::vector<std::string>& settings = {},
+    const std::filesystem::path& folder = std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50") {
   using namespace std::chrono_literals;
   const auto out = dir / "tracker.lcmlog";
-  std::vector<std::string> args{
-      "--source",      "tum:" + (std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").string(),
-      "--exit-on-eof", "--deterministic",
-      "--lcm-url",     "file://" + out.string() + "?mode=w",
-      "--set",         "trackerd.paced=false",
-      "--set",         "trackerd.realtime_priority=0",
-      "--set",         "trackerd.lock_memory=false"};
+  std::vector<std::string> args{"--source",      "tum:" + folder.string(),
+                                "--exit-on-eof", "--deterministic",
+                                "--lcm-url",     "file://" + out.string() + "?mode=w",
+                                "--set",         "trackerd.paced=false",
+                                "--set",         "trackerd.realtime_priority=0",
+                                "--set",         "trackerd.lock_memory=false"};
   for (const auto& s : settings) args.insert(args.end(), {"--set", s});
   DaemonProcess trackerd(std::filesystem::path(CVO_TOOLS_DIR) / "cvo-trackerd", args, dir / "tracker.txt");
   EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0) << slurp(dir / "tracker.txt");

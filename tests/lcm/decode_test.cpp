@@ -29,6 +29,7 @@ TEST(Decode, EveryTruncationOfEveryTypeFails) {
   expect_every_truncation_fails(test::sample_map());
   expect_every_truncation_fails(test::sample_status());
   expect_every_truncation_fails(test::sample_keyframe_request());
+  expect_every_truncation_fails(test::sample_grid());
 }
 
 TEST(Decode, ShortBufferSaysSo) {
@@ -172,6 +173,7 @@ TEST(Decode, RandomGarbageNeverCrashes) {
     expect_garbage_fails<cvo_lcm::map_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::status_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::keyframe_request_t>(rng, keep);
+    expect_garbage_fails<cvo_lcm::grid_t>(rng, keep);
   }
 }
 

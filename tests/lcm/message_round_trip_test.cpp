@@ -40,11 +40,16 @@ struct Sample<cvo_lcm::keyframe_request_t> {
   static auto make() { return test::sample_keyframe_request(); }
 };
 
+template <>
+struct Sample<cvo_lcm::grid_t> {
+  static auto make() { return test::sample_grid(); }
+};
+
 template <class T>
 class MessageRoundTrip : public ::testing::Test {};
 using ChannelTypes =
     ::testing::Types<cvo_lcm::rgbd_frame_t, cvo_lcm::pose_t, cvo_lcm::keyframe_t, cvo_lcm::local_graph_t,
-                     cvo_lcm::map_t, cvo_lcm::status_t, cvo_lcm::keyframe_request_t>;
+                     cvo_lcm::map_t, cvo_lcm::status_t, cvo_lcm::keyframe_request_t, cvo_lcm::grid_t>;
 TYPED_TEST_SUITE(MessageRoundTrip, ChannelTypes);
 
 TYPED_TEST(MessageRoundTrip, DecodesToTheSameMessage) {
@@ -74,6 +79,9 @@ TYPED_TEST(MessageRoundTrip, WireLayoutTableMatchesTheEncoding) {
     EXPECT_GT(count, 0) << field.name << ": the sample sets every count";
     size += std::int64_t{count} * field.bytes_per_element;
   }
+  if (layout.strings_at == kStringsAfterArrays)  // grid_t's frame: its length, "grid" and its NUL
+    for (int i = 0; i < layout.num_strings; ++i)
+      size += 4 + ((body[size] << 24) | (body[size + 1] << 16) | (body[size + 2] << 8) | body[size + 3]);
   EXPECT_EQ(size, static_cast<std::int64_t>(bytes.size()) - 8) << "header and element sizes of the table";
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "cvo_lcm/grid_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
@@ -189,6 +190,26 @@ inline cvo_lcm::keyframe_request_t sample_keyframe_request() {
   m.session = 0x5e5510'0000'0001;
   m.ids = {3, 7, 12};
   m.num_ids = static_cast<std::int32_t>(m.ids.size());
+  return m;
+}
+
+inline cvo_lcm::grid_t sample_grid() {
+  cvo_lcm::grid_t m{};
+  m.version = cvo_lcm::grid_t::SCHEMA_VERSION;
+  m.utime = 1305031299600000;
+  m.revision = 17;
+  m.epoch = 1305031200000000;
+  m.map_T_grid = sample_pose(0.25);
+  m.up = cvo_lcm::grid_t::UP_ACCELEROMETER;
+  m.resolution = 0.05;
+  m.origin[0] = -1.25;
+  m.origin[1] = 0.5;
+  m.width = 3;
+  m.height = 2;
+  m.cells = {cvo_lcm::grid_t::CELL_UNKNOWN, cvo_lcm::grid_t::CELL_FREE,     cvo_lcm::grid_t::CELL_OCCUPIED,
+             cvo_lcm::grid_t::CELL_FREE,    cvo_lcm::grid_t::CELL_OCCUPIED, cvo_lcm::grid_t::CELL_UNKNOWN};
+  m.num_cells = static_cast<std::int32_t>(m.cells.size());
+  m.frame = "grid";
   return m;
 }
 
