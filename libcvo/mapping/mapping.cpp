@@ -26,6 +26,18 @@ double angle_between(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
   return Eigen::AngleAxisd(a.transpose() * b).angle();
 }
 
+// Whether a footprint placed at `from` would cover other cells at `to`: some column of it moves
+// by a quarter cell or more (an optimisation moves every keyframe a little; re-placing those that
+// moved less would change next to nothing and cost the whole grid).
+bool moved(const FootprintPlacement& from, const FootprintPlacement& to, const Footprint& footprint) {
+  const double tolerance = footprint.half_cell / 2;
+  const double reach = footprint.half_cell * std::hypot(std::max<double>(-footprint.i_min, footprint.i_max) + 1,
+                                                        std::max<double>(-footprint.j_min, footprint.j_max) + 1);
+  const double turn = std::abs(std::remainder(to.yaw - from.yaw, 2 * M_PI));
+  return (to.translation.head<2>() - from.translation.head<2>()).norm() + turn * reach >= tolerance ||
+         std::abs(to.translation.z() - from.translation.z()) >= tolerance;
+}
+
 }  // namespace
 
 std::vector<const slam::MapKeyframe*> placed_keyframes(const slam::Map& map) {
@@ -112,7 +124,11 @@ bool Mapping::place(const slam::Map& map) {
     in_map.push_back(it->second.get());
   }
   revision_ = map.revision;
-  const auto decided = decide_frame(in_map);
+  // The frame is decided again only when the map has doubled since (the up and the floor settle
+  // as the map grows; a new frame re-places everything).
+  const bool decide = !frame_ || in_map.size() >= 2 * decided_with_;
+  const auto decided = decide ? decide_frame(in_map) : frame_;
+  if (decide && decided) decided_with_ = in_map.size();
   bool rebuild = false;
   if (decided &&
       (!frame_ || frame_->up != decided->up ||
@@ -130,7 +146,7 @@ bool Mapping::place(const slam::Map& map) {
   for (auto* k : in_map) {
     if (!k->footprint) k->footprint = make_footprint(k->cloud, level_of(*k), parameters_);
     const auto placement = place_footprint(grid_T_map * k->map_T_camera, k->footprint->level_R_camera);
-    if (rebuild || !k->placed || !(*k->placed == placement)) moves.emplace_back(k, placement);
+    if (rebuild || !k->placed || moved(*k->placed, placement, *k->footprint)) moves.emplace_back(k, placement);
   }
   // Most keyframes moved (a loop closure's optimisation moves all a little): placing all anew
   // costs half of taking each out and putting it back.

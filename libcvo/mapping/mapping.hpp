@@ -6,9 +6,11 @@
 //                 the frame is not kept. Its footprint is made the first time it is placed, once
 //                 its levelling is known (up.hpp).
 //   place         the keyframes of every placed session of a slam::Map at their poses: the grid
-//                 frame is (re)decided (up.hpp), new keyframes are placed, moved ones re-placed
-//                 (occupancy.hpp: only their cells change), and every one when the grid frame
-//                 moved or most keyframes did.
+//                 frame is decided (up.hpp; again each time the map has doubled), new keyframes
+//                 are placed, moved ones re-placed (occupancy.hpp: only their cells change), and
+//                 every one when the grid frame moved or most keyframes did. A keyframe moved
+//                 when some column of its footprint moved by a quarter cell or more; one that
+//                 moved less stays where it was placed.
 //   grid, cloud, octree   the products (occupancy.hpp, cloud.hpp, octree.hpp).
 //
 // Keyframes of sessions not yet in the map frame wait, local clouds made, until their session
@@ -103,7 +105,7 @@ class Mapping {
   std::vector<float> pixel_rays_;
   std::map<KeyframeKey, std::unique_ptr<Keyframe>> keyframes_;
   std::optional<GridFrame> frame_;
-  std::optional<Eigen::Vector3d> up_map_;  // the map's up when a footprint was last levelled by it
+  std::size_t decided_with_ = 0;  // keyframes in the map when the frame was last decided
   OccupancyCounts counts_;
   std::uint64_t revision_ = 0;
   MappingStatistics statistics_;

@@ -170,6 +170,16 @@ TEST(Mapping, ALoopClosureThatMovesKeyframesGivesTheGridABuildFromScratchAtTheNe
   EXPECT_EQ(b.mapping.grid()->grid, build(turning(), 0, mounted(), false, moved).mapping.grid()->grid);
 }
 
+TEST(Mapping, AKeyframeThatMovedLessThanAQuarterCellStaysWhereItWasPlaced) {
+  auto b = build(turning(), 0, mounted());
+  const auto before = b.mapping.grid()->grid;
+  auto nudged = b.poses;
+  nudged[4] = core::SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.003, 0, 0)) * nudged[4];
+  EXPECT_FALSE(b.mapping.place(map_of(nudged, 2)));
+  EXPECT_EQ(b.mapping.statistics().replaced_last, 0u);
+  EXPECT_EQ(b.mapping.grid()->grid, before);
+}
+
 TEST(Mapping, PlacingTheSameMapAgainChangesNothing) {
   auto b = build(turning(), 0, mounted());
   EXPECT_FALSE(b.mapping.place(map_of(b.poses)));
