@@ -49,8 +49,8 @@ it, and a record that cannot be decoded or applied only itself: each is named on
 offset in the file and why.
 
 stdout, three lines: "records: N intact, S skipped; no damage" (or "; B damaged bytes skipped (D
-stretches)"), "map: K keyframes and G local graphs applied, M keyframes in the grid, P of Q sessions
-in the map", "wrote: FILES".)help";
+stretches)"), "map: K keyframes and G local graphs applied, M keyframes in the grid (R refused), P of Q
+sessions in the map", "wrote: FILES".)help";
 
 constexpr const char* kNotes =
     R"(configuration: the same keys as cvo-backendd's (loop closure, pose graph, mapping.*: cell size,
@@ -101,8 +101,8 @@ void print_summary(const tools::StoreMap& m, const io::MapFiles& files, const st
   std::cout << "\n";
   const auto statistics = m.mapping.statistics();
   std::cout << "map: " << m.keyframes << " keyframes and " << m.local_graphs << " local graphs applied, "
-            << statistics.placed << " keyframes in the grid, " << m.sessions_placed << " of " << m.sessions
-            << " sessions in the map\n";
+            << statistics.placed << " keyframes in the grid (" << m.not_mapped.size() << " refused), "
+            << m.sessions_placed << " of " << m.sessions << " sessions in the map\n";
   std::cout << "wrote: " << files.grid_pgm.string() << " " << files.grid_yaml.string() << " "
             << files.cloud_ply.string() << " " << files.octomap_bt.string() << (plot ? " " + plot->string() : "")
             << "\n";

@@ -2,6 +2,7 @@
 
 #include <exception>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <variant>
@@ -15,6 +16,16 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace daemon::backendd;
+
+// The keyframe is in the SLAM map whether or not the mapping can use it (as in cvo-backendd).
+void map_keyframe(const lcm::Keyframe& k, StoreMap& out) {
+  try {
+    out.mapping.add_keyframe({k.session, k.id}, k.frame);
+  } catch (const std::invalid_argument& e) {
+    out.not_mapped.push_back(describe(MessageKey{RecordKind::kKeyframe, k.session, k.id}) +
+                             " left out of the grid: " + e.what());
+  }
+}
 
 // One intact record through the door and into the mapper and the mapping, as cvo-backendd replays
 // it; "" when it was used, else why not.
@@ -30,12 +41,12 @@ std::string use_record(const StoreSnapshot& snapshot, const IntactRecord& record
     if (const auto* k = std::get_if<lcm::Keyframe>(&*value)) {
       if (apply(mapper, *k).duplicate) return {};
       ++out.keyframes;
-      out.mapping.add_keyframe({k->session, k->id}, k->frame);
+      map_keyframe(*k, out);
     } else {
       apply(mapper, std::get<LocalGraphRecord>(*value));
       ++out.local_graphs;
     }
-  } catch (const std::exception& e) {  // slam::MapperError: nothing changed; a frame the mapping refuses
+  } catch (const std::exception& e) {  // slam::MapperError: nothing changed
     return "not applied: " + std::string(e.what());
   }
   return {};
@@ -74,10 +85,13 @@ StoreMap map_store(const fs::path& store, const config::Config& config, loop_clo
   MessageDoor door;
   for (const auto& record : snapshot.scan.records) {
     ++out.records;
+    const auto not_mapped = out.not_mapped.size();
     if (const auto why = use_record(snapshot, record, door, mapper, out); !why.empty()) {
       problems << store.string() << ": record at byte " << record.at << ": " << why << "\n";
       ++out.skipped;
     }
+    if (out.not_mapped.size() > not_mapped)
+      problems << store.string() << ": record at byte " << record.at << ": " << out.not_mapped.back() << "\n";
   }
   // The final global optimisation, as cvo-backendd's at its stop (nothing to optimise before a
   // local graph).

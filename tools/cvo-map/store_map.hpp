@@ -6,10 +6,12 @@
 //
 // What is lost costs only itself: a damaged stretch of the file (skipped by the scan), a record
 // that does not decode, repeats one let in before or cannot be applied (skipped, each named on
-// the `problems` stream with its offset in the file and why).
+// the `problems` stream with its offset in the file and why). A keyframe whose frame the mapping
+// refuses stays in the SLAM map, as in cvo-backendd, and is named as left out of the grid.
 #include <cstddef>
 #include <filesystem>
 #include <ostream>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -26,6 +28,7 @@ struct StoreMap {
   std::size_t torn_bytes = 0;                     // a last record cut short (being written, or a crash)
   std::size_t skipped = 0;                        // intact records not used
   std::size_t keyframes = 0, local_graphs = 0;    // applied to the mapper
+  std::vector<std::string> not_mapped{};          // keyframes applied that the mapping refused, and why
   std::size_t sessions = 0, sessions_placed = 0;  // placed: in the map frame
   std::vector<Eigen::Vector3d> trajectory{};      // map-frame keyframe positions of placed sessions, in order
   mapping::Mapping mapping;
