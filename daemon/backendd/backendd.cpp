@@ -160,10 +160,6 @@ std::string join_text(const slam::Map& map, core::SessionId session, std::option
 
 }  // namespace
 
-std::filesystem::path resolve_vocabulary(const std::string& setting) {
-  return setting == "default" ? loop_closure::default_vocabulary_file() : std::filesystem::path(setting);
-}
-
 // Everything the cvo-backend thread owns.
 struct Backendd::Work {
   Work(loop_closure::Vocabulary vocabulary, const config::Config& config)
@@ -236,21 +232,15 @@ int Backendd::run() {
 // store written before the door, or a damaged one, cannot feed the mapper a repeat.
 void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
   for (auto& record : recovered) {
-    std::string error;
-    // A record of an older schema (another fingerprint or version) is skipped, said here.
-    auto message = identify(record.kind, record.payload.data(), record.payload.size(), &error, nullptr);
+    std::string why;
+    // A record of an older schema (another fingerprint or version), or a repeat, is skipped, said here.
+    auto message = let_in_stored(door_, record.kind, record.payload.data(), record.payload.size(), &why);
+    record.payload = {};  // decoded: the message holds what the bytes did
     if (!message) {
-      notes_.note_limited("stored unreadable", "stored record skipped: " + error);
+      notes_.note_limited("stored skipped", why);
       continue;
     }
     const MessageKey key = message->key;
-    const auto crc = crc32_of(record.payload.data(), record.payload.size());
-    record.payload = {};  // decoded: the message holds what the bytes did
-    if (door_.check(key, crc) != Admission::kNew) {
-      notes_.note_limited("stored repeat", "stored record skipped: " + describe(key) + " is in the store twice");
-      continue;
-    }
-    door_.admit(key, crc);
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());  // a gap in the store is asked for too
     queue_.push({std::move(*message), std::nullopt});
@@ -514,7 +504,7 @@ std::optional<RecordValue> Backendd::value_of(QueuedRecord& queued, std::string*
 
 void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_point> arrived) {
   Work& w = *work_;
-  const auto outcome = w.mapper.add_keyframe({k.session, k.id, k.frame, k.pose, k.cloud});
+  const auto outcome = apply(w.mapper, k);
   if (outcome.duplicate) return;
   w.first_arrival.try_emplace(k.session, arrived);
   for (const auto& loop : outcome.loops)
@@ -531,7 +521,7 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_
 }
 
 void Backendd::apply_local_graph(const LocalGraphRecord& record) {
-  const auto joined = work_->mapper.add_local_graph(record.session, record.keyframe_id, record.graph);
+  const auto joined = apply(work_->mapper, record);
   ++work_->local_graphs;
   publish_map(joined, !joined.empty());
 }

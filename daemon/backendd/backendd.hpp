@@ -37,6 +37,7 @@
 #include "daemon/backendd/keyframe_gaps.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
+#include "daemon/backendd/replay.hpp"
 #include "daemon/backendd/work_queue.hpp"
 #include "daemon/common/heartbeat.hpp"
 #include "daemon/common/notes.hpp"
@@ -51,10 +52,6 @@ struct Map;
 }
 
 namespace cvo::daemon::backendd {
-
-/// The vocabulary file a config names: "default" is loop_closure::default_vocabulary_file();
-/// anything else a path.
-std::filesystem::path resolve_vocabulary(const std::string& setting);
 
 class Backendd {
  public:

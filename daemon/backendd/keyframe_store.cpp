@@ -4,7 +4,6 @@
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <array>
@@ -19,40 +18,6 @@ namespace cvo::daemon::backendd {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr std::array<std::uint8_t, 8> kFileMagic{'C', 'V', 'O', 'K', 'F', 'S', '1', '\n'};
-constexpr std::uint32_t kRecordMagic = 0x4B465243;
-constexpr std::array<std::uint8_t, 4> kRecordMagicBytes{0x43, 0x52, 0x46, 0x4B};  // kRecordMagic, little-endian
-constexpr std::size_t kHeaderBytes = 16;
-constexpr std::uint32_t kMaxPayload = 256u << 20;  // far above any keyframe; bounds a corrupt length
-
-void put32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-std::uint32_t get32(const std::uint8_t* p) {
-  std::uint32_t v = 0;
-  for (int i = 3; i >= 0; --i) v = (v << 8) | p[i];
-  return v;
-}
-
-std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size_t size) {
-  return crc32_of(payload, size, crc32_of(&kind, 1));
-}
-
-bool known_kind(std::uint8_t kind) {
-  return kind == static_cast<std::uint8_t>(RecordKind::kKeyframe) ||
-         kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph);
-}
-
-std::vector<std::uint8_t> encode_record(RecordKind kind, const std::vector<std::uint8_t>& payload) {
-  std::vector<std::uint8_t> record(kHeaderBytes + payload.size());
-  put32(record.data(), kRecordMagic);
-  record[4] = static_cast<std::uint8_t>(kind);
-  put32(record.data() + 8, static_cast<std::uint32_t>(payload.size()));
-  put32(record.data() + 12, checksum(static_cast<std::uint8_t>(kind), payload.data(), payload.size()));
-  std::copy(payload.begin(), payload.end(), record.begin() + kHeaderBytes);
-  return record;
-}
 
 // 0, or the errno of the failure (after a partial write: of the call that failed).
 int write_all_at(int fd, const std::uint8_t* p, std::size_t size, off_t at) {
@@ -83,86 +48,16 @@ std::string count(std::size_t n, const char* one, const char* many) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Reading back
-
-// Whether a valid record starts at `at`: why not ("" when it does), its size, and whether it looks
-// like a record the end of the file cut short (a torn write) rather than damage.
-struct Check {
-  std::string why;
-  std::size_t total = 0;
-  bool cut_short = false;
-};
-
-Check check_record(const std::uint8_t* data, std::size_t size, std::size_t at) {
-  const std::uint8_t* h = data + at;
-  const std::size_t left = size - at, have = std::min(left, kHeaderBytes);
-  // Only the header bytes the file still has are checked before calling a cut a torn write.
-  for (std::size_t i = 0; i < std::min<std::size_t>(have, 4); ++i)
-    if (h[i] != kRecordMagicBytes[i]) return {"bad record magic"};
-  if (have > 4 && !known_kind(h[4])) return {"unknown record kind " + std::to_string(h[4])};
-  for (std::size_t i = 5; i < std::min<std::size_t>(have, 8); ++i)
-    if (h[i] != 0) return {"bad record header"};
-  if (have < kHeaderBytes) return {"record header cut short", 0, true};
-  const auto bytes = get32(h + 8);
-  if (bytes > kMaxPayload) return {"impossible record length " + std::to_string(bytes)};
-  if (bytes > left - kHeaderBytes)
-    return {"record of " + std::to_string(bytes) + " bytes runs past the end of the file", 0, true};
-  if (checksum(h[4], h + kHeaderBytes, bytes) != get32(h + 12)) return {"checksum mismatch"};
-  return {{}, kHeaderBytes + bytes, false};
-}
-
-// Where the next valid record starts after `from` (`size` when none does): the record magic with
-// a header, a length and a checksum that hold. Magic bytes inside a payload fail the checksum.
-std::size_t resync(const std::uint8_t* data, std::size_t size, std::size_t from) {
-  for (std::size_t at = from; at < size; ++at) {
-    at = static_cast<std::size_t>(
-        std::search(data + at, data + size, kRecordMagicBytes.begin(), kRecordMagicBytes.end()) - data);
-    if (at < size && check_record(data, size, at).why.empty()) return at;
-  }
-  return size;
-}
-
-struct Stretch {  // bytes skipped
-  std::size_t at = 0, bytes = 0;
-  std::string why;  // of its first byte
-};
-
-struct Scan {
-  std::vector<Stretch> damaged;  // in file order
-  std::optional<Stretch> torn;   // a last record cut short by the end of the file
-};
-
-// Every intact record into `recovered`, in order, and the stretches skipped between them.
-Scan scan(const std::uint8_t* data, std::size_t size, std::vector<StoredRecord>& recovered) {
-  Scan s;
-  std::size_t at = kFileMagic.size();
-  while (at < size) {
-    const auto check = check_record(data, size, at);
-    if (check.why.empty()) {
-      const std::uint8_t* payload = data + at + kHeaderBytes;
-      recovered.push_back({static_cast<RecordKind>(data[at + 4]), {payload, data + at + check.total}});
-      at += check.total;
-      continue;
-    }
-    const auto next = resync(data, size, at + 1);
-    Stretch stretch{at, next - at, check.why};
-    if (next == size && check.cut_short)
-      s.torn = std::move(stretch);
-    else
-      s.damaged.push_back(std::move(stretch));
-    at = next;
-  }
-  return s;
-}
+// Reading back (the scan itself: store_records.hpp)
 
 struct Range {
   std::size_t at = 0, bytes = 0;
 };
 
 // The file's bytes outside every skipped stretch (after its magic): its intact records, in order.
-std::vector<Range> intact_ranges(const Scan& s, std::size_t size) {
+std::vector<Range> intact_ranges(const StoreScan& s, std::size_t size) {
   std::vector<Range> out;
-  std::size_t from = kFileMagic.size();
+  std::size_t from = kStoreMagic.size();
   const auto add = [&](std::size_t to) {
     if (to > from) out.push_back({from, to - from});
   };
@@ -172,26 +67,6 @@ std::vector<Range> intact_ranges(const Scan& s, std::size_t size) {
   }
   add(s.torn ? s.torn->at : size);
   return out;
-}
-
-// Built with append(): GCC 12 warns falsely (-Wrestrict) on chains of operator+.
-std::string damage_report(const fs::path& file, const Scan& s, std::size_t kept) {
-  std::string out = file.string();
-  out.append(":");
-  if (!s.damaged.empty()) {
-    std::size_t bytes = 0;
-    for (const auto& d : s.damaged) bytes += d.bytes;
-    out.append(" ").append(count(s.damaged.size(), "damaged stretch", "damaged stretches"));
-    out.append(" skipped (").append(count(bytes, "byte", "bytes"));
-    out.append("; the first at byte ").append(std::to_string(s.damaged.front().at));
-    out.append(": ").append(s.damaged.front().why).append(");");
-  }
-  if (s.torn) {
-    out.append(" the last record was cut short (").append(count(s.torn->bytes, "byte", "bytes"));
-    out.append(" at byte ").append(std::to_string(s.torn->at));
-    out.append(", as a crash during a write leaves it) and is cut off;");
-  }
-  return out.append(" ").append(count(kept, "intact record", "intact records")).append(" kept");
 }
 
 // The file, mapped read-only while it is read back (no copy of a large store in memory).
@@ -259,8 +134,8 @@ CleanCopy replace_with_clean_copy(const fs::path& file, const std::uint8_t* data
   CleanCopy copy;
   copy.fd = ::open(temp.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, mode & 07777);
   if (copy.fd < 0) return {-1, 0, {}, "cannot create " + temp.string() + ": " + std::strerror(errno)};
-  int error = write_all_at(copy.fd, kFileMagic.data(), kFileMagic.size(), 0);
-  copy.size = static_cast<off_t>(kFileMagic.size());
+  int error = write_all_at(copy.fd, kStoreMagic.data(), kStoreMagic.size(), 0);
+  copy.size = static_cast<off_t>(kStoreMagic.size());
   for (const auto& r : intact) {
     if (error == 0) error = write_all_at(copy.fd, data + r.at, r.bytes, copy.size);
     copy.size += static_cast<off_t>(r.bytes);
@@ -286,17 +161,6 @@ CleanCopy replace_with_clean_copy(const fs::path& file, const std::uint8_t* data
 }
 
 }  // namespace
-
-std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc) {
-  uLong c = crc;
-  // zlib takes uInt lengths: feed large buffers in pieces.
-  for (std::size_t at = 0; at < size;) {
-    const auto n = static_cast<uInt>(std::min<std::size_t>(size - at, 1u << 30));
-    c = crc32(c, data + at, n);
-    at += n;
-  }
-  return static_cast<std::uint32_t>(c);
-}
 
 std::string describe(const StoreHealth& health) {
   std::string out;
@@ -349,16 +213,15 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
   const auto size = static_cast<std::size_t>(st.st_size);
   const Mapping map(fd_, size, file_);
   const std::uint8_t* data = map.data();
-  if (!std::equal(data, data + std::min(size, kFileMagic.size()), kFileMagic.begin()))
-    throw io::InputError(file_, "not a cvo-backendd keyframe store (wrong magic); move it away to start afresh");
-  if (size < kFileMagic.size()) return create();
+  const StoreScan s = scan_store(file_, data, size);
+  if (size < kStoreMagic.size()) return create();
 
-  const auto first = recovered.size();
-  const Scan s = scan(data, size, recovered);
-  records_ = recovered.size() - first;
+  for (const auto& r : s.records)
+    recovered.push_back({r.kind, {data + r.at + kRecordHeaderBytes, data + r.at + r.bytes}});
+  records_ = s.records.size();
   end_ = static_cast<off_t>(size);
-  if (s.damaged.empty() && !s.torn) return;
-  warning = damage_report(file_, s, records_);
+  if (s.clean()) return;
+  warning = describe_damage(file_, s, "as a crash during a write leaves it", "is cut off");
   if (!s.damaged.empty()) {
     const auto copy = replace_with_clean_copy(file_, data, intact_ranges(s, size), st.st_mode);
     if (copy.fd >= 0) {
@@ -389,7 +252,7 @@ bool KeyframeStore::write_held() {
     return false;
   };
   if (end_ == 0) {
-    if (const int error = write_at_end(kFileMagic.data(), kFileMagic.size()); error != 0) return failed(error);
+    if (const int error = write_at_end(kStoreMagic.data(), kStoreMagic.size()); error != 0) return failed(error);
     fsync_folder(file_);
   }
   while (!held_.empty()) {
@@ -439,7 +302,7 @@ std::optional<StoredRecord> KeyframeStore::read(const RecordRef& where, std::str
   };
   {
     const std::lock_guard lock(mutex_);
-    if (where.offset < static_cast<off_t>(kFileMagic.size()) || where.bytes < kHeaderBytes ||
+    if (where.offset < static_cast<off_t>(kStoreMagic.size()) || where.bytes < kRecordHeaderBytes ||
         where.offset + static_cast<off_t>(where.bytes) > end_)
       return fail("not within the records written");
   }
@@ -454,7 +317,7 @@ std::optional<StoredRecord> KeyframeStore::read(const RecordRef& where, std::str
   const auto check = check_record(bytes.data(), bytes.size(), 0);
   if (!check.why.empty()) return fail(check.why);
   if (check.total != bytes.size()) return fail("its length is not the one written");
-  return StoredRecord{static_cast<RecordKind>(bytes[4]), {bytes.begin() + kHeaderBytes, bytes.end()}};
+  return StoredRecord{static_cast<RecordKind>(bytes[4]), {bytes.begin() + kRecordHeaderBytes, bytes.end()}};
 }
 
 bool KeyframeStore::retry() {

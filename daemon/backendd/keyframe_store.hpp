@@ -3,21 +3,18 @@
 // appended to one file as checksummed records, so that after a kill or a reboot it resumes with
 // every keyframe it had received.
 //
-// File: the 8-byte magic "CVOKFS1\n", then records
-//     u32 magic 0x4B465243 ("KFRC")  u8 kind  u8[3] zero  u32 payload bytes  u32 CRC-32 (zlib) of
-//     kind + payload bytes, then the payload: the message's LCM encoding (fingerprint included)
-// all little-endian. Records are only appended, each written at the end of the last complete one
-// and flushed to disk (fdatasync) before it counts as stored.
+// The file's format and how it is scanned: store_records.hpp. Records are only appended, each
+// written at the end of the last complete one and flushed to disk (fdatasync) before it counts as
+// stored.
 //
-// Reading back keeps every intact record. A damaged stretch (bad magic, kind, length or checksum)
-// is skipped and reading resynchronises on the next valid record (magic, plausible header, length
-// within the file, checksum). Then the damaged original is kept under a new name
-// (FILE.damaged-<UTC time>, a hard link) and a clean store of every intact record is written in
-// its place (temporary file, fsync, rename: FILE is at every moment the original or the complete
-// copy). Where no clean copy can be written (no space), the original stays as it is and is read
-// the same way at every start. A last record cut short by the end of the file (what a crash
-// during a write leaves; it holds nothing intact) is cut off in place: copying a whole store
-// after every such crash would cost its size each time.
+// Reading back keeps every intact record (store_records.hpp's scan). When a stretch was damaged,
+// the damaged original is kept under a new name (FILE.damaged-<UTC time>, a hard link) and a
+// clean store of every intact record is written in its place (temporary file, fsync, rename:
+// FILE is at every moment the original or the complete copy). Where no clean copy can be written
+// (no space), the original stays as it is and is read the same way at every start. A last record
+// cut short by the end of the file (what a crash during a write leaves; it holds nothing intact)
+// is cut off in place: copying a whole store after every such crash would cost its size each
+// time.
 //
 // A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
 // write is cut back so no torn record stays in front of the next one, and the record is held in
@@ -34,13 +31,9 @@
 #include <string>
 #include <vector>
 
+#include "daemon/backendd/store_records.hpp"
+
 namespace cvo::daemon::backendd {
-
-enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2 };
-
-/// zlib's CRC-32 of `size` bytes, continuing `crc` (0 to start): the store's record checksum and
-/// the receiver's fingerprint of a message's content.
-std::uint32_t crc32_of(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);
 
 struct StoredRecord {
   RecordKind kind;

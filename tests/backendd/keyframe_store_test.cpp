@@ -3,7 +3,8 @@
 // aside and a clean store written in its place; a last record cut short costs only itself;
 // writes that fail (EFBIG under a file-size limit, as a full disk) lose nothing: records are held
 // in order, within a bound that is counted, and written once writing works again; a foreign file
-// is refused. A stored record reads back from where append() says it is.
+// is refused. A stored record reads back from where append() says it is. read_store reads the
+// same records without changing the file, while a store appends to it.
 #include <signal.h>
 #include <sys/resource.h>
 
@@ -18,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include "daemon/backendd/keyframe_store.hpp"
+#include "daemon/backendd/store_records.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -397,6 +399,81 @@ TEST(KeyframeStore, WithoutRoomForACleanCopyTheDamagedStoreStaysAndIsStillRead) 
   expect_all_but(records, written, {2});
   EXPECT_EQ(damaged_copies(file).size(), 1u) << warning;
   expect_clean_and_appendable(file, records);
+}
+
+// ---------------------------------------------------------------------------------------------
+// read_store (store_records.hpp): the same scan, read only.
+
+// The payloads read_store found, in order.
+std::vector<StoredRecord> payloads(const StoreSnapshot& snapshot) {
+  std::vector<StoredRecord> out;
+  for (const auto& r : snapshot.scan.records) {
+    const auto* p = snapshot.payload(r);
+    out.push_back({r.kind, {p, p + StoreSnapshot::payload_bytes(r)}});
+  }
+  return out;
+}
+
+// A damaged record and a last record cut short: read_store keeps every intact record, says where
+// the damage is, and leaves the file as it was (no copy aside, nothing cut off); the daemon's
+// recovery, after it, keeps the very same records (one scan).
+TEST(StoreRecords, ReadStoreReadsADamagedStoreWithoutChangingIt) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  const auto written = write_store(file, 20);
+  auto bytes = bytes_of(file);
+  bytes[written.starts[7] + kRecordHeaderBytes + 5] ^= 0x01;
+  bytes.resize(written.starts[19] + 30);
+  write_bytes(file, bytes);
+
+  const auto snapshot = read_store(file);
+  expect_all_but(payloads(snapshot), written, {7, 19});
+  ASSERT_EQ(snapshot.scan.damaged.size(), 1u);
+  EXPECT_EQ(snapshot.scan.damaged[0].at, written.starts[7]);
+  EXPECT_EQ(snapshot.scan.damaged[0].bytes, written.starts[8] - written.starts[7]);
+  EXPECT_EQ(snapshot.scan.damaged[0].why, "checksum mismatch");
+  ASSERT_TRUE(snapshot.scan.torn);
+  EXPECT_EQ(snapshot.scan.torn->at, written.starts[19]);
+  EXPECT_EQ(snapshot.scan.records[7].at, written.starts[8]) << "records say where they lie";
+  EXPECT_TRUE(bytes_of(file) == bytes) << "read_store changed the file";
+  EXPECT_TRUE(damaged_copies(file).empty());
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator{}), 1);
+
+  std::string warning;
+  expect_all_but(reopen(file, warning), written, {7, 19});
+}
+
+// While a KeyframeStore holds the file open and appends: each read sees what was stored by then.
+TEST(StoreRecords, ReadStoreReadsAStoreThatIsOpenForAppending) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  std::vector<StoredRecord> none;
+  std::string warning;
+  KeyframeStore store(file, none, warning);
+  EXPECT_TRUE(read_store(file).scan.records.empty());
+  for (std::uint8_t i = 0; i < 5; ++i) {
+    ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(100 + i, i)), Appended::kStored);
+    const auto snapshot = read_store(file);
+    EXPECT_TRUE(snapshot.scan.clean());
+    ASSERT_EQ(snapshot.scan.records.size(), i + 1u);
+    EXPECT_EQ(payloads(snapshot).back().payload, payload(100 + i, i));
+  }
+}
+
+TEST(StoreRecords, ReadStoreRefusesAMissingOrForeignFileNamingIt) {
+  cvo::test::TempDir dir;
+  const auto missing = dir.path() / "none.store";
+  const auto foreign = dir.write("notes.txt", "not a keyframe store\n");
+  for (const auto& file : {missing, foreign, dir.path()}) {
+    try {
+      (void)read_store(file);
+      ADD_FAILURE() << file << " was read as a store";
+    } catch (const io::InputError& e) {
+      EXPECT_TRUE(contains(e.what(), file.string())) << e.what();
+    }
+  }
+  EXPECT_FALSE(fs::exists(missing)) << "read_store created the store";
+  EXPECT_EQ(bytes_of(foreign), "not a keyframe store\n");
 }
 
 }  // namespace

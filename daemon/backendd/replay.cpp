@@ -1,0 +1,36 @@
+#include "daemon/backendd/replay.hpp"
+
+#include "libcvo/loop_closure/vocabulary.hpp"
+
+namespace cvo::daemon::backendd {
+
+std::filesystem::path resolve_vocabulary(const std::string& setting) {
+  return setting == "default" ? loop_closure::default_vocabulary_file() : std::filesystem::path(setting);
+}
+
+std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, const std::uint8_t* data, std::size_t size,
+                                        std::string* why) {
+  std::string error;
+  auto message = identify(kind, data, size, &error, nullptr);
+  if (!message) {
+    *why = "stored record skipped: " + error;
+    return std::nullopt;
+  }
+  const auto crc = crc32_of(data, size);
+  if (door.check(message->key, crc) != Admission::kNew) {
+    *why = "stored record skipped: " + describe(message->key) + " is in the store twice";
+    return std::nullopt;
+  }
+  door.admit(message->key, crc);
+  return message;
+}
+
+slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& k) {
+  return mapper.add_keyframe({k.session, k.id, k.frame, k.pose, k.cloud});
+}
+
+std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord& record) {
+  return mapper.add_local_graph(record.session, record.keyframe_id, record.graph);
+}
+
+}  // namespace cvo::daemon::backendd

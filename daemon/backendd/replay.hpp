@@ -1,0 +1,35 @@
+#pragma once
+// A stored record replayed into the back end, the one way cvo-backendd does it at start-up and
+// cvo-map does it for a whole store: through the door (decoded once, each name once: a repeat of
+// a name already let in is skipped), its content checked (message_door.hpp's usable()), then
+// applied to the slam::Mapper (a keyframe with add_keyframe, a local graph with add_local_graph).
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "daemon/backendd/message_door.hpp"
+#include "daemon/backendd/store_records.hpp"
+#include "libcvo/core/session.hpp"
+#include "libcvo/slam/mapper.hpp"
+
+namespace cvo::daemon::backendd {
+
+/// The vocabulary file a config names (backendd.vocabulary): "default" is
+/// loop_closure::default_vocabulary_file(); anything else a path.
+std::filesystem::path resolve_vocabulary(const std::string& setting);
+
+/// A stored record's payload through `door`: its message, decoded (no image decoded yet), once
+/// let in. nullopt, with *why ("stored record skipped: ..."), when it does not decode (another
+/// schema) or its name was let in before (the store holds it twice).
+std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, const std::uint8_t* data, std::size_t size,
+                                        std::string* why);
+
+/// A keyframe into the mapper; throws slam::MapperError when it cannot be applied (nothing changed).
+slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& keyframe);
+/// A local graph into the mapper: the sessions it placed in the map; throws as above.
+std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord& record);
+
+}  // namespace cvo::daemon::backendd

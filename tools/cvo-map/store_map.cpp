@@ -1,0 +1,103 @@
+#include "tools/cvo-map/store_map.hpp"
+
+#include <exception>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <variant>
+
+#include "daemon/backendd/replay.hpp"
+#include "daemon/backendd/store_records.hpp"
+#include "libcvo/config/mapper_parameters.hpp"
+
+namespace cvo::tools {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace daemon::backendd;
+
+// The keyframe is in the SLAM map whether or not the mapping can use it (as in cvo-backendd).
+void map_keyframe(const lcm::Keyframe& k, StoreMap& out) {
+  try {
+    out.mapping.add_keyframe({k.session, k.id}, k.frame);
+  } catch (const std::invalid_argument& e) {
+    out.not_mapped.push_back(describe(MessageKey{RecordKind::kKeyframe, k.session, k.id}) +
+                             " left out of the grid: " + e.what());
+  }
+}
+
+// One intact record through the door and into the mapper and the mapping, as cvo-backendd replays
+// it; "" when it was used, else why not.
+std::string use_record(const StoreSnapshot& snapshot, const IntactRecord& record, MessageDoor& door,
+                       slam::Mapper& mapper, StoreMap& out) {
+  std::string why;
+  const auto message =
+      let_in_stored(door, record.kind, snapshot.payload(record), StoreSnapshot::payload_bytes(record), &why);
+  if (!message) return why;
+  const auto value = usable(*message, &why, nullptr);
+  if (!value) return "stored " + describe(message->key) + " unreadable: " + why;
+  try {
+    if (const auto* k = std::get_if<lcm::Keyframe>(&*value)) {
+      if (apply(mapper, *k).duplicate) return {};
+      ++out.keyframes;
+      map_keyframe(*k, out);
+    } else {
+      apply(mapper, std::get<LocalGraphRecord>(*value));
+      ++out.local_graphs;
+    }
+  } catch (const std::exception& e) {  // slam::MapperError: nothing changed
+    return "not applied: " + std::string(e.what());
+  }
+  return {};
+}
+
+void note_damage(const fs::path& store, const StoreSnapshot& snapshot, StoreMap& out, std::ostream& problems) {
+  const auto& scan = snapshot.scan;
+  for (const auto& d : scan.damaged) {
+    problems << store.string() << ": byte " << d.at << ": " << d.bytes << " damaged bytes skipped (" << d.why << ")\n";
+    ++out.damaged_stretches;
+    out.damaged_bytes += d.bytes;
+  }
+  if (scan.torn) out.torn_bytes = scan.torn->bytes;
+  if (!scan.clean())
+    problems << "warning: "
+             << describe_damage(store, scan, "as a record being written or a crash leaves it", "is left out") << "\n";
+}
+
+void place(const slam::Mapper& mapper, StoreMap& out) {
+  const slam::Map map = mapper.map();
+  out.sessions = map.sessions.size();
+  for (const auto& s : map.sessions) out.sessions_placed += s.placed ? 1 : 0;
+  for (const auto& k : map.keyframes)
+    if (mapper.placed(k.session)) out.trajectory.push_back(k.pose.translation());
+  out.mapping.place(map);
+}
+
+}  // namespace
+
+StoreMap map_store(const fs::path& store, const config::Config& config, loop_closure::Vocabulary vocabulary,
+                   std::ostream& problems) {
+  const StoreSnapshot snapshot = read_store(store);
+  StoreMap out{.mapping = mapping::Mapping(config.mapping)};
+  note_damage(store, snapshot, out, problems);
+  slam::Mapper mapper(std::move(vocabulary), config::mapper_parameters(config));
+  MessageDoor door;
+  for (const auto& record : snapshot.scan.records) {
+    ++out.records;
+    const auto not_mapped = out.not_mapped.size();
+    if (const auto why = use_record(snapshot, record, door, mapper, out); !why.empty()) {
+      problems << store.string() << ": record at byte " << record.at << ": " << why << "\n";
+      ++out.skipped;
+    }
+    if (out.not_mapped.size() > not_mapped)
+      problems << store.string() << ": record at byte " << record.at << ": " << out.not_mapped.back() << "\n";
+  }
+  // The final global optimisation, as cvo-backendd's at its stop (nothing to optimise before a
+  // local graph).
+  if (mapper.backend().local_graphs() > 0) mapper.finish();
+  place(mapper, out);
+  return out;
+}
+
+}  // namespace cvo::tools
