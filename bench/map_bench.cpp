@@ -7,9 +7,11 @@
 //       core, medians of 5.
 //   map_bench --accuracy SEQUENCE RUN.json MAP_DIR
 //       the map cvo-run --mode slam --map MAP_DIR --json > RUN.json wrote for SEQUENCE, against
-//       the same keyframes' depth placed at SEQUENCE's ground-truth poses: median distance of our
-//       cloud's points to theirs, the share of their points within 3 cm of ours, and the grid's up
-//       against the ground truth's (TUM's motion-capture frame has z up).
+//       the same keyframes' depth placed at SEQUENCE's ground-truth poses, in the ground truth's
+//       frame (ours carried there by the ATE alignment of the run's trajectory, as evaluate_ate.py
+//       aligns): median distance of our cloud's points to theirs, the share of their points within
+//       3 cm of ours, and the grid's up against the ground truth's (TUM's motion-capture frame has
+//       z up).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -23,12 +25,15 @@
 #include <open3d/io/PointCloudIO.h>
 #include <yaml-cpp/yaml.h>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
+#include <Eigen/SVD>
 #include "libcvo/core/pixel_rays.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/eval/percentile.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/lcm/grid_conversion.hpp"
 #include "libcvo/mapping/mapping.hpp"
 #include "libcvo/sim/camera_path.hpp"
 #include "libcvo/sim/render.hpp"
@@ -136,13 +141,32 @@ core::SE3 pose_at(const core::Trajectory& t, double stamp) {
   return t[core::find_closest_index(stamps, stamp)].pose;
 }
 
+// The rigid motion T minimising sum_k |R_T R_k - R_gt,k|² (chordal) + |T p_k - p_gt,k|² over the
+// keyframes: the rotation is the projection onto SO(3) of sum_k R_gt,k R_kᵀ, the translation
+// the mean residual.
+core::SE3 align_poses(const core::Trajectory& groundtruth, const core::Trajectory& estimate,
+                      const std::vector<double>& stamps) {
+  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+  for (const double t : stamps)
+    sum += pose_at(groundtruth, t).rotation_matrix() * pose_at(estimate, t).rotation_matrix().transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  const Eigen::Matrix3d rotation = svd.matrixU() * d * svd.matrixV().transpose();
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  for (const double t : stamps)
+    offset += pose_at(groundtruth, t).translation() - rotation * pose_at(estimate, t).translation();
+  return {rotation, offset / static_cast<double>(stamps.size())};
+}
+
 int accuracy(const std::filesystem::path& sequence, const std::filesystem::path& run_json,
              const std::filesystem::path& map_dir) {
   const auto run = nlohmann::json::parse(std::ifstream(run_json));
   const std::vector<double> stamps = run.at("map").at("keyframe_timestamps").get<std::vector<double>>();
   const auto seq = io::TumSequence::open(sequence);
   const auto groundtruth = io::read_tum_trajectory(sequence / "groundtruth.txt");
-  const core::SE3 world_T_map = pose_at(groundtruth, seq.files().front().timestamp);  // the map frame: frame 0's camera
+  const auto trajectory = io::read_tum_trajectory(run.at("trajectory").get<std::string>());
+  const core::SE3 world_T_map = align_poses(groundtruth, trajectory, stamps);
 
   // Their cloud: the same keyframes' depth at the ground-truth poses, made as ours is.
   const core::MappingParameters parameters;
@@ -154,12 +178,13 @@ int accuracy(const std::filesystem::path& sequence, const std::filesystem::path&
     const double t = seq.files()[i].timestamp;
     if (std::none_of(stamps.begin(), stamps.end(), [t](double s) { return std::abs(s - t) < 1e-6; })) continue;
     clouds.push_back(mapping::make_local_cloud(seq.read(i), rays, parameters));
-    placed.push_back({&clouds.back(), world_T_map.inverse() * pose_at(groundtruth, t)});
+    placed.push_back({&clouds.back(), pose_at(groundtruth, t)});
   }
   const auto theirs_points = mapping::assemble_cloud(placed, parameters.voxel_size);
   open3d::geometry::PointCloud ours, theirs;
   if (!open3d::io::ReadPointCloud((map_dir / "cloud.ply").string(), ours))
     return std::fprintf(stderr, "cannot read cloud.ply\n"), 1;
+  for (auto& p : ours.points_) p = world_T_map * p;
   for (const auto& p : theirs_points) theirs.points_.push_back(p.position.cast<double>());
   const open3d::geometry::KDTreeFlann their_tree(theirs), our_tree(ours);
   std::vector<int> index(1);
@@ -173,14 +198,21 @@ int accuracy(const std::filesystem::path& sequence, const std::filesystem::path&
   const YAML::Node yaml = YAML::LoadFile((map_dir / "grid.yaml").string());
   const auto q = yaml["map_T_grid"];
   const Eigen::Quaterniond map_R_grid(q[6].as<double>(), q[3].as<double>(), q[4].as<double>(), q[5].as<double>());
-  const Eigen::Vector3d our_up = map_R_grid * Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d their_up = world_T_map.rotation().conjugate() * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d our_up = world_T_map.rotation() * (map_R_grid * Eigen::Vector3d::UnitZ());
+  const Eigen::Vector3d their_up = Eigen::Vector3d::UnitZ();
   std::printf("map of %s (%zu keyframes, up from the %s) against the ground truth:\n", sequence.c_str(), stamps.size(),
               yaml["up"].as<std::string>().c_str());
   std::printf("  our %zu points to theirs   median %.4f m, p90 %.4f m\n", ours.points_.size(),
               eval::percentile(ours_to_theirs, 50), eval::percentile(ours_to_theirs, 90));
   std::printf("  their %zu points within 3 cm of ours   %.1f %%\n", theirs.points_.size(),
               100.0 * static_cast<double>(within) / static_cast<double>(theirs.points_.size()));
+  // CVO_GRID of this grid, as the back end would send it.
+  const cv::Mat pgm = cv::imread((map_dir / "grid.pgm").string(), cv::IMREAD_UNCHANGED);
+  mapping::MapGrid grid;
+  grid.grid.width = pgm.cols, grid.grid.height = pgm.rows;
+  grid.grid.cells.assign(pgm.total(), -1);
+  const auto message = lcm::to_message(grid, 0, 0);
+  std::printf("  CVO_GRID of its %d x %d cells   %d bytes\n", pgm.cols, pgm.rows, message.getEncodedSize());
   std::printf("  grid up against the ground truth's   %.2f deg\n",
               std::acos(std::clamp(our_up.dot(their_up), -1.0, 1.0)) * 180 / M_PI);
   return 0;

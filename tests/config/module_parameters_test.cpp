@@ -121,6 +121,7 @@ TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
   const std::set<std::pair<std::string, std::string>> other_quantities{
       {"libcvo/loop_closure/vocabulary.hpp", "max_iterations"},  // k-medians iterations of training
       {"libcvo/registration/registration.hpp", "max_points"},    // Capacities: no default, every caller's max_points
+      {"libcvo/registration/point_selection.hpp", "cell_size"},  // selection cells in pixels, not map cells
       {"drivers/usb_cameras.hpp", "source"},                     // where a camera's USB ids are published
   };
   std::set<std::string> names;

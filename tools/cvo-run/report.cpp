@@ -106,7 +106,7 @@ void print_text(std::FILE* out, const RunReport& r) {
     if (const auto& m = r.slam->map)
       std::fprintf(out,
                    "map         %s: %d x %d cells of %.0f cm (%zu occupied, %zu free), up from the %s, %zu keyframes "
-                   "of %.0f kB, %zu cloud points, placed in %.1f ms\n",
+                   "of %.0f kB, %zu cloud points, footprints made and placed in %.1f ms\n",
                    m->dir.c_str(), m->width, m->height, m->resolution * 100, m->occupied, m->free, m->up.c_str(),
                    m->keyframes, m->bytes_per_keyframe / 1000, m->cloud_points, m->place_ms);
     if (r.slam->sessions.size() > 1)
