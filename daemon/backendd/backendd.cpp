@@ -115,30 +115,6 @@ std::string text(const GridSummary& g, const mapping::MappingStatistics& s) {
          " MB of local maps, " + std::to_string(g.bytes) + " bytes on CVO_GRID)";
 }
 
-using KeyframePoses = std::map<mapping::KeyframeKey, core::SE3>;
-
-KeyframePoses placed_poses(const slam::Map& map) {
-  KeyframePoses poses;
-  for (const auto& s : map.sessions)
-    if (s.placed)
-      for (const auto& k : map.keyframes)
-        if (k.session == s.session) poses.emplace(mapping::KeyframeKey{k.session, k.id}, k.pose);
-  return poses;
-}
-
-// Whether some keyframe of `before` is at least half a cell or half a degree from where `now` has
-// it: a loop closure that moved it so far changed what a planner sees.
-bool moved_visibly(const KeyframePoses& before, const KeyframePoses& now, double cell_size) {
-  for (const auto& [key, pose] : before) {
-    const auto at = now.find(key);
-    if (at == now.end()) continue;
-    const core::SE3 delta = pose.inverse() * at->second;
-    if (delta.translation().norm() >= cell_size / 2 || Eigen::AngleAxisd(delta.rotation()).angle() >= 0.5 * M_PI / 180)
-      return true;
-  }
-  return false;
-}
-
 // How long a new session took to find its place in the map, after its first keyframe: in sensor
 // time (what the robot had to see) and on this machine (what the back end took, with its queue).
 std::string join_text(const slam::Map& map, core::SessionId session, std::optional<Clock::time_point> first_arrival) {
@@ -179,8 +155,6 @@ struct Backendd::Work {
   MapSummary summary;              // of the last map published
   GridSummary grid;
   bool grid_due = false;  // the grid changed since the last CVO_GRID
-  // The placed keyframes' poses at the last place(), and in the last CVO_GRID.
-  KeyframePoses placed_poses, grid_poses;
   std::int64_t local_graphs = 0, processed = 0, processed_at_last_status = 0;
   Clock::time_point last_status = Clock::now();
 };
@@ -541,8 +515,9 @@ void Backendd::publish_map(const std::vector<std::int64_t>& joined, bool after_l
 }
 
 // The map's keyframes into the grid at their new poses. A changed grid goes out at once when it is
-// the first, or a loop closure moved keyframes of the last one visibly (a robot must not plan on
-// the grid of before the loop); else when a second has passed since the last (work_loop).
+// the first, or a loop closure moved keyframes so that they were re-placed (some cell of theirs
+// moved by a quarter cell: a robot must not plan on the grid of before the loop); else when a
+// second has passed since the last (work_loop).
 void Backendd::place_in_grid(const slam::Map& map, bool after_loop) {
   Work& w = *work_;
   if (!w.mapping.place(map)) return;
@@ -551,8 +526,7 @@ void Backendd::place_in_grid(const slam::Map& map, bool after_loop) {
   w.grid.place_ms_total += s.place_ms_last;
   w.grid.place_ms_max = std::max(w.grid.place_ms_max, s.place_ms_last);
   w.grid_due = true;
-  w.placed_poses = placed_poses(map);
-  const bool moved = after_loop && moved_visibly(w.grid_poses, w.placed_poses, config_.mapping.cell_size);
+  const bool moved = after_loop && s.moved_last > 0;
   if (!w.grid.last || moved || Clock::now() - *w.grid.last >= kGridPeriod) publish_grid(moved);
 }
 
@@ -568,7 +542,6 @@ void Backendd::publish_grid(bool after_loop) {
   w.grid.bytes = static_cast<std::size_t>(message.getEncodedSize());
   ++w.grid.published;
   w.grid_due = false;
-  w.grid_poses = w.placed_poses;
   const auto s = w.mapping.statistics();
   if (first)
     notes_.note("first CVO_GRID: " + std::to_string(grid->grid.width) + " x " + std::to_string(grid->grid.height) +

@@ -1,5 +1,6 @@
 #include "libcvo/mapping/mapping.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -137,7 +138,7 @@ bool Mapping::place(const slam::Map& map) {
     frame_ = decided;
     rebuild = true;
   }
-  statistics_.replaced_last = 0;
+  statistics_.replaced_last = statistics_.moved_last = 0;
   statistics_.cells_changed_last = 0;
   if (!frame_) return false;
 
@@ -148,6 +149,8 @@ bool Mapping::place(const slam::Map& map) {
     const auto placement = place_footprint(grid_T_map * k->map_T_camera, k->footprint->level_R_camera);
     if (rebuild || !k->placed || moved(*k->placed, placement, *k->footprint)) moves.emplace_back(k, placement);
   }
+  statistics_.moved_last = static_cast<std::size_t>(
+      std::count_if(moves.begin(), moves.end(), [](const auto& move) { return move.first->placed.has_value(); }));
   // Most keyframes moved (a loop closure's optimisation moves all a little): placing all anew
   // costs half of taking each out and putting it back.
   rebuild = rebuild || moves.size() * 2 > in_map.size();

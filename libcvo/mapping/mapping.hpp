@@ -61,6 +61,7 @@ struct MappingStatistics {
   std::size_t local_map_bytes = 0;  // every keyframe's cloud and footprint
   std::size_t grid_bytes = 0;       // the counts behind the grid
   std::size_t replaced_last = 0;    // keyframes the last place() placed or re-placed
+  std::size_t moved_last = 0;       // of them, placed before and moved (or moved by a new grid frame)
   std::size_t cells_changed_last = 0;
   bool rebuilt_last = false;  // the last place() placed every keyframe anew
   double place_ms_last = 0;   // wall time of the last place()

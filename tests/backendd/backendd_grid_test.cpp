@@ -24,6 +24,7 @@
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
+#include "tests/support/loop_orbit.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -33,22 +34,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 using cvo::testing::DaemonProcess;
-
-// 13 s of the 12 s orbit (390°) at 10 Hz through the textured room, half-size camera, Kinect-like
-// depth noise: the end sees the start again, and a loop closes (as in cvo_run_slam_test).
-fs::path write_orbit(const fs::path& dir) {
-  sim::SequenceOptions options;
-  options.path = sim::PathKind::orbit;
-  options.frames = 130;
-  options.rate_hz = 10.0;
-  options.seed = 7;
-  options.noise.enabled = true;
-  options.render.supersample = false;
-  options.intrinsics = {262.5, 262.5, 159.25, 119.25, 320, 240, 5000.0};
-  const fs::path seq = dir / "orbit";
-  sim::write_sequence(seq, options);
-  return seq;
-}
 
 void write_log(const fs::path& file, const std::vector<cvo::testing::Message>& messages) {
   ::lcm::LogFile log(file.string(), "w");
@@ -81,7 +66,8 @@ class BackenddGrid : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new test::TempDir("backendd_grid");
-    const auto messages = cvo::testing::tracker_recording(dir_->path(), {}, write_orbit(dir_->path()));
+    const auto messages =
+        cvo::testing::tracker_recording(dir_->path(), {}, cvo::testing::write_loop_orbit(dir_->path()));
     run_ = new Outcome(run_backendd(dir_->path(), "tracked", messages));
   }
   static void TearDownTestSuite() {

@@ -158,6 +158,7 @@ TEST(Mapping, ALoopClosureThatMovesKeyframesGivesTheGridABuildFromScratchAtTheNe
   EXPECT_TRUE(b.mapping.place(map_of(moved, 2)));
   const auto statistics = b.mapping.statistics();
   EXPECT_EQ(statistics.replaced_last, 2u) << "only the keyframes that moved are re-placed";
+  EXPECT_EQ(statistics.moved_last, 2u);
   EXPECT_FALSE(statistics.rebuilt_last);
   const auto fresh = build(b.poses, 0, mounted(), false, moved);
   EXPECT_EQ(b.mapping.grid()->grid, fresh.mapping.grid()->grid);

@@ -2,13 +2,17 @@
 // found and accepted, one of them closes the orbit, and the SLAM trajectory beats KF-CVO's own.
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iomanip>
 #include <regex>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/sim/sequence.hpp"
 #include "tests/drivers/tum_copy.hpp"
+#include "tests/support/loop_orbit.hpp"
 #include "tests/support/run_tool.hpp"
 #include "tests/support/temp_dir.hpp"
 
@@ -22,25 +26,9 @@ using cvo::testing::quoted;
 using cvo::testing::run_tool;
 using cvo::testing::ToolRun;
 
-// 13 s of the 12 s orbit (390°) at 10 Hz through the textured room, half-size camera, Kinect-like
-// depth noise (so that KF-CVO drifts by millimetres, which loops can remove): ~5 s to render.
-fs::path write_orbit(const test::TempDir& dir) {
-  sim::SequenceOptions options;
-  options.path = sim::PathKind::orbit;
-  options.frames = 130;
-  options.rate_hz = 10.0;
-  options.seed = 7;
-  options.noise.enabled = true;
-  options.render.supersample = false;
-  options.intrinsics = {262.5, 262.5, 159.25, 119.25, 320, 240, 5000.0};
-  const fs::path seq = dir.path() / "orbit";
-  sim::write_sequence(seq, options);
-  return seq;
-}
-
 TEST(CvoRunSlam, LoopsCloseARenderedOrbitAndLowerTheAte) {
   const test::TempDir dir("cvo_run_slam");
-  const fs::path seq = write_orbit(dir);
+  const fs::path seq = cvo::testing::write_loop_orbit(dir.path());
   const std::string traj = quoted(dir.path() / "traj.txt");
 
   const ToolRun kf = run_tool("cvo-run", quoted(seq) + " --out " + traj + " --mode kf-cvo --json", dir.path());
@@ -157,6 +145,51 @@ TEST(CvoRunSlam, SeveralFoldersNeedSlamMode) {
       dir.path());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("need --mode slam"), std::string::npos) << r.err;
+}
+
+// The sample with an accelerometer.txt as the Kinect writes it (its axes: x left, y up, z
+// forward), made from the ground truth: up in the camera frame, times g.
+fs::path sample_with_accelerometer(const test::TempDir& dir) {
+  const fs::path seq = dir.path() / "fr1_rpy_50_accelerometer";
+  fs::create_directories(seq);
+  for (const auto& entry : fs::directory_iterator(test::kSample))
+    fs::create_symlink(entry.path(), seq / entry.path().filename());
+  std::ofstream out(seq / "accelerometer.txt");
+  out << "# accelerometer data\n# timestamp ax ay az\n";
+  for (const auto& sample : io::read_tum_trajectory(test::kSample / "groundtruth.txt")) {
+    const Eigen::Vector3d up = sample.pose.rotation().conjugate() * Eigen::Vector3d(0, 0, 9.81);
+    out << std::fixed << std::setprecision(6) << sample.timestamp << " " << -up.x() << " " << -up.y() << " " << up.z()
+        << "\n";
+  }
+  return seq;
+}
+
+TEST(CvoRunSlam, TheMapOfTheRunIsWrittenWhereMapSaysLevelledByTheAccelerometer) {
+  const test::TempDir dir("cvo_run_map");
+  const fs::path seq = sample_with_accelerometer(dir), map = dir.path() / "map", plot = dir.path() / "map.png";
+  const ToolRun r = run_tool("cvo-run",
+                             quoted(seq) + " --out " + quoted(dir.path() / "t.txt") + " --mode slam --map " +
+                                 quoted(map) + " --map-plot " + quoted(plot) + " --json",
+                             dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* file : {"grid.pgm", "grid.yaml", "cloud.ply", "octomap.bt"})
+    EXPECT_GT(fs::file_size(map / file), 0u) << file;
+  EXPECT_GT(fs::file_size(plot), 0u);
+  EXPECT_EQ(json_value(r.out, "up"), "\"accelerometer\"");
+  EXPECT_NE(json_value(r.out, "keyframe_timestamps"), "[]");
+  EXPECT_NE(cvo::testing::slurp(map / "grid.yaml").find("up: accelerometer"), std::string::npos);
+  EXPECT_NE(r.err.find("map         "), std::string::npos) << "the report's map line";
+}
+
+TEST(CvoRunSlam, AMapNeedsSlamMode) {
+  const test::TempDir dir("cvo_run_map");
+  const ToolRun r = run_tool("cvo-run",
+                             quoted(test::kSample) + " --out " + quoted(dir.path() / "t.txt") +
+                                 " --mode kf-cvo --map " + quoted(dir.path() / "map"),
+                             dir.path());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--map and --map-plot need --mode slam"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "map"));
 }
 
 TEST(CvoRunSlam, AMissingVocabularyIsAnInputError) {

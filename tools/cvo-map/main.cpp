@@ -20,6 +20,7 @@
 #include "libcvo/io/map_files.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "program/cli.hpp"
+#include "program/configuration.hpp"
 #include "store_map.hpp"
 
 namespace {
@@ -78,19 +79,6 @@ void add_options(CLI::App& app, Arguments& args) {
       ->type_name("FILE");
 }
 
-// The config file (an InputError, exit 1, when bad), then the --set overrides (a usage error).
-config::Config make_config(const Arguments& args) {
-  config::Config config = args.config ? config::load_config(*args.config) : config::Config{};
-  for (const auto& assignment : args.sets) {
-    try {
-      config::apply_override(config, assignment);
-    } catch (const config::ConfigError& e) {
-      throw UsageError(e.what());
-    }
-  }
-  return config;
-}
-
 void print_summary(const tools::StoreMap& m, const io::MapFiles& files, const std::optional<fs::path>& plot) {
   std::cout << "records: " << m.records << " intact, " << m.skipped << " skipped; ";
   if (m.damaged_stretches == 0) std::cout << "no damage";
@@ -109,7 +97,7 @@ void print_summary(const tools::StoreMap& m, const io::MapFiles& files, const st
 }
 
 int run(const Arguments& args) {
-  const config::Config config = make_config(args);
+  const config::Config config = program::configuration(args.config, args.sets);
   auto vocabulary = loop_closure::Vocabulary::load(
       args.vocabulary ? *args.vocabulary : daemon::backendd::resolve_vocabulary(config.backendd.vocabulary));
   const tools::StoreMap m = tools::map_store(args.store, config, std::move(vocabulary), std::cerr);

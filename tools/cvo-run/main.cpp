@@ -41,6 +41,7 @@
 #include "libcvo/odometry/opencv_odometry.hpp"
 #include "libcvo/slam/trajectory_correction.hpp"
 #include "program/cli.hpp"
+#include "program/configuration.hpp"
 #include "program/progress.hpp"
 #include "report.hpp"
 #include "slam_pipeline.hpp"
@@ -121,19 +122,6 @@ void add_options(CLI::App& app, Arguments& args) {
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
   app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
       ->type_name("FILE");
-}
-
-// The config file (an InputError, exit 1, when bad), then the --set overrides (a usage error).
-config::Config make_config(const Arguments& args) {
-  config::Config config = args.config ? config::load_config(*args.config) : config::Config{};
-  for (const auto& assignment : args.sets) {
-    try {
-      config::apply_override(config, assignment);
-    } catch (const config::ConfigError& e) {
-      throw UsageError(e.what());
-    }
-  }
-  return config;
 }
 
 // See "camera:" in the help's notes. nullopt: TumSequence takes SEQUENCE/camera.yaml or the preset
@@ -360,7 +348,7 @@ int run(const Arguments& args) {
   if (args.sequences.size() > 1 && args.mode != "slam")
     throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " +
                      std::to_string(args.sequences.size()) + " for mode '" + args.mode + "'");
-  const config::Config config = make_config(args);
+  const config::Config config = program::configuration(args.config, args.sets);
   std::vector<io::TumSequence> sequences = open_sequences(args, config);
 
   // Everything that can fail on input is checked before the (long) run.
