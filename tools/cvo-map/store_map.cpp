@@ -69,8 +69,7 @@ void place(const slam::Mapper& mapper, StoreMap& out) {
   const slam::Map map = mapper.map();
   out.sessions = map.sessions.size();
   for (const auto& s : map.sessions) out.sessions_placed += s.placed ? 1 : 0;
-  for (const auto& k : map.keyframes)
-    if (mapper.placed(k.session)) out.trajectory.push_back(k.pose.translation());
+  for (const auto* k : mapping::placed_keyframes(map)) out.trajectory.push_back(k->pose.translation());
   out.mapping.place(map);
 }
 
