@@ -427,6 +427,10 @@ void check_consistency(const Config& c, const std::filesystem::path& source) {
     throw ConfigError(source, "mapping.obstacle_min_height (" + shortest(c.mapping.obstacle_min_height) +
                                   ") must be below mapping.obstacle_max_height (" +
                                   shortest(c.mapping.obstacle_max_height) + ")");
+  // A keyframe's footprint is a lattice of half-cells out to max_range (libcvo/mapping/local_map.hpp).
+  if (c.mapping.max_range > 4000 * c.mapping.cell_size)
+    throw ConfigError(source, "mapping.max_range (" + shortest(c.mapping.max_range) +
+                                  ") must be at most 4000 mapping.cell_size (" + shortest(c.mapping.cell_size) + ")");
   if (c.cvo.ell_min > c.cvo.ell_init)
     throw ConfigError(source, "cvo.ell_min (" + shortest(c.cvo.ell_min) + ") must not exceed cvo.ell_init (" +
                                   shortest(c.cvo.ell_init) + ")");

@@ -335,6 +335,7 @@ TEST(Config, MappingKeysHaveAGroundRobotsDefaultsAndTheMountIsAPose) {
             std::string::npos);
   EXPECT_NE(error_of("mapping: {obstacle_min_height: 2.0}").find("must be below mapping.obstacle_max_height"),
             std::string::npos);
+  EXPECT_NE(error_of("mapping: {cell_size: 0.0001}").find("at most 4000 mapping.cell_size"), std::string::npos);
   EXPECT_NE(error_of("mapping: {hit_probability: 0.4}").find("mapping.hit_probability"), std::string::npos);
 }
 
