@@ -31,7 +31,7 @@ program::Json loop_list(const RunReport& r) {
   return list;
 }
 
-// One object per folder, in order; null outside slam mode.
+// What --map wrote (the JSON's "map").
 program::Json map_object(const MapReport& m) {
   program::Json o;
   o["dir"] = m.dir;
@@ -49,6 +49,7 @@ program::Json map_object(const MapReport& m) {
   return o;
 }
 
+// One object per folder, in order; null outside slam mode.
 program::Json session_list(const RunReport& r) {
   if (!r.slam) return nullptr;
   program::Json list = program::Json::array();
