@@ -47,7 +47,6 @@ class HeightHistogram {
  public:
   void add(long bin, long count) { counts_[bin] += count, total_ += count; }
   [[nodiscard]] std::optional<long> floor_bin() const;
-  [[nodiscard]] long total() const { return total_; }
 
  private:
   std::map<long, long> counts_;
