@@ -29,7 +29,7 @@ struct AppliedCorrection {
   core::SE3 T_map_odom;         // identity when not placed
   double last_match_time = -1;  // sensor time of the session's newest verified match (-1: none)
   // The back end's covariance of keyframe covariance_keyframe's map pose, when it gives one.
-  std::optional<core::Matrix6d> keyframe_covariance;
+  std::optional<core::Matrix6d> keyframe_covariance = std::nullopt;
   std::int64_t covariance_keyframe = -1;
 };
 

@@ -53,7 +53,7 @@ struct KeyframePlacement {
   std::optional<std::int64_t> previous;
   core::SE3 pose;
   std::int64_t piece = 0;
-  std::optional<std::int64_t> candidates_below;
+  std::optional<std::int64_t> candidates_below = std::nullopt;
 };
 
 /// A keyframe's current estimate after an optimisation or a join of pieces.

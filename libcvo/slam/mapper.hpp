@@ -101,7 +101,7 @@ struct MapSession {
   double since_match_s = -1;    // its newest keyframe's time minus last_match_time; -1: no match
   bool visitor = false;         // localized in a read-only map: its keyframes are in no map
   // Of its newest keyframe's map pose (a visitor's window solve), [rho; phi], right-perturbed.
-  std::optional<core::Matrix6d> keyframe_covariance;
+  std::optional<core::Matrix6d> keyframe_covariance = std::nullopt;
   std::int64_t covariance_keyframe = -1;  // the keyframe id it is of
 };
 

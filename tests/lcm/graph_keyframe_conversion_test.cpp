@@ -15,6 +15,7 @@
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/registration/point_selection.hpp"
 #include "tests/lcm/through_bytes.hpp"
+#include "tests/support/map_session.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -202,7 +203,7 @@ TEST(MapConversion, RoundTripKeepsSessionsKeyframesAndLoops) {
   slam::Map map;
   map.revision = 42;
   const core::SE3 correction = core::SE3::from_translation({0.5, -0.25, 2.0});
-  map.sessions = {{-7, true, -7, 2, 0, core::SE3()}, {99, false, 99, 1, -1, correction}};
+  map.sessions = {test::map_session(-7, true, -7, 2, 0, core::SE3()), test::map_session(99, false, 99, 1, -1, correction)};
   map.keyframes = {{-7, 0, 1305031229.528748, core::SE3()},
                    {-7, 1, 1305031230.5, core::SE3::from_translation({1, 0, 0})},
                    {99, 0, 1305031240.25, correction}};

@@ -10,6 +10,7 @@
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/map_decision.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
+#include "tests/support/map_session.hpp"
 
 namespace cvo::lcm {
 namespace {
@@ -32,7 +33,7 @@ std::vector<std::uint8_t> map_bytes(std::int64_t revision, const std::vector<sla
 }
 
 slam::MapSession placed(std::int64_t session, const core::SE3& correction) {
-  return {session, true, kOther, 1, 0, correction};
+  return test::map_session(session, true, kOther, 1, 0, correction);
 }
 
 CorrectionDecision decide(const std::vector<std::uint8_t>& bytes, const AppliedCorrection& last) {
@@ -54,14 +55,30 @@ TEST(MapDecision, ANewerMapPlacingTheSessionIsApplied) {
   const auto far =
       decide(map_bytes(4, {placed(kSession, core::SE3::from_translation({40, 0, 0}))}), AppliedCorrection{});
   EXPECT_TRUE(far.apply) << far.why;
-  const auto unplaced = decide(map_bytes(5, {{kSession, false, kSession, 1, -1, kOneMetre}}), d.correction);
+  const auto unplaced = decide(map_bytes(5, {test::map_session(kSession, false, kSession, 1, -1, kOneMetre)}), d.correction);
   ASSERT_TRUE(unplaced.apply) << unplaced.why;
   EXPECT_FALSE(unplaced.correction.placed);
   EXPECT_EQ(unplaced.correction.T_map_odom.translation().norm(), 0) << "identity when not placed";
 }
 
+TEST(MapDecision, TheSessionsLastMatchAndKeyframeCovarianceComeWithItsCorrection) {
+  slam::MapSession s = test::map_session(kSession, true, kOther, 1, 0, kOneMetre);
+  s.last_match_time = 1305031102.5;
+  s.keyframe_covariance = core::Matrix6d::Identity() * 4e-4;
+  s.covariance_keyframe = 9;
+  const auto d = decide(map_bytes(3, {s}), AppliedCorrection{});
+  ASSERT_TRUE(d.apply) << d.why;
+  EXPECT_NEAR(d.correction.last_match_time, 1305031102.5, 1e-6);
+  ASSERT_TRUE(d.correction.keyframe_covariance);
+  EXPECT_EQ((*d.correction.keyframe_covariance)(4, 4), 4e-4);
+  EXPECT_EQ(d.correction.covariance_keyframe, 9);
+  // A covariance that is not one (negative variance) makes the map refused whole.
+  s.keyframe_covariance = -core::Matrix6d::Identity();
+  EXPECT_FALSE(decide(map_bytes(4, {s}), AppliedCorrection{}).apply);
+}
+
 TEST(MapDecision, StaleForeignImplausibleAndNonFiniteMapsAreRefusedByKind) {
-  const AppliedCorrection last{0, 7, kSession, true, kOneMetre};
+  const AppliedCorrection last{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
   const auto refused = [&](const std::vector<std::uint8_t>& bytes, BadKind kind, const char* says) {
     const auto d = decide(bytes, last);
     EXPECT_FALSE(d.apply);
@@ -96,7 +113,7 @@ TEST(MapDecision, StaleForeignImplausibleAndNonFiniteMapsAreRefusedByKind) {
 // (the tracker must not wait for the revision to pass the old one), and a map of the old epoch,
 // replayed, is stale.
 TEST(MapDecision, ARestartedBackEndsMapsAreNewerThanItsPredecessors) {
-  const AppliedCorrection last{1000, 250, kSession, true, kOneMetre};
+  const AppliedCorrection last{1000, 250, kSession, true, kOneMetre, -1, std::nullopt, -1};
   const auto restarted = decide(map_bytes(1, {placed(kSession, kOneMetre)}, 2000), last);
   ASSERT_TRUE(restarted.apply) << restarted.why;
   EXPECT_EQ(restarted.correction.epoch, 2000);
@@ -109,11 +126,11 @@ TEST(MapDecision, ARestartedBackEndsMapsAreNewerThanItsPredecessors) {
 TEST(MapDecision, TheJumpBoundHoldsOnlyWithinTheSessionItPlaced) {
   // The last correction was for a session the tracker has left (a camera change): the new
   // session's first placement is not a jump from it.
-  const AppliedCorrection other_session{0, 7, kOther, true, kOneMetre};
+  const AppliedCorrection other_session{0, 7, kOther, true, kOneMetre, -1, std::nullopt, -1};
   const auto d = decide(map_bytes(8, {placed(kSession, core::SE3::from_translation({9, 0, 0}))}), other_session);
   EXPECT_TRUE(d.apply) << d.why;
   // Nor is a placement after the session was unplaced.
-  const AppliedCorrection unplaced{0, 7, kSession, false, {}};
+  const AppliedCorrection unplaced{0, 7, kSession, false, {}, -1, std::nullopt, -1};
   EXPECT_TRUE(decide(map_bytes(8, {placed(kSession, core::SE3::from_translation({9, 0, 0}))}), unplaced).apply);
 }
 

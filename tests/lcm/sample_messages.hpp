@@ -143,7 +143,22 @@ inline cvo_lcm::map_t sample_map() {
   m.utime = 1305031299000000;
   m.revision = 17;
   constexpr std::int64_t kFirst = 0x5e5510'0000'0001, kSecond = -0x2222'3333'4444'5555;
-  m.sessions = {{kFirst, true, kFirst, 3, 0, sample_pose(0)}, {kSecond, false, kSecond, 1, -1, sample_pose(1)}};
+  const auto session = [](std::int64_t id, bool placed, std::int32_t keyframes, std::int64_t joined,
+                           const cvo_lcm::pose3d_t& correction) {
+    cvo_lcm::map_session_t s{};
+    s.session = id;
+    s.placed = placed;
+    s.piece = id;
+    s.keyframes = keyframes;
+    s.joined_at_keyframe = joined;
+    s.correction = correction;
+    s.state = placed ? cvo_lcm::pose_t::STATE_LOCALIZED : cvo_lcm::pose_t::STATE_LOCALIZING;
+    s.last_match_utime = placed ? 1305031102175304 : 0;
+    s.covariance_keyframe = placed ? 2 : -1;
+    for (int i = 0; i < 6; ++i) s.keyframe_covariance[i * 7] = placed ? 1e-4 : 0;
+    return s;
+  };
+  m.sessions = {session(kFirst, true, 3, 0, sample_pose(0)), session(kSecond, false, 1, -1, sample_pose(1))};
   const std::int64_t ids[] = {0, 1, 2, 5};
   for (std::size_t i = 0; i < 4; ++i)
     m.keyframes.push_back(

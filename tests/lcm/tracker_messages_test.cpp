@@ -52,6 +52,35 @@ TEST(TrackerMessages, PoseMessageCarriesTheTrackedFrame) {
   EXPECT_EQ(to_pose_status(odometry::TrackStatus::kSelectionFailed), +cvo_lcm::pose_t::STATUS_SELECTION_FAILED);
 }
 
+TEST(TrackerMessages, PoseMessageSaysTheSessionsStateItsMapAndBothCovariances) {
+  TrackedPose p;
+  p.state = core::LocalizationState::kLocalized;
+  p.since_match_s = 0.75;
+  p.map_epoch = 1000;
+  p.map_revision = 12;
+  p.relative_covariance = core::Matrix6d::Identity() * 1e-6;
+  cvo_lcm::pose_t m = pose_message(1, p, 0);
+  EXPECT_EQ(m.state, +cvo_lcm::pose_t::STATE_LOCALIZED);
+  EXPECT_EQ(m.since_match_s, 0.75);
+  EXPECT_EQ(m.map_epoch, 1000);
+  EXPECT_EQ(m.map_revision, 12);
+  EXPECT_TRUE(m.has_map_pose);
+  EXPECT_TRUE(m.has_relative_covariance);
+  EXPECT_EQ(m.relative_covariance[5 * 6 + 5], 1e-6);
+  // Before it is localized: no time since a match; without a map pose when the tracker is told so.
+  p.state = core::LocalizationState::kLocalizing;
+  p.has_map_pose = false;
+  p.map_pose = core::SE3::from_translation({3, 0, 0});
+  p.relative_covariance.reset();
+  m = pose_message(1, p, 0);
+  EXPECT_EQ(m.since_match_s, -1);
+  EXPECT_FALSE(m.has_map_pose);
+  EXPECT_EQ(m.map_pose.position[0], 0) << "no map pose is given";
+  EXPECT_FALSE(m.has_relative_covariance);
+  p.state = core::LocalizationState::kLost;
+  EXPECT_EQ(pose_message(1, p, 0).state, +cvo_lcm::pose_t::STATE_LOST);
+}
+
 TEST(TrackerMessages, StatusMessageHoldsEveryCounter) {
   const cvo_lcm::status_t expected = test::sample_status();
   ProcessStatus s;

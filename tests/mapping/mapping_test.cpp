@@ -8,6 +8,7 @@
 #include "libcvo/mapping/mapping.hpp"
 #include "libcvo/sim/scene.hpp"
 #include "rendered_room.hpp"
+#include "tests/support/map_session.hpp"
 
 namespace cvo::mapping {
 namespace {
@@ -221,7 +222,7 @@ TEST(Mapping, KeyframesOfASessionNotInTheMapWaitUntilItJoins) {
   ASSERT_TRUE(b.mapping.add_keyframe({2, 0}, sim::render(room(true), testing::camera(), camera_at(0.5, 0.5, 60))));
   EXPECT_FALSE(b.mapping.add_keyframe({2, 0}, sim::render(room(true), testing::camera(), camera_at(0.5, 0.5, 60))));
   auto map = map_of(b.poses, 2);
-  map.sessions.push_back({2, false, 2, 1, -1, core::SE3()});
+  map.sessions.push_back(test::map_session(2, false, 2, 1, -1, core::SE3()));
   map.keyframes.push_back({2, 0, 0, core::SE3()});
   b.mapping.place(map);
   EXPECT_EQ(b.mapping.grid()->grid, alone);

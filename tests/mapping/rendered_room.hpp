@@ -12,6 +12,7 @@
 #include "libcvo/sim/render.hpp"
 #include "libcvo/sim/scene.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "tests/support/map_session.hpp"
 
 namespace cvo::mapping::testing {
 
@@ -56,7 +57,7 @@ inline core::Intrinsics camera() { return {262.5, 262.5, 159.5, 119.5, 320, 240,
 inline slam::Map map_of(const std::vector<core::SE3>& world_T_camera, std::uint64_t revision = 1) {
   slam::Map map;
   map.revision = revision;
-  map.sessions.push_back({1, true, 1, world_T_camera.size(), 0, core::SE3()});
+  map.sessions.push_back(test::map_session(1, true, 1, world_T_camera.size(), 0, core::SE3()));
   const core::SE3 map_T_world = world_T_camera.front().inverse();
   for (std::size_t k = 0; k < world_T_camera.size(); ++k)
     map.keyframes.push_back({1, static_cast<std::int64_t>(k), static_cast<double>(k), map_T_world * world_T_camera[k]});
