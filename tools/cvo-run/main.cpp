@@ -54,7 +54,7 @@ using namespace cvo;
 constexpr const char* kSynopsis =
     "cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]\n"
     "               [--plot PNG] [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]\n"
-    "       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [options as above]";
+    "       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [--store FILE] [options as above]";
 
 constexpr const char* kDescription =
     R"(Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
@@ -66,7 +66,9 @@ With --mode slam, several folders are several sessions of one map (a robot mappi
 several runs), run in order through one back end: each starts in its own odometry frame and joins
 the first one's map at its first verified loop to it. TRAJ.txt holds every joined session's frames
 in the first session's map frame; a session that never joined is left out and reported so (--json:
-"sessions"). Ground truth: --groundtruth, else every folder's groundtruth.txt together.
+"sessions"). Ground truth: --groundtruth, else every folder's groundtruth.txt together. --store FILE
+writes the keyframe store cvo-backendd would write from the same keyframes (a new file), which
+cvo-backendd --store and cvo-map read.
 
 modes (--mode):
   cvo              frame-to-frame CVO, the paper's baseline (default)
@@ -94,7 +96,7 @@ struct Arguments {
   fs::path out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
-  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot;
+  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot, store;
   std::vector<std::string> sets;
   bool json = false;
 };
@@ -118,6 +120,10 @@ void add_options(CLI::App& app, Arguments& args) {
       ->type_name("DIR");
   app.add_option("--map-plot", args.map_plot, "--mode slam with --map: the grid with the keyframe trajectory on it")
       ->type_name("PNG");
+  app.add_option("--store", args.store,
+                 "--mode slam: write the keyframe store cvo-backendd would write (a new file; cvo-backendd --store and "
+                 "cvo-map read it)")
+      ->type_name("FILE");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
   app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
@@ -273,7 +279,7 @@ tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mappin
 // (slam::correct_trajectory fills in the frames it never saw).
 core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
                           const core::Trajectory& groundtruth, tools::RunReport& report) {
-  tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value());
+  tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value(), args.store);
   std::vector<core::Trajectory> odometry(sequences.size());
   report.slam = tools::SlamReport{};
   for (std::size_t k = 0; k < sequences.size(); ++k) {
@@ -312,6 +318,8 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
   for (const auto& l : map.loops)
     s.loops.push_back({l.from_frame, l.to_frame, l.chi2, l.weight, l.from_session, l.to_session});
   if (args.map) s.map = write_map(args, *pipeline.mapping(), map, pipeline.statistics().map_ms);
+  if (const auto* store = pipeline.store())
+    s.store = tools::StoreReport{args.store->string(), store->records(), pipeline.statistics().store_ms};
   // kf-cvo's own ATE: one session only (several have several odometry frames).
   if (!groundtruth.empty() && sequences.size() == 1 && !odometry[0].empty()) {
     try {
@@ -357,6 +365,7 @@ int run(const Arguments& args) {
   if ((args.map || args.map_plot) && args.mode != "slam")
     throw UsageError("--map and --map-plot need --mode slam (the map is made from the SLAM map's keyframes)");
   if (args.map_plot && !args.map) throw UsageError("--map-plot needs --map DIR");
+  if (args.store && args.mode != "slam") throw UsageError("--store needs --mode slam (it stores the SLAM keyframes)");
   if (args.plot && groundtruth.empty())
     throw UsageError("--plot needs ground truth: " + args.sequences.front().string() +
                      " has no groundtruth.txt and no --groundtruth was given");

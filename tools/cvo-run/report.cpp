@@ -110,6 +110,9 @@ void print_text(std::FILE* out, const RunReport& r) {
                    "of %.0f kB, %zu cloud points, footprints made and placed in %.1f ms\n",
                    m->dir.c_str(), m->width, m->height, m->resolution * 100, m->occupied, m->free, m->up.c_str(),
                    m->keyframes, m->bytes_per_keyframe / 1000, m->cloud_points, m->place_ms);
+    if (const auto& s = r.slam->store)
+      std::fprintf(out, "store       %s: %llu records (keyframes and local graphs), written in %.0f ms\n",
+                   s->file.c_str(), static_cast<unsigned long long>(s->records), s->ms);
     if (r.slam->sessions.size() > 1)
       for (const auto& s : r.slam->sessions) {
         const std::string at = s.joined_at_keyframe ? " at its keyframe " + std::to_string(*s.joined_at_keyframe) : "";
@@ -175,6 +178,10 @@ program::Json to_json(const RunReport& r) {
   o["backend_ms_total"] = slam([](const auto& s) { return s.backend_ms; });
   o["final_optimisation_ms"] = slam([](const auto& s) { return s.final_optimisation_ms; });
   o["map"] = r.slam && r.slam->map ? map_object(*r.slam->map) : program::Json();
+  o["store"] =
+      r.slam && r.slam->store
+          ? program::Json{{"file", r.slam->store->file}, {"records", r.slam->store->records}, {"ms", r.slam->store->ms}}
+          : program::Json();
   o["ate_rmse_m_odometry"] =
       r.slam && r.slam->ate_odometry ? program::Json(r.slam->ate_odometry->error.rmse) : program::Json();
   return o;

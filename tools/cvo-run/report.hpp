@@ -54,6 +54,13 @@ struct MapReport {
   std::vector<double> keyframe_timestamps;  // of the keyframes in the map (their colour stamps), in map order
 };
 
+/// What --store wrote (cvo-run --mode slam --store FILE).
+struct StoreReport {
+  std::string file;
+  std::uint64_t records = 0;  // keyframes and local graphs
+  double ms = 0;              // encoding and writing them
+};
+
 struct SlamReport {
   std::size_t loops_accepted = 0;
   std::size_t loops_tried = 0;                  // candidates verified (matches, RANSAC, CVO, α)
@@ -63,6 +70,7 @@ struct SlamReport {
   std::vector<LoopEntry> loops;                 // in acceptance order
   std::vector<SessionEntry> sessions;           // one per folder, in order
   std::optional<MapReport> map;
+  std::optional<StoreReport> store;
 };
 
 struct RunReport {
