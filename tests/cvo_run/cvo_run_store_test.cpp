@@ -1,7 +1,7 @@
 // cvo-run --mode slam --store FILE writes the keyframe store cvo-backendd would write: cvo-map
 // reads it (every record intact, one session per folder, all in the map), a real cvo-backendd
 // started on it replays it (its final CVO_MAP holds every keyframe cvo-run made, in the map) and
-// leaves it as it was, and a store that exists already is not touched.
+// leaves it as it was; the same input writes the same bytes, and a store that exists already is not touched.
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -80,6 +80,16 @@ TEST(CvoRunStore, CvoMapReadsTheStoreOfATwoSessionRun) {
       << map.out;
   EXPECT_EQ(number_after(map.out, "map:"), keyframes) << map.out;
   EXPECT_NE(map.out.find("2 of 2 sessions in the map"), std::string::npos) << map.out << map.err;
+}
+
+// A local graph is stamped with its sensor time, not the wall clock's: a map made again is the same file.
+TEST(CvoRunStore, TheSameInputWritesTheSameStore) {
+  const test::TempDir dir("cvo_run_store_same");
+  test::write_tum_copy(dir.path() / "fr1_first", 25);
+  ASSERT_EQ(slam_with_store({dir.path() / "fr1_first"}, dir.path() / "a.store", dir.path()).exit_code, 0);
+  ASSERT_EQ(slam_with_store({dir.path() / "fr1_first"}, dir.path() / "b.store", dir.path()).exit_code, 0);
+  EXPECT_GT(fs::file_size(dir.path() / "a.store"), 8u);
+  EXPECT_TRUE(bytes_of(dir.path() / "a.store") == bytes_of(dir.path() / "b.store"));
 }
 
 // A log with one event on a channel nobody reads: the file:// provider needs a first event.
