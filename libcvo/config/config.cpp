@@ -103,7 +103,7 @@ Field row(std::string key, S Config::*section, T S::*member, Range range, std::s
 using core::CvoParameters, core::SelectionParameters, core::KeyframeParameters, core::LoopClosureParameters,
     core::PoseGraphParameters, core::DatasetParameters, core::OdometryParameters, core::KeyframeTrackingParameters,
     core::LoopVerificationParameters;
-using core::MappingParameters;
+using core::LocalizationParameters, core::MappingParameters;
 
 constexpr Range kRealtimePriority{0, 99};  // SCHED_FIFO priorities; 0 = do not ask for one
 constexpr Range kCpu{-1, 4095};            // -1 = no affinity
@@ -224,6 +224,8 @@ const std::vector<Field>& table() {
       Field{"mapping.base_T_camera", Get<Pose>([](Config& c) -> Pose& { return c.mapping.base_T_camera; }), kAny,
             "the camera's pose on a base with z up, origin on the floor: x, y, z, qx, qy, qz, qw (none: gravity "
             "from the recording's accelerometer, else the floor plane)"},
+      row("localization.window_keyframes", &Config::localization, &LocalizationParameters::window_keyframes,
+          kAtLeastTwo, "a session being localized in a stored map keeps its newest keyframes, this many"),
       row("trackerd.source", &Config::trackerd, &TrackerdParameters::source, kAny,
           "frame source: tum:DIR, lcm:URL, openni2:URI (openni2:any), v4l2:COLOUR[,DEPTH]"),
       row("trackerd.lcm_url", &Config::trackerd, &TrackerdParameters::lcm_url, kAny,
@@ -261,6 +263,8 @@ const std::vector<Field>& table() {
       row("trackerd.max_map_jump_deg", &Config::trackerd, &TrackerdParameters::max_map_jump_deg, kHalfTurnDeg,
           "a CVO_MAP correction that turns the map frame further than this (degrees) from the last one applied is "
           "refused"),
+      row("trackerd.map_pose_until_localized", &Config::trackerd, &TrackerdParameters::map_pose_until_localized, kAny,
+          "map pose published before the back end localizes the session: odometry or none"),
       row("backendd.lcm_url", &Config::backendd, &BackenddParameters::lcm_url, kAny,
           "LCM provider keyframes and local graphs come from, and CVO_MAP goes to"),
       row("backendd.store", &Config::backendd, &BackenddParameters::store, kAny,
@@ -279,6 +283,9 @@ const std::vector<Field>& table() {
       row("backendd.unsaved_records_max", &Config::backendd, &BackenddParameters::unsaved_records_max, kNonNegative,
           "records held in memory while the store cannot be written (disk full), saved in order when it can; "
           "beyond it a record is used but lost on restart"),
+      row("backendd.mode", &Config::backendd, &BackenddParameters::mode, kAny,
+          "mapping (every session grows the stored map) or localization (the stored map is read only; sessions "
+          "are localized in it, never stored)"),
       Field{"camera", Get<std::string>([](Config& c) -> std::string& { return c.camera; }), kAny,
             "tum_fr1, tum_fr2, tum_fr3, synthetic, or a path to an intrinsics file"},
   };
@@ -431,6 +438,11 @@ void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.mapping.max_range > 4000 * c.mapping.cell_size)
     throw ConfigError(source, "mapping.max_range (" + shortest(c.mapping.max_range) +
                                   ") must be at most 4000 mapping.cell_size (" + shortest(c.mapping.cell_size) + ")");
+  if (c.trackerd.map_pose_until_localized != "odometry" && c.trackerd.map_pose_until_localized != "none")
+    throw ConfigError(source, "trackerd.map_pose_until_localized (" + c.trackerd.map_pose_until_localized +
+                                  ") must be odometry or none");
+  if (c.backendd.mode != "mapping" && c.backendd.mode != "localization")
+    throw ConfigError(source, "backendd.mode (" + c.backendd.mode + ") must be mapping or localization");
   if (c.cvo.ell_min > c.cvo.ell_init)
     throw ConfigError(source, "cvo.ell_min (" + shortest(c.cvo.ell_min) + ") must not exceed cvo.ell_init (" +
                                   shortest(c.cvo.ell_init) + ")");

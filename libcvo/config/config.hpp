@@ -50,6 +50,10 @@ struct TrackerdParameters {
   // the correction applied last is refused as implausible (a loop closure corrects drift).
   double max_map_jump_m = 1.0;
   double max_map_jump_deg = 30.0;
+  // The map pose published while the back end has not localized the session: its odometry pose
+  // (a pose in the session's own frame, as before any map), or none (map_pose left out: a consumer
+  // that needs the map frame waits).
+  std::string map_pose_until_localized = "odometry";
 };
 
 /// cvo-backendd's own settings (daemon/backendd).
@@ -65,6 +69,9 @@ struct BackenddParameters {
   // size limit), written in order when it works again; beyond this they are used but not stored.
   // A 640x480 keyframe with JPEG colour is about 300 kB.
   std::size_t unsaved_records_max = 512;
+  // mapping: every session grows the stored map; localization: the stored map is read only and
+  // every session is localized in it (keyframes kept in memory, never stored).
+  std::string mode = "mapping";
 };
 
 struct Config {
@@ -78,6 +85,7 @@ struct Config {
   core::PoseGraphParameters pose_graph;
   core::DatasetParameters dataset;
   core::MappingParameters mapping;
+  core::LocalizationParameters localization;
   TrackerdParameters trackerd;
   BackenddParameters backendd;
   std::string camera = "tum_fr1";  // a preset name or a path to an intrinsics file (io::load_camera)

@@ -15,7 +15,7 @@ loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& conf
 slam::BackendParameters backend_parameters(const Config& config) { return config.pose_graph; }
 
 slam::MapperParameters mapper_parameters(const Config& config) {
-  return {loop_detector_parameters(config), backend_parameters(config)};
+  return {loop_detector_parameters(config), backend_parameters(config), config.localization};
 }
 
 }  // namespace cvo::config

@@ -184,4 +184,14 @@ struct MappingParameters {
   bool operator==(const MappingParameters&) const = default;
 };
 
+/// Localization in a stored map (slam::Mapper::localize_only): a session being localized keeps
+/// only its newest keyframes in memory, so a robot can run in a map for months in fixed memory.
+/// The window spans a few seconds of keyframes: enough for the window's own odometry to carry a
+/// verified match forward, short enough that its drift stays small.
+struct LocalizationParameters {
+  std::size_t window_keyframes = 16;  // a localizing session's keyframes kept, the newest
+
+  bool operator==(const LocalizationParameters&) const = default;
+};
+
 }  // namespace cvo::core

@@ -10,4 +10,13 @@ std::string session_name(SessionId session) {
   return text;
 }
 
+const char* to_string(LocalizationState state) {
+  switch (state) {
+    case LocalizationState::kLocalizing: return "localizing";
+    case LocalizationState::kLocalized: return "localized";
+    case LocalizationState::kLost: return "lost";
+  }
+  return "unknown";
+}
+
 }  // namespace cvo::core

@@ -14,4 +14,9 @@ using SessionId = std::int64_t;
 /// How logs and messages name a session: its 64 bits in hex, "0x0123456789abcdef".
 std::string session_name(SessionId session);
 
+/// Where a session stands in the map (CVO_POSE, CVO_MAP): not placed yet, placed (its map poses
+/// are map poses), or its odometry failed (a new session follows; this one is over).
+enum class LocalizationState : std::int8_t { kLocalizing = 0, kLocalized = 1, kLost = 2 };
+const char* to_string(LocalizationState state);  // "localizing", "localized", "lost"
+
 }  // namespace cvo::core

@@ -22,6 +22,41 @@ void KeyframeDatabase::add(KeyframeId id, BowVector bow) {
   bows_.push_back(std::move(bow));
 }
 
+std::vector<KeyframeId> KeyframeDatabase::ids() const {
+  std::vector<KeyframeId> held;
+  for (const KeyframeId id : ids_)
+    if (const auto it = position_.find(id); it != position_.end() && ids_[it->second] == id) held.push_back(id);
+  return held;
+}
+
+void KeyframeDatabase::remove(KeyframeId id) {
+  const std::uint32_t position = position_.at(id);
+  for (const BowEntry& e : bows_[position]) {
+    auto& postings = inverted_[e.word];
+    std::erase_if(postings, [&](const Posting& p) { return p.keyframe == position; });
+  }
+  bows_[position] = {};
+  position_.erase(id);
+  if (ids_.size() > 2 * position_.size() + 16) compact();
+}
+
+// Positions renumbered over the kept keyframes, in their order.
+void KeyframeDatabase::compact() {
+  std::vector<KeyframeId> ids;
+  std::vector<BowVector> bows;
+  for (std::uint32_t j = 0; j < ids_.size(); ++j)
+    if (const auto it = position_.find(ids_[j]); it != position_.end() && it->second == j) {
+      ids.push_back(ids_[j]);
+      bows.push_back(std::move(bows_[j]));
+    }
+  ids_.clear();
+  bows_.clear();
+  position_.clear();
+  inverted_.clear();
+  for (std::size_t j = 0; j < ids.size(); ++j) add(ids[j], std::move(bows[j]));
+  inverted_.shrink_to_fit();
+}
+
 std::vector<LoopCandidate> KeyframeDatabase::candidates(KeyframeId query_id, const BowVector& bow,
                                                         KeyframeId previous_id, double min_eta) const {
   const auto previous = position_.find(previous_id);
@@ -40,7 +75,7 @@ std::vector<LoopCandidate> KeyframeDatabase::candidates(KeyframeId query_id, con
   }
   std::vector<LoopCandidate> out;
   for (std::uint32_t j = 0; j < earlier; ++j) {
-    if (j == previous->second) continue;
+    if (j == previous->second || bows_[j].empty()) continue;  // removed ones too
     const double s = std::clamp(common[j], 0.0, 1.0);
     if (const double eta = s / reference; eta > min_eta) out.push_back({ids_[j], s, eta});
   }

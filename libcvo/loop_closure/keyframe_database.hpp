@@ -39,11 +39,18 @@ class KeyframeDatabase {
   /// a BowVector (entries sorted by word, each once, positive finite weights).
   void add(KeyframeId id, BowVector bow);
 
-  [[nodiscard]] std::size_t size() const { return ids_.size(); }
+  /// Removes a keyframe (a localizing session's window moving on, slam/mapper.hpp): it is never a
+  /// candidate again. Removed entries are compacted away once they outnumber the kept ones, so a
+  /// database that keeps a bounded number of keyframes holds bounded memory. Throws
+  /// std::out_of_range when the id is not there.
+  void remove(KeyframeId id);
+
+  [[nodiscard]] std::size_t size() const { return position_.size(); }
   [[nodiscard]] bool contains(KeyframeId id) const { return position_.contains(id); }
   /// Keyframe id's vector; std::out_of_range when it is not there.
   [[nodiscard]] const BowVector& bow(KeyframeId id) const { return bows_[position_.at(id)]; }
-  [[nodiscard]] const std::vector<KeyframeId>& ids() const { return ids_; }  // insertion order
+  /// The keyframes held, in insertion order.
+  [[nodiscard]] std::vector<KeyframeId> ids() const;
 
   /// Loop-closure candidates of keyframe query_id with vector `bow`: the keyframes added before
   /// query_id (all of them when query_id is not in the database), except previous_id and query_id,
@@ -57,7 +64,9 @@ class KeyframeDatabase {
     std::uint32_t keyframe;  // position in ids_
     double weight;
   };
-  std::vector<KeyframeId> ids_;
+  void compact();
+
+  std::vector<KeyframeId> ids_;  // by position; removed ones stay until compact() (bows_ empty)
   std::vector<BowVector> bows_;
   std::unordered_map<KeyframeId, std::uint32_t> position_;
   std::vector<std::vector<Posting>> inverted_;  // by word; grows to the largest word seen

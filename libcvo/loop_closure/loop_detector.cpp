@@ -16,7 +16,7 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core:
   if (previous_ && id <= *previous_)
     throw std::invalid_argument("LoopDetector::add_keyframe: id " + std::to_string(id) + " is not above " +
                                 std::to_string(*previous_));
-  return add_keyframe(KeyframePlacement{id, previous_, pose, 0}, frame, cloud);
+  return add_keyframe(KeyframePlacement{id, previous_, pose, 0, std::nullopt}, frame, cloud);
 }
 
 std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& placement, const core::RgbdFrame& frame,
@@ -36,6 +36,7 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
     const int max_refinements = parameters_.verification.max_refinements;
     int refinements = 0;
     for (const auto& c : candidates) {  // best η first
+      if (placement.candidates_below && c.id >= *placement.candidates_below) continue;
       if (max_refinements > 0 && refinements == max_refinements) break;
       auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
       if (v.refinement.iterations > 0) ++refinements;
@@ -51,6 +52,13 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
   keyframes_.emplace(id, std::move(keyframe));
   previous_ = id;
   return loops;
+}
+
+void LoopDetector::remove_keyframe(std::int64_t id) {
+  if (keyframes_.erase(id) == 0)
+    throw std::out_of_range("LoopDetector::remove_keyframe: keyframe " + std::to_string(id) + " is not stored");
+  database_.remove(id);
+  if (previous_ == id) previous_.reset();
 }
 
 void LoopDetector::update_poses(const std::map<std::int64_t, core::SE3>& poses) {

@@ -46,11 +46,14 @@ namespace cvo::loop_closure {
 
 /// Where a new keyframe sits: its id (unique), its predecessor in its session (none for the first),
 /// its current global estimate T_piece_keyframe and the piece of map that pose is in.
+/// `candidates_below`: only keyframes with a smaller id are loop candidates (a session localized in
+/// a read-only map looks for loops to the map's keyframes only, not to its own window).
 struct KeyframePlacement {
   std::int64_t id = 0;
   std::optional<std::int64_t> previous;
   core::SE3 pose;
   std::int64_t piece = 0;
+  std::optional<std::int64_t> candidates_below;
 };
 
 /// A keyframe's current estimate after an optimisation or a join of pieces.
@@ -77,6 +80,10 @@ class LoopDetector {
   /// bad frame (wrong image types or sizes, bad intrinsics).
   std::vector<LoopClosure> add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
                                         const registration::PointCloud& cloud, const core::SE3& pose);
+
+  /// Forgets a keyframe: it is no candidate and no η normaliser any more, and its features and
+  /// cloud are freed. Throws std::out_of_range when it is not stored.
+  void remove_keyframe(std::int64_t id);
 
   /// New global estimates after an optimisation (used for T_rel in the α test). Ids that are not
   /// stored keyframes (e.g. ordinary frames of the graph) are ignored.

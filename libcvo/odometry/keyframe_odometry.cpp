@@ -295,6 +295,7 @@ void KeyframeOdometry::hand_out(const core::RgbdFrame& frame, TrackStep& step) c
   step.keyframe_id = keyframe_id_;
   step.gamma = gamma_;
   step.reason = reason_;
+  step.lost = reason_ == KeyframeReason::kRestart;
   if (graph_closed_) step.closed_graph = HandedLocalGraph{keyframe_id_ - 1, &graphs_[1 - graph_]};
   if (step.keyframe)
     step.new_keyframe = NewKeyframe{keyframe_id_, keyframe_ == previous_ ? previous_images_ : frame, keyframe_pose_,

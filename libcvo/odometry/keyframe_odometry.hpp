@@ -95,6 +95,11 @@ struct TrackStep : TrackResult {
   // Covariance of this frame's keyframe→frame edge T_m^n (the inverse of its CVO Hessian,
   // [translation, rotation]); none for a frame without one (a first frame, a restart, a failure).
   std::optional<core::Matrix6d> edge_covariance;
+  // The odometry failed: this frame could not be registered (or is the first usable one after
+  // frames without points), so its pose is a guess and the session's odometry frame is broken here
+  // (a camera carried elsewhere, covered, shaken). The caller ends the session (finish(), reset())
+  // and tracks the next frame as the first of a new one, which the back end localizes afresh.
+  bool lost = false;
   std::optional<HandedLocalGraph> closed_graph;  // the local graph this frame closed
   std::optional<NewKeyframe> new_keyframe;       // the keyframe this frame made
 };

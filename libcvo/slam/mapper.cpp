@@ -37,14 +37,16 @@ bool same_pose(const core::SE3& a, const core::SE3& b) {
 }  // namespace
 
 Mapper::Mapper(loop_closure::Vocabulary vocabulary, const MapperParameters& parameters)
-    : detector_(std::move(vocabulary), parameters.detector), backend_(parameters.backend) {}
+    : detector_(std::move(vocabulary), parameters.detector),
+      backend_(parameters.backend),
+      localization_(parameters.localization) {}
 
-Mapper::Session& Mapper::session(core::SessionId id) {
+Mapper::Session& Mapper::enter(core::SessionId id) {
   if (const auto it = sessions_.find(id); it != sessions_.end()) return it->second;
   order_.push_back(id);
   backend_.add_session(id);
   auto& s = sessions_[id];
-  s.ordinal = static_cast<std::int64_t>(order_.size() - 1);
+  s.ordinal = next_ordinal_++;
   if (order_.size() == 1) s.joined_at_keyframe = 0;  // the first session defines the map
   return s;
 }
@@ -52,6 +54,9 @@ Mapper::Session& Mapper::session(core::SessionId id) {
 posegraph::NodeId Mapper::node(const Session& s, std::int64_t frame) const { return (s.ordinal << kFrameBits) | frame; }
 
 bool Mapper::knows(core::SessionId session, std::int64_t keyframe_id) const {
+  if (const auto v = visitors_.find(session); v != visitors_.end())
+    return std::any_of(v->second.window.begin(), v->second.window.end(),
+                       [&](const WindowKeyframe& w) { return w.id == keyframe_id; });
   const auto it = sessions_.find(session);
   return it != sessions_.end() && it->second.keyframes.contains(keyframe_id);
 }
@@ -61,6 +66,7 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   if (frame >= kMaxFrame)
     throw MapperError(name(k.session, k.id) + ": frame index " + std::to_string(frame) + " is 2^40 or more");
   if (k.id < 0) throw MapperError(name(k.session, k.id) + ": negative id");
+  if (map_below_ && !sessions_.contains(k.session)) return visit(k);
   if (const auto it = sessions_.find(k.session); it != sessions_.end()) {
     const auto& keyframes = it->second.keyframes;
     if (const auto same = keyframes.find(k.id); same != keyframes.end()) {
@@ -80,11 +86,12 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
     if (!below_ok || !above_ok)
       throw MapperError(name(k.session, k.id) + " (frame " + std::to_string(frame) +
                         ") is out of order with the session's other keyframes");
+    if (map_below_) throw MapperError(name(k.session, k.id) + " is new to a stored session: the map is read only");
   }
 
-  Session& s = session(k.session);
+  Session& s = enter(k.session);
   const posegraph::NodeId id = node(s, frame);
-  loop_closure::KeyframePlacement placement{id, std::nullopt, {}, backend_.piece(k.session)};
+  loop_closure::KeyframePlacement placement{id, std::nullopt, {}, backend_.piece(k.session), std::nullopt};
   if (const auto after = s.keyframes.upper_bound(k.id); after != s.keyframes.begin())
     placement.previous = node(s, std::prev(after)->second.frame);  // η's normaliser: its predecessor
   const auto& graph = backend_.keyframe_graph();
@@ -107,6 +114,7 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
     backend_.add_loop(loop);
     loops_.push_back(loop);
     outcome.loops.push_back(describe(loop));
+    s.last_match_time = k.frame.timestamp;
   }
   outcome.joined = after_change();
   return outcome;
@@ -124,9 +132,15 @@ std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id,
         k != it->second.keyframes.end() && k->second.frame != first)
       throw MapperError("local graph of " + name(session_id, keyframe_id) + " starts at frame " +
                         std::to_string(first) + ", the keyframe is frame " + std::to_string(k->second.frame));
+  if (map_below_ && !sessions_.contains(session_id)) {
+    if (auto v = visitors_.find(session_id); v != visitors_.end()) add_window_graph(v->second, keyframe_id, graph);
+    return {};
+  }
+  if (map_below_ && !knows(session_id, keyframe_id))
+    throw MapperError("local graph of " + name(session_id, keyframe_id) + " is new to the map, which is read only");
   // The Backend checks the rest before it changes anything; a session a refused graph introduced
   // stays registered without nodes (harmless: it is placed by nothing).
-  const Session& s = session(session_id);
+  const Session& s = enter(session_id);
   const auto offset = node(s, 0);
   try {
     backend_.add_local_graph(session_id, offset + first, renumbered(graph, offset));
@@ -178,8 +192,21 @@ Map Mapper::map() const {
   for (const core::SessionId id : order_) {
     const Session& s = sessions_.at(id);
     const core::SE3 correction = backend_.odometry_correction(id);
-    map.sessions.push_back(
-        {id, backend_.placed(id), backend_.piece(id), s.keyframes.size(), s.joined_at_keyframe, correction});
+    MapSession& entry = map.sessions.emplace_back();
+    entry.session = id;
+    entry.placed = backend_.placed(id);
+    entry.piece = backend_.piece(id);
+    entry.keyframes = s.keyframes.size();
+    entry.joined_at_keyframe = s.joined_at_keyframe;
+    entry.correction = correction;
+    entry.state = s.lost                ? core::LocalizationState::kLost
+                  : backend_.placed(id) ? core::LocalizationState::kLocalized
+                                        : core::LocalizationState::kLocalizing;
+    // The first session is the map: each of its keyframes is in it.
+    entry.last_match_time =
+        id == order_.front() && !s.keyframes.empty() ? s.keyframes.rbegin()->second.timestamp : s.last_match_time;
+    if (entry.last_match_time >= 0 && !s.keyframes.empty())
+      entry.since_match_s = s.keyframes.rbegin()->second.timestamp - entry.last_match_time;
     for (const auto& [keyframe, record] : s.keyframes) {
       // A keyframe whose local graph has not closed yet follows its session's newest correction.
       const auto it = poses.find(node(s, record.frame));
@@ -187,6 +214,7 @@ Map Mapper::map() const {
           {id, keyframe, record.timestamp, it != poses.end() ? it->second : correction * record.odometry});
     }
   }
+  for (const auto& [id, v] : visitors_) map.sessions.push_back(describe(id, v));
   const auto states = backend_.loops();
   for (const auto& state : states) {
     MapLoop m = describe(state.loop);

@@ -26,10 +26,29 @@
 // seen (so a replay of the same input rebuilds the same graph), n < 2^40 (a year at 30 Hz is 2^30).
 // Frame indices and keyframe ids count from 0 in every session, as the tracker numbers them.
 //
+// Localization (localize_only(), cvo-backendd's backendd.mode=localization, cvo-run --mode
+// localize): after the stored map was applied it is read only. A session not seen before is then a
+// visitor: its keyframes look for loops to the map's keyframes only (the same verification that
+// joins sessions: bag of words, RANSAC, CVO, α), its first verified loop localizes it
+// (LocalizationState::kLocalized), and its correction comes from its window
+// (localization_window.hpp): its newest localization.window_keyframes keyframes, kept in memory
+// only (never in the map, never stored) and forgotten by the loop detector as the window moves on.
+// At most kMaxWindows visitors hold a window at once (the others keep their correction and state:
+// a tracker that went away), and at most kMaxVisitors are remembered at all, so a map serves for
+// months in bounded memory. A stored session's keyframes that are not in the map already are
+// refused then (the map is read only).
+//
+// States (MapSession::state): a mapped session is kLocalized once placed in the map (the first:
+// always), else kLocalizing; a visitor likewise once its window is solved. mark_lost() (the
+// tracker said its odometry failed) makes either kLost: a lost visitor's window is freed.
+// last_match_time is the sensor time of the session's newest keyframe with a verified loop to the
+// map (to another session, for a mapped one; the first session's newest keyframe: it is the map).
+//
 // Everything that cannot be applied throws MapperError before anything changed, with a message
 // naming the session and keyframe; the mapper stays usable.
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -45,6 +64,7 @@
 #include "libcvo/odometry/local_graph.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 #include "libcvo/slam/backend.hpp"
+#include "libcvo/slam/localization_window.hpp"
 
 namespace cvo::slam {
 
@@ -57,6 +77,7 @@ class MapperError : public std::invalid_argument {
 struct MapperParameters {
   loop_closure::LoopDetectorParameters detector;
   BackendParameters backend;
+  core::LocalizationParameters localization;
 };
 
 /// A keyframe as the tracker sends it (CVO_KEYFRAME): frame.index is its frame in the session.
@@ -75,6 +96,13 @@ struct MapSession {
   std::size_t keyframes = 0;
   std::int64_t joined_at_keyframe = -1;  // its newest keyframe id when it joined (first session: 0)
   core::SE3 correction;                  // T_piece_odom: piece pose = correction · odometry pose
+  core::LocalizationState state = core::LocalizationState::kLocalizing;
+  double last_match_time = -1;  // sensor time (s) of its newest keyframe with a verified match; -1: none
+  double since_match_s = -1;    // its newest keyframe's time minus last_match_time; -1: no match
+  bool visitor = false;         // localized in a read-only map: its keyframes are in no map
+  // Of its newest keyframe's map pose (a visitor's window solve), [rho; phi], right-perturbed.
+  std::optional<core::Matrix6d> keyframe_covariance;
+  std::int64_t covariance_keyframe = -1;  // the keyframe id it is of
 };
 
 struct MapKeyframe {
@@ -127,6 +155,14 @@ class Mapper {
   /// The global optimisation of every frame.
   posegraph::OptimizationReport finish();
 
+  /// From now on the map is read only and new sessions are localized in it (see the header).
+  void localize_only();
+  [[nodiscard]] bool localizing_only() const { return map_below_.has_value(); }
+  /// The tracker's odometry of `session` failed (a new session follows): its state is kLost.
+  void mark_lost(core::SessionId session);
+  /// What map() says of one session: a default entry (kLocalizing, unplaced) for one not seen.
+  [[nodiscard]] MapSession session(core::SessionId session) const;
+
   [[nodiscard]] Map map() const;
   /// The frames of one session (placed or not) in its piece's frame, stamped with their colour time.
   [[nodiscard]] core::Trajectory frame_trajectory(core::SessionId session) const;
@@ -136,6 +172,11 @@ class Mapper {
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
   [[nodiscard]] std::size_t loops_accepted() const { return loops_.size(); }
+  /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
+  [[nodiscard]] std::size_t window_keyframes() const;
+
+  static constexpr std::size_t kMaxWindows = 8;
+  static constexpr std::size_t kMaxVisitors = 256;
 
  private:
   struct KeyframeRecord {
@@ -147,9 +188,32 @@ class Mapper {
     std::int64_t ordinal = 0;
     std::map<std::int64_t, KeyframeRecord> keyframes;  // by id
     std::int64_t joined_at_keyframe = -1;
+    bool lost = false;
+    double last_match_time = -1;
+  };
+  // A session localized in the read-only map.
+  struct Visitor {
+    std::int64_t ordinal = 0;
+    std::uint64_t last_used = 0;  // the mapper's revision when it last had a keyframe
+    std::deque<WindowKeyframe> window;
+    std::vector<WindowMatch> matches;  // loops to the map from window keyframes
+    std::optional<core::SE3> correction;
+    std::optional<core::Matrix6d> covariance;
+    std::int64_t covariance_keyframe = -1, localized_at_keyframe = -1;
+    std::size_t keyframes = 0;
+    double last_match_time = -1, newest_time = -1;
+    bool lost = false;
   };
 
-  Session& session(core::SessionId id);
+  Session& enter(core::SessionId id);
+  KeyframeOutcome visit(const SessionKeyframe& keyframe);
+  std::vector<loop_closure::LoopClosure> detect(const SessionKeyframe& keyframe,
+                                                const loop_closure::KeyframePlacement& placement);
+  void add_window_graph(Visitor& v, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
+  void move_window(Visitor& v);
+  void solve(Visitor& v, std::int64_t newest_id);
+  void forget_idle_visitors();
+  [[nodiscard]] MapSession describe(core::SessionId id, const Visitor& v) const;
   [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
   [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
   std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
@@ -162,6 +226,10 @@ class Mapper {
   std::vector<loop_closure::LoopClosure> loops_;
   std::size_t loops_tried_ = 0;
   std::uint64_t revision_ = 0;
+  core::LocalizationParameters localization_;
+  std::optional<posegraph::NodeId> map_below_;  // localize_only(): nodes below it are the map's
+  std::map<core::SessionId, Visitor> visitors_;
+  std::int64_t next_ordinal_ = 0;
 };
 
 }  // namespace cvo::slam

@@ -91,7 +91,8 @@ static_assert(
     holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters, core::LoopVerificationParameters,
                   core::CvoParameters, core::SelectionParameters, core::OdometryParameters>);
 static_assert(std::is_same_v<slam::BackendParameters, core::PoseGraphParameters>);
-static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters>);
+static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters,
+                            core::LocalizationParameters>);
 static_assert(holds_exactly<posegraph::OptimizerOptions, core::PoseGraphParameters, double, double, double, bool>);
 
 // A member declaration of one of `names`: a plain type, the name, maybe a default, a semicolon
@@ -123,6 +124,8 @@ TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
       {"libcvo/registration/registration.hpp", "max_points"},    // Capacities: no default, every caller's max_points
       {"libcvo/registration/point_selection.hpp", "cell_size"},  // selection cells in pixels, not map cells
       {"drivers/usb_cameras.hpp", "source"},                     // where a camera's USB ids are published
+      {"drivers/usb_cameras.hpp", "mode"},                       // a device node's permission bits
+      {"tools/cvo-run/report.hpp", "mode"},                      // the odometry mode run, not the back end's
   };
   std::set<std::string> names;
   for (const auto& key : config_keys()) names.insert(key.substr(key.find('.') + 1));

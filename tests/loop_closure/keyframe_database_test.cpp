@@ -38,6 +38,30 @@ KeyframeDatabase example() {
   return db;
 }
 
+TEST(KeyframeDatabase, ARemovedKeyframeIsNoCandidateAndTheOthersScoreAsBefore) {
+  KeyframeDatabase db = example();
+  db.remove(12);
+  EXPECT_FALSE(db.contains(12));
+  EXPECT_EQ(db.size(), 5u);
+  EXPECT_EQ(ids_of(db.candidates(21, kQuery, 20, 0.3)), (std::vector<KeyframeId>{10, 14}));
+  EXPECT_THROW(db.remove(12), std::out_of_range);
+  db.add(12, {{1, 0.5}, {2, 0.5}});  // an id may come back
+  EXPECT_EQ(ids_of(db.candidates(21, kQuery, 20, 0.3)), (std::vector<KeyframeId>{12, 10, 14}));
+}
+
+TEST(KeyframeDatabase, AWindowOfKeyframesHoldsBoundedMemoryAsItMovesOn) {
+  KeyframeDatabase db;
+  for (KeyframeId id = 0; id < 1000; ++id) {
+    db.add(id, {{static_cast<std::uint32_t>(id % 50), 0.5}, {60, 0.5}});
+    if (id >= 8) db.remove(id - 8);
+  }
+  EXPECT_EQ(db.size(), 8u);
+  EXPECT_EQ(db.ids(), (std::vector<KeyframeId>{992, 993, 994, 995, 996, 997, 998, 999}));
+  // Compacted: candidates still come from the eight, best η first.
+  const auto c = db.candidates(1000, {{60, 1.0}}, 999, 0.0);
+  EXPECT_EQ(c.size(), 7u);
+}
+
 TEST(KeyframeDatabase, CandidatesAreAboveTheThresholdBestFirstWithoutThePreviousKeyframe) {
   const KeyframeDatabase db = example();
   const auto c = db.candidates(21, kQuery, 20, 0.3);
