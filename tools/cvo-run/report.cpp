@@ -121,6 +121,14 @@ void print_text(std::FILE* out, const RunReport& r) {
                      s.joined ? ("joined the map" + at).c_str() : "NOT placed in the map (left out of the trajectory)");
       }
   }
+  if (const auto& l = r.localize) {
+    std::fprintf(out, "map store   %s (read only)\n", l->map_store.c_str());
+    std::fprintf(out, "localized   %zu frames (%zu localizing, %zu lost), %s, %zu sessions, %zu relocalizations\n",
+                 l->frames_localized, l->frames_localizing, l->frames_lost,
+                 l->localized_after_s ? ("first after " + std::to_string(*l->localized_after_s) + " s").c_str()
+                                      : "NEVER localized",
+                 l->sessions, l->relocalizations);
+  }
   if (r.groundtruth.empty()) {
     std::fprintf(out, "evaluation  none (no ground truth)\n");
     return;
@@ -182,6 +190,16 @@ program::Json to_json(const RunReport& r) {
       r.slam && r.slam->store
           ? program::Json{{"file", r.slam->store->file}, {"records", r.slam->store->records}, {"ms", r.slam->store->ms}}
           : program::Json();
+  const auto localize = [&](auto get) { return r.localize ? program::Json(get(*r.localize)) : program::Json(); };
+  o["localized_frames"] = localize([](const auto& l) { return l.frames_localized; });
+  o["localized_after_s"] = r.localize ? program::or_null(r.localize->localized_after_s) : program::Json();
+  o["relocalizations"] = localize([](const auto& l) { return l.relocalizations; });
+  o["frames_localizing"] = localize([](const auto& l) { return l.frames_localizing; });
+  o["frames_localized"] = localize([](const auto& l) { return l.frames_localized; });
+  o["frames_lost"] = localize([](const auto& l) { return l.frames_lost; });
+  o["localization_sessions"] = localize([](const auto& l) { return l.sessions; });
+  o["window_keyframes_max"] = localize([](const auto& l) { return l.window_keyframes_max; });
+  o["map_store"] = localize([](const auto& l) { return l.map_store; });
   o["ate_rmse_m_odometry"] =
       r.slam && r.slam->ate_odometry ? program::Json(r.slam->ate_odometry->error.rmse) : program::Json();
   return o;
