@@ -57,7 +57,6 @@ struct Localizer::State {
   odometry::KeyframeOdometryParameters parameters;
   std::unique_ptr<odometry::KeyframeOdometry> tracker;  // made at the first frame: its size
   core::SessionId session = 0;
-  bool seen = false;       // the mapper has a keyframe of the current session
   bool localized = false;  // the current session was localized at some frame
   std::optional<double> first_timestamp;
   core::Trajectory trajectory;
@@ -76,7 +75,6 @@ struct Localizer::State {
   void new_session() {
     ++session;
     ++report.sessions;
-    seen = false;
     localized = false;
   }
 };
@@ -100,10 +98,14 @@ odometry::TrackResult Localizer::track(const core::RgbdFrame& frame) {
         std::make_unique<odometry::KeyframeOdometry>(frame.intrinsics.width, frame.intrinsics.height, s.parameters);
   if (!s.first_timestamp) s.first_timestamp = frame.timestamp;
   const odometry::TrackStep step = s.tracker->track(frame);
-  if (step.lost) {  // the kidnapped robot: this session ends (its open graph to the back end), another starts
+  if (step.lost) {  // the kidnapped robot: this session ends, another starts
     ++s.report.frames_lost;
-    if (const auto open = s.tracker->finish(); open && s.seen)
-      s.mapper.add_local_graph(s.session, open->keyframe_id, *open->graph);
+    // The graphs of keyframes the back end has go to it; a keyframe this broken frame made does not.
+    const auto hand = [&](const odometry::HandedLocalGraph& g) {
+      if (s.mapper.knows(s.session, g.keyframe_id)) s.mapper.add_local_graph(s.session, g.keyframe_id, *g.graph);
+    };
+    if (const auto& g = step.closed_graph) hand(*g);
+    if (const auto open = s.tracker->finish()) hand(*open);
     s.mapper.mark_lost(s.session);
     s.tracker->reset();
     s.new_session();
@@ -112,10 +114,7 @@ odometry::TrackResult Localizer::track(const core::RgbdFrame& frame) {
   // The state as it stood when the frame was tracked: its own keyframe is seen after.
   s.count(s.mapper.session(s.session).state, frame, step.pose);
   if (const auto& g = step.closed_graph) s.mapper.add_local_graph(s.session, g->keyframe_id, *g->graph);
-  if (const auto& k = step.new_keyframe) {
-    s.mapper.add_keyframe({s.session, k->id, k->frame, k->pose, *k->cloud});
-    s.seen = true;
-  }
+  if (const auto& k = step.new_keyframe) s.mapper.add_keyframe({s.session, k->id, k->frame, k->pose, *k->cloud});
   s.report.window_keyframes_max = std::max(s.report.window_keyframes_max, s.mapper.window_keyframes());
   return step;
 }
