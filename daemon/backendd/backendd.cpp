@@ -121,6 +121,13 @@ std::string join_text(const slam::Map& map, core::SessionId session, std::option
   const auto s =
       std::find_if(map.sessions.begin(), map.sessions.end(), [&](const auto& m) { return m.session == session; });
   const std::int64_t at = s != map.sessions.end() ? s->joined_at_keyframe : -1;
+  if (s != map.sessions.end() && s->visitor) {  // its keyframes are in no map: arrival time only
+    std::string out =
+        "session " + core::session_name(session) + " localized in the stored map at its keyframe " + std::to_string(at);
+    if (!first_arrival) return out;
+    return out + " (" + fixed(std::chrono::duration<double>(Clock::now() - *first_arrival).count(), 2) +
+           " s after its first keyframe arrived)";
+  }
   double first = std::numeric_limits<double>::quiet_NaN(), joined = first;
   for (const auto& k : map.keyframes) {
     if (k.session != session) continue;
@@ -171,10 +178,28 @@ Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(c
   if (!work_->lcm.good())
     throw io::InputError(b.publish_url == "lcm_url" ? "backendd.lcm_url" : "backendd.publish_url",
                          "cannot open LCM provider '" + publish_url(b) + "'");
+  if (localization()) {
+    read_map_store();
+    return;
+  }
   std::string warning;
   store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning, b.unsaved_records_max);
   if (!warning.empty()) notes_.note("warning: " + warning);
   note_store_change();  // a new store on a full disk: started degraded
+}
+
+// The stored map, read without changing a byte of it; damage costs only the records it touches.
+void Backendd::read_map_store() {
+  const auto& file = config_.backendd.store;
+  if (!std::filesystem::exists(file))
+    throw io::InputError("backendd.store", "no keyframe store '" + file + "': localization needs a stored map");
+  const StoreSnapshot snapshot = read_store(file);
+  if (!snapshot.scan.clean())
+    notes_.note("warning: " + describe_damage(file, snapshot.scan, "a write under way", "it is left out"));
+  for (const auto& r : snapshot.scan.records) {
+    const std::uint8_t* payload = snapshot.payload(r);
+    recovered_.push_back({r.kind, {payload, payload + StoreSnapshot::payload_bytes(r)}});
+  }
 }
 
 Backendd::~Backendd() = default;
@@ -182,7 +207,8 @@ Backendd::~Backendd() = default;
 int Backendd::run() {
   const auto recovered = recovered_.size();
   let_in_recovered(std::exchange(recovered_, {}));
-  notes_.note("store " + store_->file().string() + " (" + std::to_string(recovered) + " records recovered), LCM " +
+  notes_.note((localization() ? "localization in the map of " : "store ") + config_.backendd.store + " (" +
+              std::to_string(recovered) + " records " + (localization() ? "read" : "recovered") + "), LCM " +
               config_.backendd.lcm_url);
   std::thread receive([this] { receive_loop(); });
   std::thread work([this] { work_loop(); });
@@ -217,6 +243,7 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     const MessageKey key = message->key;
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());  // a gap in the store is asked for too
+    ++replayed_pending_;
     queue_.push({std::move(*message), std::nullopt});
   }
 }
@@ -301,7 +328,8 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     // already. A record refused here is neither stored nor let in, so its re-send is new.
     const bool log = is_log(config_.backendd.lcm_url);
     const bool room = log ? queue_.wait_for_room([&] { return stop_.load(); }) : queue_.has_room();
-    const bool to_store = !room && !log && !store_->health().failing && waiting_in_store_ < kMaxWaitingInStore;
+    const bool to_store =
+        store_ && !room && !log && !store_->health().failing && waiting_in_store_ < kMaxWaitingInStore;
     if (!room && !to_store) {
       ++queue_drops_;
       return notes_.note_limited("queue full", describe(key) + " refused: " + std::to_string(queue_.size()) +
@@ -309,8 +337,9 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     }
     // Used in any case; what the store cannot write now it holds and writes later, within a bound.
     RecordRef where;
-    const auto appended = store_->append(kind, std::vector<std::uint8_t>(data, data + size), &where);
-    if (appended == Appended::kNotDurable)
+    const auto appended =
+        store_ ? store_->append(kind, std::vector<std::uint8_t>(data, data + size), &where) : Appended::kStored;
+    if (store_ && appended == Appended::kNotDurable)
       notes_.note_limited("not stored", "warning: " + describe(key) + " used but not stored (lost on restart): " +
                                             describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
@@ -345,6 +374,7 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
     return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
   }
   gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
+  if (pose->state == cvo_lcm::pose_t::STATE_LOST) queue_.push({LostSession{pose->session}, Clock::now()});
 }
 
 // A log cannot answer: what it lacks is lost as soon as it is noticed.
@@ -391,6 +421,7 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
 
 // The store's state after an append or a retry, noted when it changes (cvo-receive).
 void Backendd::note_store_change() {
+  if (!store_) return;
   const auto health = store_->health();
   if (health.failing && !store_failing_)
     notes_.note("warning: " + describe(health) + ": accepted records are used and held in memory (at most " +
@@ -406,7 +437,7 @@ void Backendd::note_store_change() {
 // stop, where what is still unsaved is said.
 void Backendd::retry_store(bool final) {
   const auto now = Clock::now();
-  if (!final && now - store_retried_ < 1s) return;
+  if (!store_ || (!final && now - store_retried_ < 1s)) return;
   store_retried_ = now;
   store_->retry();
   note_store_change();
@@ -439,7 +470,23 @@ void Backendd::work_loop() {
 // One record into the mapper. What it cannot apply changed nothing (slam::Mapper's promise): it is
 // noted and the daemon goes on with the next.
 void Backendd::process(QueuedRecord& queued) {
+  // Localization starts once the stored map is in: its records are queued before any live one.
+  const auto localize_when_stored = [&] {
+    if (localization() && !work_->mapper.localizing_only() && replayed_pending_ == 0) start_localizing();
+  };
+  if (queued.arrived) localize_when_stored();
+  process_record(queued);
+  if (!queued.arrived && --replayed_pending_ == 0) localize_when_stored();
+  ++work_->processed;
+}
+
+void Backendd::process_record(QueuedRecord& queued) {
   try {
+    if (const auto* lost = std::get_if<LostSession>(&queued.content)) {
+      work_->mapper.mark_lost(lost->session);
+      notes_.note("session " + core::session_name(lost->session) + " lost: its tracker's odometry failed");
+      return publish_map({}, false);
+    }
     std::string error;
     const auto value = value_of(queued, &error);
     if (!value) return notes_.note_limited("unreadable", error);
@@ -452,7 +499,18 @@ void Backendd::process(QueuedRecord& queued) {
   } catch (const std::exception& e) {
     notes_.note_limited("failure", std::string("record skipped after a failure: ") + e.what());
   }
-  ++work_->processed;
+}
+
+// The stored map, optimised as a whole once, becomes read only; sessions from now on are localized.
+void Backendd::start_localizing() {
+  Work& w = *work_;
+  if (w.mapper.backend().local_graphs() > 0) w.mapper.finish();
+  w.mapper.localize_only();
+  const auto map = w.mapper.map();
+  notes_.note("localizing new sessions in the stored map: " + std::to_string(map.keyframes.size()) + " keyframes of " +
+              std::to_string(map.sessions.size()) + " sessions, " + std::to_string(map.loops.size()) + " loops" +
+              (map.keyframes.empty() ? " (an empty map: nothing can be localized)" : ""));
+  publish_map({}, false);
 }
 
 // The record's value, decoded here only if it was not at the door: a replayed message's images, a
@@ -484,9 +542,10 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_
   for (const auto& loop : outcome.loops)
     notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
                 keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
-  // The keyframe is in the SLAM map whether or not the occupancy grid can use it.
+  // The keyframe is in the SLAM map whether or not the occupancy grid can use it; a visitor's is in
+  // no map.
   try {
-    w.mapping.add_keyframe({k.session, k.id}, k.frame);
+    if (!w.mapper.localizing_only()) w.mapping.add_keyframe({k.session, k.id}, k.frame);
   } catch (const std::invalid_argument& e) {
     ++w.grid.not_mapped;
     notes_.note_limited("not mapped", keyframe_name(k.session, k.id) + " left out of the grid: " + e.what());
@@ -561,7 +620,7 @@ void Backendd::publish_status(std::int8_t state) {
   s.process = kProcess;
   s.session = 0;  // the back end is no tracker session
   // A store that does not keep every record is the daemon's degraded state (the stop says itself).
-  const auto store = store_->health();
+  const auto store = store_ ? store_->health() : StoreHealth{};
   s.state = store.degraded() && state != cvo_lcm::status_t::STATE_STOPPING ? cvo_lcm::status_t::STATE_DEGRADED : state;
   s.unsaved_records = static_cast<std::int64_t>(store.unsaved);
   const double elapsed = std::chrono::duration<double>(now - w.last_status).count();
@@ -584,7 +643,8 @@ void Backendd::publish_status(std::int8_t state) {
 void Backendd::finish() {
   Work& w = *work_;
   try {
-    if (w.mapper.backend().local_graphs() > 0) {  // nothing to optimise before a local graph
+    // Nothing to optimise before a local graph; a read-only map was optimised when it became one.
+    if (w.mapper.backend().local_graphs() > 0 && !w.mapper.localizing_only()) {
       const auto report = w.mapper.finish();
       notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
                   std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");

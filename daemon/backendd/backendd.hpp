@@ -17,10 +17,16 @@
 //                 keyframes; CVO_STATUS once a period
 //
 // At start-up the store is read back and every record goes through the same door and path, so a
-// restart resumes every session received before. On SIGTERM/SIGINT/SIGHUP: what is already in the socket
-// is taken in, the queue is drained, a final global optimisation runs, the final CVO_MAP is
-// published, then the final CVO_GRID, exit 0. No record can stop the daemon: what the mapper cannot apply is noted and
-// skipped.
+// restart resumes every session received before.
+//
+// Localization (backendd.mode localization): the store is only read (read_store, as cvo-map reads
+// it: never written, renamed or cut back), its records are the map; once they are applied the
+// final global optimisation runs and the mapper becomes read only (slam::Mapper::localize_only).
+// Every new session is localized in it; its keyframes are never stored and make no grid, and the
+// grid published is the stored map's. A CVO_POSE whose state is LOST marks its session lost. On SIGTERM/SIGINT/SIGHUP:
+// what is already in the socket is taken in, the queue is drained, a final global optimisation runs, the final CVO_MAP
+// is published, then the final CVO_GRID, exit 0. No record can stop the daemon: what the mapper cannot apply is noted
+// and skipped.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -68,12 +74,16 @@ class Backendd {
 
  private:
   struct Work;
+  // A tracker said its session's odometry failed (CVO_POSE state LOST).
+  struct LostSession {
+    core::SessionId session = 0;
+  };
   // A record decoded once: received, its value (decoded and checked at the door); replayed from
   // the store, its message (decoded at the door, its images decoded in its turn, so that a long
   // store is not held decoded); waiting in the store (the queue was full), only where it lies (read
   // back and decoded in its turn: what waits there is not held in memory at all).
   struct QueuedRecord {
-    std::variant<RecordValue, Identified, RecordRef> content;
+    std::variant<RecordValue, Identified, RecordRef, LostSession> content;
     std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
   };
 
@@ -87,6 +97,8 @@ class Backendd {
   void retry_store(bool final);
   void work_loop();
   void process(QueuedRecord& queued);
+  void process_record(QueuedRecord& queued);
+  void read_map_store();
   std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
   void apply_keyframe(const lcm::Keyframe& keyframe, std::optional<std::chrono::steady_clock::time_point> arrived);
   void apply_local_graph(const LocalGraphRecord& record);
@@ -95,11 +107,13 @@ class Backendd {
   void publish_grid(bool after_loop);
   void publish_status(std::int8_t state);
   void finish();
+  void start_localizing();
+  [[nodiscard]] bool localization() const { return config_.backendd.mode == "localization"; }
 
   config::Config config_;
   Notes notes_{"cvo-backendd"};  // the journal and CVO_STATUS's detail, at one log-rate policy
   SystemdNotifier systemd_;
-  std::unique_ptr<KeyframeStore> store_;
+  std::unique_ptr<KeyframeStore> store_;  // none in localization mode: the store is only read
   std::vector<StoredRecord> recovered_;
   // cvo-receive only: whether the store was failing when last noted, and when held records were
   // last retried.
@@ -113,6 +127,7 @@ class Backendd {
   std::atomic<bool> stop_{false}, receiver_done_{false};
   std::atomic<bool> input_ended_{false};  // a file:// input log was read to its end
   std::atomic<std::int64_t> queue_drops_{0};
+  std::atomic<std::int64_t> replayed_pending_{0};  // records of the store not applied yet
   // Records that found the queue full and wait in the store instead (queued by reference), now
   // and in all: a back end slower than its trackers loses nothing and holds no more in memory.
   std::atomic<std::int64_t> waiting_in_store_{0}, waited_in_store_{0};

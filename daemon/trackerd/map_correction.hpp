@@ -8,6 +8,7 @@
 // computation.
 #include <cstdint>
 #include <mutex>
+#include <optional>
 
 #include "libcvo/core/se3.hpp"
 
@@ -16,6 +17,10 @@ namespace cvo::daemon::trackerd {
 struct MapPlacement {
   core::SE3 T_map_odom;  // identity while not placed: map pose = odometry pose
   bool placed = false;
+  std::int64_t epoch = -1, revision = -1;             // of the CVO_MAP it came from (-1: none)
+  double last_match_time = -1;                        // sensor time of the newest verified match (-1: none)
+  std::optional<core::Matrix6d> keyframe_covariance;  // of keyframe covariance_keyframe's map pose
+  std::int64_t covariance_keyframe = -1;
 };
 
 class MapCorrection {

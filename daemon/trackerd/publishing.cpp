@@ -143,6 +143,10 @@ void Publishing::publish(const Event& event) {
     latency_.add(m.latency_ms);
     if (m.latency_ms > shared_.config.trackerd.deadline_ms) ++deadline_misses_;
     if (published_++ == 0) shared_.notes.note("first pose published");
+    if (event.pose.state == core::LocalizationState::kLost)
+      shared_.notes.note("session " + core::session_name(event.session) + " lost at frame " +
+                         std::to_string(event.pose.frame_index) + ": the odometry failed (" +
+                         odometry::to_string(event.pose.status) + "); tracking again in a new session");
     last_frame_ = Clock::now();
   }
   outbox.release(event);
@@ -256,7 +260,9 @@ void Publishing::apply_map(const void* data, int size) {
                        (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
                        " (map revision " + std::to_string(d.correction.revision) + ")");
   applied_ = d.correction;
-  shared_.correction.set(session, {d.correction.T_map_odom, d.correction.placed});
+  const auto& c = d.correction;
+  shared_.correction.set(session, {c.T_map_odom, c.placed, c.epoch, c.revision, c.last_match_time,
+                                   c.keyframe_covariance, c.covariance_keyframe});
 }
 
 }  // namespace cvo::daemon::trackerd

@@ -60,10 +60,15 @@ void Tracking::run() {
     slot->frame.index -= first_index_;  // frame indices count from 0 in a session
     Event event;
     track(*slot, event);
-    shared_.ring.end_read();                // this frame's slot is kept: the next frame may make it a keyframe
+    shared_.ring.end_read();  // this frame's slot is kept: the next frame may make it a keyframe
+    const bool lost = event.pose.state == core::LocalizationState::kLost;
     outbox_->push(event, t.deterministic);  // when full, dropped: counted, with what it carried
     ++session_frames_;
     ++shared_.counters.frames_tracked;
+    if (lost) {  // the odometry failed: the next frame is the first of a new session
+      first_index_ += static_cast<std::uint64_t>(event.pose.frame_index) + 1;
+      start_new_session();
+    }
     count_allocations();
   }
   if (tracker_) {
@@ -159,6 +164,13 @@ void Tracking::track(const RingSlot& slot, Event& event) {
   e.odom_pose = step.pose;
   e.map_pose = placement.T_map_odom * step.pose;
   e.map_placed = placement.placed;
+  e.has_map_pose = placement.placed || shared_.config.trackerd.map_pose_until_localized == "odometry";
+  e.map_epoch = placement.epoch;
+  e.map_revision = placement.revision;
+  e.state = step.lost          ? core::LocalizationState::kLost
+            : placement.placed ? core::LocalizationState::kLocalized
+                               : core::LocalizationState::kLocalizing;
+  e.since_match_s = placement.last_match_time >= 0 ? frame.timestamp - placement.last_match_time : -1;
   e.inner_product = step.inner_product;
   e.gamma_keyframe = step.gamma;
   e.iterations = step.iterations;

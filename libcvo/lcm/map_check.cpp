@@ -1,5 +1,7 @@
 #include "libcvo/lcm/map_check.hpp"
 
+#include "cvo_lcm/pose_t.hpp"
+#include "libcvo/core/information.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
@@ -8,8 +10,16 @@ std::string map_error(const cvo_lcm::map_t& m) {
   const std::string prefix = "cvo_lcm.map_t: ";
   if (m.version != cvo_lcm::map_t::SCHEMA_VERSION) return prefix + "schema version " + std::to_string(m.version);
   std::string why;
-  for (const auto& s : m.sessions)
-    if (!from_message(s.correction, &why)) return prefix + "session " + std::to_string(s.session) + ": " + why;
+  for (const auto& s : m.sessions) {
+    const std::string session = prefix + "session " + std::to_string(s.session) + ": ";
+    if (!from_message(s.correction, &why)) return session + why;
+    if (s.state < cvo_lcm::pose_t::STATE_LOCALIZING || s.state > cvo_lcm::pose_t::STATE_LOST)
+      return session + "state " + std::to_string(s.state);
+    if (s.covariance_keyframe >= 0)
+      // A covariance is what an information matrix must be: finite, symmetric, positive semi-definite.
+      if (const auto check = core::check_information(matrix6_from_message(s.keyframe_covariance)); !check.ok())
+        return session + "keyframe covariance: " + check.why();
+  }
   for (const auto& k : m.keyframes)
     if (!from_message(k.pose, &why))
       return prefix + "keyframe " + std::to_string(k.id) + " of session " + std::to_string(k.session) + ": " + why;

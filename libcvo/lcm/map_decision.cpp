@@ -59,7 +59,12 @@ CorrectionDecision decide_map_correction(const void* data, int size, std::int64_
   if (std::string bad = map_error(*message); !bad.empty()) return refuse(BadKind::kContent, bad);
 
   CorrectionDecision d;
-  d.correction = {message->epoch, message->revision, session, entry->placed != 0, core::SE3{}};
+  d.correction = {message->epoch, message->revision, session, entry->placed != 0, core::SE3{}, -1, std::nullopt, -1};
+  if (entry->last_match_utime > 0) d.correction.last_match_time = from_utime(entry->last_match_utime);
+  if (entry->covariance_keyframe >= 0) {  // map_error checked it
+    d.correction.keyframe_covariance = matrix6_from_message(entry->keyframe_covariance);
+    d.correction.covariance_keyframe = entry->covariance_keyframe;
+  }
   if (d.correction.placed) {
     d.correction.T_map_odom =
         *from_message(entry->correction, nullptr);  // a rigid transform: map_error checked it above

@@ -12,6 +12,7 @@
 //     loop closure corrects drift, it does not teleport the camera.
 // An entry that is not placed is applied too (map pose = odometry pose again).
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "libcvo/core/bad_kind.hpp"
@@ -21,11 +22,15 @@ namespace cvo::lcm {
 
 /// The correction a tracker applies; the state the next decision compares with.
 struct AppliedCorrection {
-  std::int64_t epoch = -1;     // of the map it came from (map_t.epoch); -1: none applied yet
-  std::int64_t revision = -1;  // of the map it came from
-  std::int64_t session = 0;    // the session it is for (0: none)
-  bool placed = false;         // the map places the session: T_map_odom applies
-  core::SE3 T_map_odom;        // identity when not placed
+  std::int64_t epoch = -1;      // of the map it came from (map_t.epoch); -1: none applied yet
+  std::int64_t revision = -1;   // of the map it came from
+  std::int64_t session = 0;     // the session it is for (0: none)
+  bool placed = false;          // the map places the session: T_map_odom applies
+  core::SE3 T_map_odom;         // identity when not placed
+  double last_match_time = -1;  // sensor time of the session's newest verified match (-1: none)
+  // The back end's covariance of keyframe covariance_keyframe's map pose, when it gives one.
+  std::optional<core::Matrix6d> keyframe_covariance;
+  std::int64_t covariance_keyframe = -1;
 };
 
 struct CorrectionLimits {

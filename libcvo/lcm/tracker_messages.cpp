@@ -24,9 +24,16 @@ cvo_lcm::pose_t pose_message(std::int64_t session, const TrackedPose& pose, doub
   m.frame_index = pose.frame_index;
   m.keyframe_id = pose.keyframe_id;
   m.odom_pose = to_message(pose.odom_pose);
-  m.map_pose = to_message(pose.map_pose);
+  m.map_pose = to_message(pose.has_map_pose ? pose.map_pose : core::SE3());
   m.map_placed = pose.map_placed;
+  m.has_map_pose = pose.has_map_pose;
+  m.map_epoch = pose.map_epoch;
+  m.map_revision = pose.map_revision;
+  m.state = static_cast<std::int8_t>(pose.state);
+  m.since_match_s = pose.state == core::LocalizationState::kLocalized ? pose.since_match_s : -1;
   matrix6_to_message(pose.covariance, m.covariance);
+  m.has_relative_covariance = pose.relative_covariance.has_value();
+  matrix6_to_message(pose.relative_covariance.value_or(core::Matrix6d::Zero()), m.relative_covariance);
   m.status = to_pose_status(pose.status);
   m.is_keyframe = pose.is_keyframe;
   m.inner_product = pose.inner_product;

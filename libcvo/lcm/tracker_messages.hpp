@@ -6,24 +6,32 @@
 // map_decision.hpp's.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/core/bad_kind.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/odometry/track_result.hpp"
 
 namespace cvo::lcm {
 
-/// One tracked frame, as CVO_POSE carries it (map_pose = T_map_odom · odom_pose when placed).
+/// One tracked frame, as CVO_POSE carries it (map_pose = T_map_odom · odom_pose when placed;
+/// proto/pose_t.lcm says what each field means).
 struct TrackedPose {
   std::int64_t frame_index = 0;  // in its session
   std::int64_t keyframe_id = -1;
   double timestamp = 0;  // the frame's colour stamp
   core::SE3 odom_pose, map_pose;
-  bool map_placed = false;  // map_pose is in the map frame (CVO_MAP placed the session)
-  core::Matrix6d covariance = core::Matrix6d::Identity();
+  bool map_placed = false;                         // map_pose is in the map frame (CVO_MAP placed the session)
+  bool has_map_pose = true;                        // false: map_pose not given
+  std::int64_t map_epoch = -1, map_revision = -1;  // of the CVO_MAP applied (-1: none)
+  core::LocalizationState state = core::LocalizationState::kLocalizing;
+  double since_match_s = -1;                               // LOCALIZED: sensor time since the last verified match
+  core::Matrix6d covariance = core::Matrix6d::Identity();  // of map_pose
+  std::optional<core::Matrix6d> relative_covariance;       // of odom_pose_{n-1}^-1 · odom_pose_n
   odometry::TrackStatus status = odometry::TrackStatus::kOk;
   bool is_keyframe = false;
   double inner_product = 0, gamma_keyframe = 0;

@@ -45,6 +45,8 @@ struct Captured {
   std::vector<cvo_lcm::status_t> backend_statuses;  // cvo-backendd's CVO_STATUS, in order
   std::set<KeyframeName> keyframes;                 // every CVO_KEYFRAME seen
   std::map<std::int64_t, std::int64_t> last_frame;  // CVO_POSE: each session's newest frame index
+  // CVO_POSE: each session's states as they changed (pose_t STATE_*), sessions in the order seen.
+  std::vector<std::pair<std::int64_t, std::vector<std::int8_t>>> state_changes;
 
   /// The last map holds every keyframe of `names`.
   [[nodiscard]] bool map_holds(const std::set<KeyframeName>& names) const {
@@ -121,6 +123,10 @@ class LcmCapture {
         if (const auto p = cvo::lcm::decode<cvo_lcm::pose_t>(buffer->data, size, nullptr)) {
           auto& last = captured_.last_frame[p->session];
           last = std::max(last, p->frame_index);
+          auto& changes = captured_.state_changes;
+          if (changes.empty() || changes.back().first != p->session) changes.push_back({p->session, {}});
+          if (changes.back().second.empty() || changes.back().second.back() != p->state)
+            changes.back().second.push_back(p->state);
         }
       }
     }
