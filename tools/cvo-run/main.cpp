@@ -139,7 +139,7 @@ void add_options(CLI::App& app, Arguments& args) {
       ->type_name("FILE");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
-  app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
+  app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam and localize (default: see below)")
       ->type_name("FILE");
 }
 
