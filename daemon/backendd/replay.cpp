@@ -1,5 +1,9 @@
 #include "daemon/backendd/replay.hpp"
 
+#include <exception>
+#include <utility>
+#include <variant>
+
 #include "libcvo/loop_closure/vocabulary.hpp"
 
 namespace cvo::daemon::backendd {
@@ -23,6 +27,25 @@ std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, cons
   }
   door.admit(message->key, crc);
   return message;
+}
+
+Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const std::uint8_t* data, std::size_t size) {
+  Replayed out;
+  const auto message = let_in_stored(door, kind, data, size, &out.why);
+  if (!message) return out;
+  auto value = usable(*message, &out.why, nullptr);
+  if (!value) return {"stored " + describe(message->key) + " unreadable: " + out.why, std::nullopt};
+  try {
+    if (const auto* k = std::get_if<lcm::Keyframe>(&*value)) {
+      if (apply(mapper, *k).duplicate) return {};
+    } else {
+      apply(mapper, std::get<LocalGraphRecord>(*value));
+    }
+  } catch (const std::exception& e) {  // slam::MapperError: nothing changed
+    return {"not applied: " + std::string(e.what()), std::nullopt};
+  }
+  out.value = std::move(value);
+  return out;
 }
 
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& k) {

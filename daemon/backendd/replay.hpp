@@ -27,6 +27,15 @@ std::filesystem::path resolve_vocabulary(const std::string& setting);
 std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, const std::uint8_t* data, std::size_t size,
                                         std::string* why);
 
+/// A stored record replayed whole: let in, checked, applied. `why` is "" when it was used (a
+/// keyframe the mapper holds already: used, `value` empty), else why not ("stored record skipped:
+/// ...", "stored ... unreadable: ...", "not applied: ..."); `value` is what was applied.
+struct Replayed {
+  std::string why;
+  std::optional<RecordValue> value;
+};
+Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const std::uint8_t* data, std::size_t size);
+
 /// A keyframe into the mapper; throws slam::MapperError when it cannot be applied (nothing changed).
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& keyframe);
 /// A local graph into the mapper: the sessions it placed in the map; throws as above.

@@ -31,23 +31,14 @@ void map_keyframe(const lcm::Keyframe& k, StoreMap& out) {
 // it; "" when it was used, else why not.
 std::string use_record(const StoreSnapshot& snapshot, const IntactRecord& record, MessageDoor& door,
                        slam::Mapper& mapper, StoreMap& out) {
-  std::string why;
-  const auto message =
-      let_in_stored(door, record.kind, snapshot.payload(record), StoreSnapshot::payload_bytes(record), &why);
-  if (!message) return why;
-  const auto value = usable(*message, &why, nullptr);
-  if (!value) return "stored " + describe(message->key) + " unreadable: " + why;
-  try {
-    if (const auto* k = std::get_if<lcm::Keyframe>(&*value)) {
-      if (apply(mapper, *k).duplicate) return {};
-      ++out.keyframes;
-      map_keyframe(*k, out);
-    } else {
-      apply(mapper, std::get<LocalGraphRecord>(*value));
-      ++out.local_graphs;
-    }
-  } catch (const std::exception& e) {  // slam::MapperError: nothing changed
-    return "not applied: " + std::string(e.what());
+  const auto replayed =
+      replay(door, mapper, record.kind, snapshot.payload(record), StoreSnapshot::payload_bytes(record));
+  if (!replayed.value) return replayed.why;
+  if (const auto* k = std::get_if<lcm::Keyframe>(&*replayed.value)) {
+    ++out.keyframes;
+    map_keyframe(*k, out);
+  } else {
+    ++out.local_graphs;
   }
   return {};
 }

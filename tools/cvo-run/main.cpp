@@ -40,6 +40,7 @@
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/opencv_odometry.hpp"
 #include "libcvo/slam/trajectory_correction.hpp"
+#include "localize.hpp"
 #include "program/cli.hpp"
 #include "program/configuration.hpp"
 #include "program/progress.hpp"
@@ -54,7 +55,8 @@ using namespace cvo;
 constexpr const char* kSynopsis =
     "cvo-run SEQUENCE --out TRAJ.txt [--mode MODE] [--max-frames N] [--groundtruth GT]\n"
     "               [--plot PNG] [--json] [--config FILE] [--set key=value]... [--vocabulary FILE]\n"
-    "       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [options as above]";
+    "       cvo-run --mode slam SEQUENCE [SEQUENCE ...] --out TRAJ.txt [--store FILE] [options as above]\n"
+    "       cvo-run --mode localize SEQUENCE --map-store FILE --out TRAJ.txt [options as above]";
 
 constexpr const char* kDescription =
     R"(Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
@@ -66,7 +68,16 @@ With --mode slam, several folders are several sessions of one map (a robot mappi
 several runs), run in order through one back end: each starts in its own odometry frame and joins
 the first one's map at its first verified loop to it. TRAJ.txt holds every joined session's frames
 in the first session's map frame; a session that never joined is left out and reported so (--json:
-"sessions"). Ground truth: --groundtruth, else every folder's groundtruth.txt together.
+"sessions"). Ground truth: --groundtruth, else every folder's groundtruth.txt together. --store FILE
+writes the keyframe store cvo-backendd would write from the same keyframes (a new file), which
+cvo-backendd --store and cvo-map read.
+
+With --mode localize, SEQUENCE is localized in the map of --map-store (a keyframe store, read only):
+KF-CVO tracks it, each keyframe is verified against the map as a session joins it, and TRAJ.txt
+holds the map poses of the frames tracked while localized (the correction as it stood then, times
+the odometry pose: what a daemon would publish). A frame whose odometry fails starts a new session,
+localized again without a hint. --json adds localized_frames, localized_after_s, relocalizations
+and frames_localizing / frames_localized / frames_lost.
 
 modes (--mode):
   cvo              frame-to-frame CVO, the paper's baseline (default)
@@ -74,6 +85,7 @@ modes (--mode):
   slam             CVO SLAM, kf-cvo with loop closure and the robust pose graph (paper sections
                    5-6); the trajectory written is the final global optimisation's, and the
                    report also gives kf-cvo's own ATE
+  localize         kf-cvo localized in a stored map (--map-store), which it never changes
   opencv-rgbd      OpenCV contrib's dense photometric RGB-D odometry
   opencv-rgbd-icp  OpenCV's photometric + point-to-plane ICP odometry
                    (both frame to frame with the same motion model; depth 0.1-5 m, from
@@ -94,7 +106,7 @@ struct Arguments {
   fs::path out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
-  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot;
+  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot, store, map_store;
   std::vector<std::string> sets;
   bool json = false;
 };
@@ -103,7 +115,7 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_option("SEQUENCE", args.sequences, "TUM RGB-D folder; with --mode slam, one per session")->required();
   app.add_option("--out", args.out, "the trajectory to write")->required()->type_name("TRAJ.txt");
   app.add_option("--mode", args.mode, "the odometry (see modes above)")
-      ->check(CLI::IsMember({"cvo", "kf-cvo", "slam", "opencv-rgbd", "opencv-rgbd-icp"}));
+      ->check(CLI::IsMember({"cvo", "kf-cvo", "slam", "localize", "opencv-rgbd", "opencv-rgbd-icp"}));
   app.add_option("--max-frames", args.max_frames, "only the first N frames (of each folder)")
       ->transform(program::kDecimal)
       ->check(program::kPositive)
@@ -118,9 +130,16 @@ void add_options(CLI::App& app, Arguments& args) {
       ->type_name("DIR");
   app.add_option("--map-plot", args.map_plot, "--mode slam with --map: the grid with the keyframe trajectory on it")
       ->type_name("PNG");
+  app.add_option("--store", args.store,
+                 "--mode slam: write the keyframe store cvo-backendd would write (a new file; cvo-backendd --store and "
+                 "cvo-map read it)")
+      ->type_name("FILE");
+  app.add_option("--map-store", args.map_store,
+                 "--mode localize: the keyframe store of the map to localize in (read only, never changed)")
+      ->type_name("FILE");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
-  app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
+  app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam and localize (default: see below)")
       ->type_name("FILE");
 }
 
@@ -273,7 +292,7 @@ tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mappin
 // (slam::correct_trajectory fills in the frames it never saw).
 core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
                           const core::Trajectory& groundtruth, tools::RunReport& report) {
-  tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value());
+  tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value(), args.store);
   std::vector<core::Trajectory> odometry(sequences.size());
   report.slam = tools::SlamReport{};
   for (std::size_t k = 0; k < sequences.size(); ++k) {
@@ -312,6 +331,8 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
   for (const auto& l : map.loops)
     s.loops.push_back({l.from_frame, l.to_frame, l.chi2, l.weight, l.from_session, l.to_session});
   if (args.map) s.map = write_map(args, *pipeline.mapping(), map, pipeline.statistics().map_ms);
+  if (const auto* store = pipeline.store())
+    s.store = tools::StoreReport{args.store->string(), store->records(), pipeline.statistics().store_ms};
   // kf-cvo's own ATE: one session only (several have several odometry frames).
   if (!groundtruth.empty() && sequences.size() == 1 && !odometry[0].empty()) {
     try {
@@ -321,6 +342,17 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
     }
   }
   return trajectory;
+}
+
+// --mode localize: one folder, one session after another in the stored map (localize.hpp).
+core::Trajectory run_localize(const Arguments& args, const config::Config& config, io::TumSequence& sequence,
+                              tools::RunReport& report) {
+  tools::Localizer localizer(config, load_vocabulary(args), *args.map_store, std::cerr);
+  stream(
+      sequence, [&](const core::RgbdFrame& f) { return localizer.track(f); }, report, report.keyframes);
+  report.localize = localizer.report();
+  report.localize->map_store = args.map_store->string();
+  return localizer.trajectory();
 }
 
 void evaluate(const Arguments& args, const core::Trajectory& groundtruth, const core::Trajectory& trajectory,
@@ -357,6 +389,9 @@ int run(const Arguments& args) {
   if ((args.map || args.map_plot) && args.mode != "slam")
     throw UsageError("--map and --map-plot need --mode slam (the map is made from the SLAM map's keyframes)");
   if (args.map_plot && !args.map) throw UsageError("--map-plot needs --map DIR");
+  if (args.store && args.mode != "slam") throw UsageError("--store needs --mode slam (it stores the SLAM keyframes)");
+  if ((args.mode == "localize") != args.map_store.has_value())
+    throw UsageError(args.map_store ? "--map-store needs --mode localize" : "--mode localize needs --map-store FILE");
   if (args.plot && groundtruth.empty())
     throw UsageError("--plot needs ground truth: " + args.sequences.front().string() +
                      " has no groundtruth.txt and no --groundtruth was given");
@@ -370,6 +405,8 @@ int run(const Arguments& args) {
   core::Trajectory trajectory;
   if (args.mode == "slam") {
     trajectory = run_slam(args, config, sequences, groundtruth, report);
+  } else if (args.mode == "localize") {
+    trajectory = run_localize(args, config, sequences.front(), report);
   } else {
     Tracker tracker = make_tracker(args, config, sequences.front().intrinsics());
     trajectory = stream(
@@ -379,7 +416,9 @@ int run(const Arguments& args) {
         },
         report, report.keyframes);
   }
-  if (trajectory.empty() && (report.slam == std::nullopt || report.frames == report.failed.size())) {
+  // SLAM and localization may leave frames out (unplaced sessions, frames not localized).
+  const bool may_leave_out = report.slam || report.localize;
+  if (trajectory.empty() && (!may_leave_out || report.frames == report.failed.size())) {
     io::write_tum_trajectory(args.out, trajectory);
     throw io::InputError(args.sequences.front(), "no frame could be read");
   }

@@ -110,6 +110,9 @@ void print_text(std::FILE* out, const RunReport& r) {
                    "of %.0f kB, %zu cloud points, footprints made and placed in %.1f ms\n",
                    m->dir.c_str(), m->width, m->height, m->resolution * 100, m->occupied, m->free, m->up.c_str(),
                    m->keyframes, m->bytes_per_keyframe / 1000, m->cloud_points, m->place_ms);
+    if (const auto& s = r.slam->store)
+      std::fprintf(out, "store       %s: %llu records (keyframes and local graphs), written in %.0f ms\n",
+                   s->file.c_str(), static_cast<unsigned long long>(s->records), s->ms);
     if (r.slam->sessions.size() > 1)
       for (const auto& s : r.slam->sessions) {
         const std::string at = s.joined_at_keyframe ? " at its keyframe " + std::to_string(*s.joined_at_keyframe) : "";
@@ -117,6 +120,14 @@ void print_text(std::FILE* out, const RunReport& r) {
                      s.sequence.c_str(), s.frames, s.keyframes,
                      s.joined ? ("joined the map" + at).c_str() : "NOT placed in the map (left out of the trajectory)");
       }
+  }
+  if (const auto& l = r.localize) {
+    std::fprintf(out, "map store   %s (read only)\n", l->map_store.c_str());
+    std::fprintf(out, "localized   %zu frames (%zu localizing, %zu lost), %s, %zu sessions, %zu relocalizations\n",
+                 l->frames_localized, l->frames_localizing, l->frames_lost,
+                 l->localized_after_s ? ("first after " + std::to_string(*l->localized_after_s) + " s").c_str()
+                                      : "NEVER localized",
+                 l->sessions, l->relocalizations);
   }
   if (r.groundtruth.empty()) {
     std::fprintf(out, "evaluation  none (no ground truth)\n");
@@ -175,6 +186,20 @@ program::Json to_json(const RunReport& r) {
   o["backend_ms_total"] = slam([](const auto& s) { return s.backend_ms; });
   o["final_optimisation_ms"] = slam([](const auto& s) { return s.final_optimisation_ms; });
   o["map"] = r.slam && r.slam->map ? map_object(*r.slam->map) : program::Json();
+  o["store"] =
+      r.slam && r.slam->store
+          ? program::Json{{"file", r.slam->store->file}, {"records", r.slam->store->records}, {"ms", r.slam->store->ms}}
+          : program::Json();
+  const auto localize = [&](auto get) { return r.localize ? program::Json(get(*r.localize)) : program::Json(); };
+  o["localized_frames"] = localize([](const auto& l) { return l.frames_localized; });
+  o["localized_after_s"] = r.localize ? program::or_null(r.localize->localized_after_s) : program::Json();
+  o["relocalizations"] = localize([](const auto& l) { return l.relocalizations; });
+  o["frames_localizing"] = localize([](const auto& l) { return l.frames_localizing; });
+  o["frames_localized"] = localize([](const auto& l) { return l.frames_localized; });
+  o["frames_lost"] = localize([](const auto& l) { return l.frames_lost; });
+  o["localization_sessions"] = localize([](const auto& l) { return l.sessions; });
+  o["window_keyframes_max"] = localize([](const auto& l) { return l.window_keyframes_max; });
+  o["map_store"] = localize([](const auto& l) { return l.map_store; });
   o["ate_rmse_m_odometry"] =
       r.slam && r.slam->ate_odometry ? program::Json(r.slam->ate_odometry->error.rmse) : program::Json();
   return o;

@@ -54,6 +54,13 @@ struct MapReport {
   std::vector<double> keyframe_timestamps;  // of the keyframes in the map (their colour stamps), in map order
 };
 
+/// What --store wrote (cvo-run --mode slam --store FILE).
+struct StoreReport {
+  std::string file;
+  std::uint64_t records = 0;  // keyframes and local graphs
+  double ms = 0;              // encoding and writing them
+};
+
 struct SlamReport {
   std::size_t loops_accepted = 0;
   std::size_t loops_tried = 0;                  // candidates verified (matches, RANSAC, CVO, α)
@@ -63,6 +70,18 @@ struct SlamReport {
   std::vector<LoopEntry> loops;                 // in acceptance order
   std::vector<SessionEntry> sessions;           // one per folder, in order
   std::optional<MapReport> map;
+  std::optional<StoreReport> store;
+};
+
+/// What --mode localize adds (localize.hpp): frames counted by the state of their session when
+/// they were tracked (a lost frame: the one whose odometry failed, which ended its session).
+struct LocalizeReport {
+  std::string map_store;
+  std::size_t sessions = 0;  // started in the run: 1 + the frames lost
+  std::size_t frames_localizing = 0, frames_localized = 0, frames_lost = 0;
+  std::optional<double> localized_after_s;  // sensor time from the first frame to the first localized one
+  std::size_t relocalizations = 0;          // sessions localized after an earlier one of the run was
+  std::size_t window_keyframes_max = 0;     // the most keyframes the localization window held (Mapper)
 };
 
 struct RunReport {
@@ -73,13 +92,14 @@ struct RunReport {
   std::size_t poses = 0;      // lines written to the trajectory
   std::size_t keyframes = 0;  // 0 in frame-to-frame mode, which has no keyframes
   std::vector<FailedFrame> failed;
-  std::vector<double> track_ms;        // whole track() step, per frame tracked
-  std::vector<double> points;          // selected per frame tracked
-  std::vector<double> iterations;      // per registration run
-  double wall_s = 0;                   // the whole loop, reading images included
-  std::optional<eval::AteResult> ate;  // with ground truth (and >= 3 associated poses)
-  std::optional<eval::RpeResult> rpe;  // with ground truth (and >= 2 pairs 1 s apart)
-  std::optional<SlamReport> slam;      // --mode slam only
+  std::vector<double> track_ms;            // whole track() step, per frame tracked
+  std::vector<double> points;              // selected per frame tracked
+  std::vector<double> iterations;          // per registration run
+  double wall_s = 0;                       // the whole loop, reading images included
+  std::optional<eval::AteResult> ate;      // with ground truth (and >= 3 associated poses)
+  std::optional<eval::RpeResult> rpe;      // with ground truth (and >= 2 pairs 1 s apart)
+  std::optional<SlamReport> slam;          // --mode slam only
+  std::optional<LocalizeReport> localize;  // --mode localize only
 };
 
 void print_text(std::FILE* out, const RunReport& report);

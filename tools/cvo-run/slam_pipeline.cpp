@@ -26,10 +26,12 @@ struct SlamPipeline::Session {
   std::vector<io::AccelerometerSample> accelerometer;
 };
 
-SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map)
+SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map,
+                           const std::optional<std::filesystem::path>& store)
     : config_(config),
       mapper_(std::move(vocabulary), config::mapper_parameters(config)),
-      mapping_(map ? std::make_unique<mapping::Mapping>(config.mapping) : nullptr) {}
+      mapping_(map ? std::make_unique<mapping::Mapping>(config.mapping) : nullptr),
+      store_(store ? std::make_unique<StoreOutput>(*store, config) : nullptr) {}
 
 SlamPipeline::~SlamPipeline() = default;
 
@@ -43,21 +45,36 @@ odometry::TrackResult SlamPipeline::track(const core::RgbdFrame& frame) {
   Session& s = *session_;
   const odometry::TrackStep step = s.tracker.track(frame);
   const auto start = Clock::now();
-  if (const auto& g = step.closed_graph) mapper_.add_local_graph(s.id, g->keyframe_id, *g->graph);
+  const double stored = statistics_.store_ms;
+  if (const auto& g = step.closed_graph) add_local_graph(s.id, *g);
   if (const auto& k = step.new_keyframe) {
+    to_store([&](StoreOutput& store) { store.keyframe(s.id, k->id, k->frame, k->pose, *k->cloud); });
     mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
     if (mapping_)
       mapping_->add_keyframe({s.id, k->id}, k->frame, io::mean_specific_force(s.accelerometer, k->frame.timestamp));
   }
-  statistics_.backend_ms += ms_since(start);
+  statistics_.backend_ms += ms_since(start) - (statistics_.store_ms - stored);
   return step;
 }
 
 void SlamPipeline::end_session() {
   if (!session_) return;
-  if (const auto open = session_->tracker.finish())
-    mapper_.add_local_graph(session_->id, open->keyframe_id, *open->graph);
+  if (const auto open = session_->tracker.finish()) add_local_graph(session_->id, *open);
   session_.reset();
+}
+
+// Timed apart from the back end's work (the daemon's cvo-receive does it, not cvo-backend).
+template <class Write>
+void SlamPipeline::to_store(Write&& write) {
+  if (!store_) return;
+  const auto start = Clock::now();
+  write(*store_);
+  statistics_.store_ms += ms_since(start);
+}
+
+void SlamPipeline::add_local_graph(core::SessionId session, const odometry::HandedLocalGraph& g) {
+  to_store([&](StoreOutput& store) { store.local_graph(session, g.keyframe_id, *g.graph); });
+  mapper_.add_local_graph(session, g.keyframe_id, *g.graph);
 }
 
 void SlamPipeline::finish() {

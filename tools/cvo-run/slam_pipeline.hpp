@@ -7,6 +7,8 @@
 //   after each frame  the tracker's step says which local graph closed and which frame became a
 //                     keyframe (with the tracker's own keyframe cloud, as cvo-trackerd sends it);
 //                     both go to slam::Mapper, the back end cvo-backendd runs too;
+//                     with a store (--store), each is appended to it first, as cvo-backendd
+//                     stores a record before it uses it (store_output.hpp);
 //   end_session()     the session's open local graph (the tracker's finish()) goes to the mapper;
 //   finish()          the global optimisation; with a map (--map), every keyframe's local map
 //                     (made as it became a keyframe, levelled by the session's accelerometer
@@ -14,6 +16,7 @@
 // The tracker never sees the corrections: it runs in its own odometry frame, and the back end
 // works on relative poses.
 #include <cstddef>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -27,6 +30,7 @@
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "store_output.hpp"
 
 namespace cvo::tools {
 
@@ -34,12 +38,15 @@ struct SlamStatistics {
   double backend_ms = 0;  // local graphs, loop detection, keyframe optimisations: whole run
   double final_ms = 0;    // end of the last session (its open local graph) and the global optimisation
   double map_ms = 0;      // placing every keyframe's local map at its final pose (--map)
+  double store_ms = 0;    // encoding and writing the keyframe store's records (--store), not in backend_ms
 };
 
 class SlamPipeline {
  public:
-  /// With `map`, keyframes are mapped too (mapping()).
-  SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map = false);
+  /// With `map`, keyframes are mapped too (mapping()); with `store`, keyframes and local graphs are
+  /// written to a new keyframe store there (throws io::InputError naming it when it exists).
+  SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map = false,
+               const std::optional<std::filesystem::path>& store = std::nullopt);
   ~SlamPipeline();
 
   /// Starts session `session` with frames of width x height (ends the previous one first);
@@ -57,13 +64,19 @@ class SlamPipeline {
   [[nodiscard]] const slam::Mapper& mapper() const { return mapper_; }
   /// nullptr without a map.
   [[nodiscard]] const mapping::Mapping* mapping() const { return mapping_.get(); }
+  /// nullptr without a store.
+  [[nodiscard]] const StoreOutput* store() const { return store_.get(); }
 
  private:
   struct Session;
+  void add_local_graph(core::SessionId session, const odometry::HandedLocalGraph& graph);
+  template <class Write>
+  void to_store(Write&& write);
 
   config::Config config_;
   slam::Mapper mapper_;
   std::unique_ptr<mapping::Mapping> mapping_;
+  std::unique_ptr<StoreOutput> store_;
   std::unique_ptr<Session> session_;
   SlamStatistics statistics_;
 };
