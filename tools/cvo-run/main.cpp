@@ -19,6 +19,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "libcvo/eval/plot.hpp"
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/io/accelerometer.hpp"
+#include "libcvo/io/covariance_io.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/map_files.hpp"
@@ -94,7 +96,7 @@ struct Arguments {
   fs::path out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
-  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot;
+  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot, covariance_out;
   std::vector<std::string> sets;
   bool json = false;
 };
@@ -118,6 +120,11 @@ void add_options(CLI::App& app, Arguments& args) {
       ->type_name("DIR");
   app.add_option("--map-plot", args.map_plot, "--mode slam with --map: the grid with the keyframe trajectory on it")
       ->type_name("PNG");
+  app.add_option("--covariance-out", args.covariance_out,
+                 "kf-cvo and slam: per frame its timestamp, then the 36 entries (row-major, [rho; phi], right "
+                 "perturbation) of the frame-to-frame relative pose's covariance; frames without a measured motion "
+                 "(the first, a restart, a failure) have no line")
+      ->type_name("COV");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
   app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam (default: see below)")
@@ -201,6 +208,12 @@ core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::T
   return all;
 }
 
+// --covariance-out: the frame's relative covariance, when it has one.
+void record_covariance(const core::RgbdFrame& frame, const odometry::TrackStep& step,
+                       std::vector<io::StampedCovariance>& covariances) {
+  if (step.relative_covariance) covariances.push_back({frame.timestamp, *step.relative_covariance});
+}
+
 // Streams one folder through `track` (frame -> TrackResult), adding its frames to the report;
 // returns the poses of the frames tracked. `keyframes` counts this folder's keyframes.
 template <class Track>
@@ -272,7 +285,8 @@ tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mappin
 // every joined session's frames in the map frame, kf-cvo's own poses corrected by the back end
 // (slam::correct_trajectory fills in the frames it never saw).
 core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
-                          const core::Trajectory& groundtruth, tools::RunReport& report) {
+                          const core::Trajectory& groundtruth, tools::RunReport& report,
+                          std::vector<io::StampedCovariance>& covariances) {
   tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value());
   std::vector<core::Trajectory> odometry(sequences.size());
   report.slam = tools::SlamReport{};
@@ -285,7 +299,13 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
                                                                  : std::vector<io::AccelerometerSample>{});
     tools::SessionEntry entry{args.sequences[k].string(), session, report.frames, 0, false, std::nullopt};
     odometry[k] = stream(
-        sequences[k], [&](const core::RgbdFrame& f) { return pipeline.track(f); }, report, entry.keyframes);
+        sequences[k],
+        [&](const core::RgbdFrame& f) -> odometry::TrackResult {
+          const odometry::TrackStep step = pipeline.track(f);
+          record_covariance(f, step, covariances);
+          return step;
+        },
+        report, entry.keyframes);
     entry.frames = report.frames - entry.frames;
     report.keyframes += entry.keyframes;
     report.slam->sessions.push_back(entry);
@@ -357,6 +377,10 @@ int run(const Arguments& args) {
   if ((args.map || args.map_plot) && args.mode != "slam")
     throw UsageError("--map and --map-plot need --mode slam (the map is made from the SLAM map's keyframes)");
   if (args.map_plot && !args.map) throw UsageError("--map-plot needs --map DIR");
+  if (args.covariance_out && args.mode != "kf-cvo" && args.mode != "slam")
+    throw UsageError("--covariance-out needs --mode kf-cvo or slam (mode '" + args.mode + "' has no covariance)");
+  if (args.covariance_out && !std::ofstream(*args.covariance_out))
+    throw io::InputError(*args.covariance_out, "cannot write the covariances here");
   if (args.plot && groundtruth.empty())
     throw UsageError("--plot needs ground truth: " + args.sequences.front().string() +
                      " has no groundtruth.txt and no --groundtruth was given");
@@ -368,14 +392,22 @@ int run(const Arguments& args) {
   report.trajectory = args.out.string();
 
   core::Trajectory trajectory;
+  std::vector<io::StampedCovariance> covariances;
   if (args.mode == "slam") {
-    trajectory = run_slam(args, config, sequences, groundtruth, report);
+    trajectory = run_slam(args, config, sequences, groundtruth, report, covariances);
   } else {
     Tracker tracker = make_tracker(args, config, sequences.front().intrinsics());
     trajectory = stream(
         sequences.front(),
         [&](const core::RgbdFrame& f) {
-          return std::visit([&](auto& t) -> odometry::TrackResult { return t.track(f); }, tracker);
+          return std::visit(
+              [&](auto& t) -> odometry::TrackResult {
+                auto step = t.track(f);
+                if constexpr (std::is_same_v<decltype(step), odometry::TrackStep>)
+                  record_covariance(f, step, covariances);
+                return step;
+              },
+              tracker);
         },
         report, report.keyframes);
   }
@@ -385,6 +417,7 @@ int run(const Arguments& args) {
   }
   report.poses = trajectory.size();
   io::write_tum_trajectory(args.out, trajectory);
+  if (args.covariance_out) io::write_covariances(*args.covariance_out, covariances);
   if (!groundtruth.empty() && !trajectory.empty()) evaluate(args, groundtruth, trajectory, report);
 
   tools::print_text(args.json ? stderr : stdout, report);
