@@ -22,8 +22,8 @@ std::optional<double> mahalanobis(const Eigen::Matrix<double, N, 1>& e, const Ei
 
 // The ground truth at t, interpolated between the poses around it, both within max_difference.
 std::optional<core::SE3> groundtruth_at(const core::Trajectory& gt, double t, double max_difference) {
-  const auto after = std::lower_bound(gt.begin(), gt.end(), t,
-                                      [](const core::StampedPose& p, double s) { return p.timestamp < s; });
+  const auto after =
+      std::lower_bound(gt.begin(), gt.end(), t, [](const core::StampedPose& p, double s) { return p.timestamp < s; });
   if (after != gt.end() && after->timestamp == t) return after->pose;
   if (after == gt.begin() || after == gt.end()) return std::nullopt;
   const auto before = std::prev(after);

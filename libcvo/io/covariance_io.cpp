@@ -13,9 +13,9 @@ std::vector<StampedCovariance> parse_covariances(std::istream& in, const std::fi
   std::vector<StampedCovariance> out;
   for_each_data_line(in, name, [&](std::size_t line_no, const std::vector<std::string>& fields) {
     if (fields.size() != 37)
-      throw InputError(name, line_no,
-                       "expected 37 fields 'timestamp' and a 6x6 covariance row-major, got " +
-                           std::to_string(fields.size()));
+      throw InputError(
+          name, line_no,
+          "expected 37 fields 'timestamp' and a 6x6 covariance row-major, got " + std::to_string(fields.size()));
     StampedCovariance c;
     c.timestamp = parse_finite(fields[0], name, line_no);
     for (int k = 0; k < 36; ++k) c.covariance(k / 6, k % 6) = parse_finite(fields[1 + k], name, line_no);

@@ -203,7 +203,7 @@ KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& re
     result.keyframe_registration_ms = ms_since(keyframe_start);
   }
   r.T_mn = r.kf.converged && f2f_ok && separate ? fuse_with_chain(r.kf, r.f2f, r.chain, r.chain_information)
-                                                    : r.kf.transform;
+                                                : r.kf.transform;
   result.registration_ms = ms_since(start);
   result.iterations = r.f2f.iterations + (separate ? r.kf.iterations : 0);
   result.registration_status = r.kf.converged ? r.f2f.status : r.kf.status;

@@ -47,7 +47,7 @@ struct PoseCovarianceChain {
 
 /// What one frame publishes.
 struct PoseCovariances {
-  std::optional<core::Matrix6d> relative;  // of T_{n-1}^n, right perturbation
+  std::optional<core::Matrix6d> relative;            // of T_{n-1}^n, right perturbation
   core::Matrix6d odometry = core::Matrix6d::Zero();  // of P_n, right perturbation
 };
 

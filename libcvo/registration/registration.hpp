@@ -85,8 +85,8 @@ struct RegistrationResult {
   RegistrationStatus status = RegistrationStatus::kOk;
   double inner_product = 0;  // F(T) at the final length-scale (over what both views see: see above)
   double final_ell = 0;
-  std::size_t pairs = 0;                            // contributing pairs at the last iteration
-  core::Matrix6d hessian = core::Matrix6d::Zero();  // H / ℓ², ordered [translation, rotation]
+  std::size_t pairs = 0;                                     // contributing pairs at the last iteration
+  core::Matrix6d hessian = core::Matrix6d::Zero();           // H / ℓ², ordered [translation, rotation]
   core::Matrix6d gradient_scatter = core::Matrix6d::Zero();  // B (see above), the same order
 };
 
