@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <cstdlib>
 
 namespace cvo::odometry {
 
@@ -18,7 +17,6 @@ std::optional<core::Matrix6d> edge_covariance(const registration::RegistrationRe
 }
 
 core::Matrix6d information_of(const std::optional<core::Matrix6d>& covariance, const core::Matrix6d& hessian) {
-  if (std::getenv("CVO_RAWGRAPH")) return hessian;  // TEMP
   if (!covariance) return hessian;
   const Eigen::LLT<core::Matrix6d> llt(*covariance);
   if (llt.info() != Eigen::Success) return hessian;
