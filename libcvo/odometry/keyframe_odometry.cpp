@@ -9,8 +9,8 @@
 #include <Eigen/LU>
 
 #include "libcvo/core/units.hpp"
-#include "libcvo/odometry/edge_covariance.hpp"
 #include "libcvo/odometry/variance_factor.hpp"
+#include "libcvo/registration/edge_covariance.hpp"
 
 namespace cvo::odometry {
 namespace {
@@ -238,9 +238,11 @@ core::SE3 KeyframeOdometry::add_to_local_graph(const core::RgbdFrame& frame, con
   auto& graph = graphs_[graph_];
   const auto f2f_covariance = fill_covariances(r, false, result);
   graph.add_node({frame.index, frame.timestamp, pose});
-  graph.add_edge({keyframe_frame_, frame.index, r.kf.transform, information_of(result.edge_covariance, r.kf.hessian)});
+  graph.add_edge({keyframe_frame_, frame.index, r.kf.transform,
+                  registration::information_of(result.edge_covariance, r.kf.hessian)});
   if (r.f2f.converged && keyframe_ != previous_)
-    graph.add_edge({previous_frame_, frame.index, r.f2f.transform, information_of(f2f_covariance, r.f2f.hessian)});
+    graph.add_edge(
+        {previous_frame_, frame.index, r.f2f.transform, registration::information_of(f2f_covariance, r.f2f.hessian)});
   return pose;
 }
 
@@ -260,12 +262,12 @@ core::SE3 KeyframeOdometry::keyframe_at_previous(const core::RgbdFrame& frame, c
   result.inner_product = r.f2f.inner_product;
   fill_covariances(r, true, result);  // n-1 is the keyframe: the frame-to-frame edge is its edge
   graphs_[graph_].add_node({frame.index, frame.timestamp, pose});
-  graphs_[graph_].add_edge(
-      {previous_frame_, frame.index, r.f2f.transform, information_of(result.edge_covariance, r.f2f.hessian)});
+  graphs_[graph_].add_edge({previous_frame_, frame.index, r.f2f.transform,
+                            registration::information_of(result.edge_covariance, r.f2f.hessian)});
   return pose;
 }
 
-// The edges' covariances, calibrated (edge_covariance.hpp, variance_factor.hpp), and the published
+// The edges' covariances, calibrated (registration/edge_covariance.hpp, variance_factor.hpp), and the published
 // poses' (pose_covariance.hpp), from the registrations and the information the fusion used. A
 // registration without a covariance (singular) leaves the relative one out and carries the
 // odometry one. Returns the frame-to-frame edge's calibrated covariance when there is one.
@@ -273,7 +275,7 @@ std::optional<core::Matrix6d> KeyframeOdometry::fill_covariances(const Registrat
                                                                  TrackStep& result) {
   const double factor = variance_factor_.value();
   const auto calibrated = [factor](const registration::RegistrationResult& e) -> std::optional<core::Matrix6d> {
-    const auto sigma = edge_covariance(e);
+    const auto sigma = registration::edge_covariance(e);
     if (!sigma) return std::nullopt;
     return factor * *sigma;
   };

@@ -1,5 +1,5 @@
 #pragma once
-// How the covariance of the published poses follows from the registrations' (edge_covariance.hpp),
+// How the covariance of the published poses follows from the registrations' (registration/edge_covariance.hpp),
 // by first-order propagation through exactly what KF-CVO computes (keyframe_odometry.hpp).
 //
 // Conventions. A registration's covariance is a LEFT perturbation in its fixed frame (T_m^n =

@@ -6,7 +6,7 @@
 // d = log(C T_m^n⁻¹) is N(0, S), S = Σ_kf + Σ̄_{n-1} + Ad Σ_f Adᵀ (pose_covariance.hpp), so
 // χ² = dᵀ S⁻¹ d averages 6. The ratio of the χ² seen to 6 is the classical variance factor of unit
 // weight σ̂₀² = vᵀPv / r of an adjustment with redundancy r (Gauss; Koch, "Parameter Estimation and
-// Hypothesis Testing in Linear Models"): what the sandwich (edge_covariance.hpp) misses, because
+// Hypothesis Testing in Linear Models"): what the sandwich (registration/edge_covariance.hpp) misses, because
 // the points' terms are more alike than it assumes, scales every registration's covariance alike,
 // and this measures it on the running sequence, with no ground truth and no constant fitted to any
 // sequence. The estimate is the mean over the session's fused frames with a prior of

@@ -8,7 +8,7 @@
 // block of H⁻¹ at its variables, a perturbation of the retraction T (+) d ≈ T exp(d) (on the
 // right, [rho; phi] as core::SE3). Fixed nodes are constants: their marginal is zero, and they
 // condition the rest (when no node is fixed the first is held, the optimiser's gauge). Only as
-// honest as the edges' information: the tracker's is calibrated (odometry/edge_covariance.hpp).
+// honest as the edges' information: the tracker's is calibrated (registration/edge_covariance.hpp).
 //
 // Cost: one sparse Cholesky factorisation of H (Eigen's SimplicialLLT, AMD ordering), then six
 // solves per requested node, in batches.

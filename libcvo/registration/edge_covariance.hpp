@@ -27,15 +27,15 @@
 #include "libcvo/core/se3.hpp"
 #include "libcvo/registration/registration.hpp"
 
-namespace cvo::odometry {
+namespace cvo::registration {
 
 /// H⁻¹ B H⁻¹ of a converged registration, symmetric; nullopt when H is singular or the result
 /// not finite (a registration that constrains fewer than six directions has no covariance).
-std::optional<core::Matrix6d> edge_covariance(const registration::RegistrationResult& result);
+std::optional<core::Matrix6d> edge_covariance(const RegistrationResult& result);
 
 /// The information Σ⁻¹ of an edge with (calibrated) covariance Σ, for a pose graph in the
 /// registration's convention; the CVO Hessian itself when there is none (a degenerate
 /// registration keeps its zero directions, which core::check_information accepts).
 core::Matrix6d information_of(const std::optional<core::Matrix6d>& covariance, const core::Matrix6d& hessian);
 
-}  // namespace cvo::odometry
+}  // namespace cvo::registration

@@ -1,11 +1,11 @@
-#include "libcvo/odometry/edge_covariance.hpp"
+#include "libcvo/registration/edge_covariance.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
-namespace cvo::odometry {
+namespace cvo::registration {
 
-std::optional<core::Matrix6d> edge_covariance(const registration::RegistrationResult& result) {
+std::optional<core::Matrix6d> edge_covariance(const RegistrationResult& result) {
   const Eigen::FullPivLU<core::Matrix6d> lu(result.hessian);
   if (!result.hessian.allFinite() || !lu.isInvertible()) return std::nullopt;
   const core::Matrix6d H_inv = lu.inverse();
@@ -24,4 +24,4 @@ core::Matrix6d information_of(const std::optional<core::Matrix6d>& covariance, c
   return 0.5 * (omega + omega.transpose());
 }
 
-}  // namespace cvo::odometry
+}  // namespace cvo::registration
