@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "libcvo/config/config.hpp"
 #include "libcvo/config/module_parameters.hpp"
