@@ -5,6 +5,7 @@
 
 #include "libcvo/loop_closure/feature_matching.hpp"
 #include "libcvo/loop_closure/rigid_ransac.hpp"
+#include "libcvo/registration/edge_covariance.hpp"
 
 namespace cvo::loop_closure {
 namespace {
@@ -98,9 +99,12 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
 
   v.attempt.accepted = true;
   v.attempt.verdict = "accepted";
-  // Ω = H as the solver reports it: see the header for why no adjoint is needed.
-  v.closure = LoopClosure{
-      j.id, i.id, v.refinement.transform.inverse(), v.refinement.hessian, 0.0, v.attempt.alpha, v.attempt.inliers};
+  // Ω = Σ⁻¹ of the solver's result, calibrated as every CVO edge (registration/edge_covariance.hpp);
+  // see the header for why no adjoint is needed.
+  const auto information =
+      registration::information_of(registration::edge_covariance(v.refinement), v.refinement.hessian);
+  v.closure =
+      LoopClosure{j.id, i.id, v.refinement.transform.inverse(), information, 0.0, v.attempt.alpha, v.attempt.inliers};
   return v;
 }
 

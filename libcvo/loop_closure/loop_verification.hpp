@@ -29,8 +29,9 @@
 //      noise level of the sparsified kernel (bench/odometry-tuning.md, "α at the optimum"), and
 //      such a loop may be refused although it is right.
 //
-// Information of the loop edge. The solver's Hessian H (registration.hpp: H/ℓ² at ℓ_min, order
-// [translation, rotation]) is the information of a LEFT perturbation T_ij <- exp(ξ) T_ij, ξ in
+// Information of the loop edge. The solver's calibrated information H = Σ⁻¹
+// (registration/edge_covariance.hpp, the sandwich of its Hessian; order [translation, rotation])
+// is the information of a LEFT perturbation T_ij <- exp(ξ) T_ij, ξ in
 // i's frame. Then Z = T_ij^-1 <- T_ij^-1 exp(-ξ) = Z exp(-ξ): a RIGHT perturbation of Z, which is
 // the pose graph's residual e ≈ log(Z^-1 T_j^-1 T_i) (posegraph/residual.hpp, right perturbation
 // in the `to` node's frame) up to sign. So Ω = H as it comes, because CVO runs with the new
@@ -65,7 +66,7 @@ struct LoopClosure {
   std::int64_t from = 0;  // j, the earlier keyframe
   std::int64_t to = 0;    // i, the new keyframe
   core::SE3 measurement;  // T_from_to = T_j^-1 T_i (keyframe i's camera in keyframe j's frame)
-  core::Matrix6d information = core::Matrix6d::Identity();  // CVO Hessian, [translation, rotation]
+  core::Matrix6d information = core::Matrix6d::Identity();  // calibrated CVO information (above)
   double eta = 0;                                           // normalised bag-of-words score of the candidate
   double alpha = 0;                                         // eq. 12, > 0
   int inliers = 0;                                          // RANSAC inliers of the initial pose

@@ -9,6 +9,8 @@
 #include <Eigen/LU>
 
 #include "libcvo/core/units.hpp"
+#include "libcvo/odometry/variance_factor.hpp"
+#include "libcvo/registration/edge_covariance.hpp"
 
 namespace cvo::odometry {
 namespace {
@@ -28,13 +30,6 @@ core::CvoParameters gamma_parameters(const KeyframeOdometryParameters& p) {
   core::CvoParameters c = p.cvo;
   c.sigma = p.tracking.gamma_sigma;
   return c;
-}
-
-// The covariance of an edge measured with CVO Hessian `information`, when it is invertible.
-std::optional<core::Matrix6d> edge_covariance(const core::Matrix6d& information) {
-  const Eigen::FullPivLU<core::Matrix6d> lu(information);
-  if (!lu.isInvertible()) return std::nullopt;
-  return lu.inverse();
 }
 
 }  // namespace
@@ -94,6 +89,8 @@ void KeyframeOdometry::start_over() {
   keyframe_pose_ = previous_pose_ = T_m_previous_ = velocity_ = last_pose_ = core::SE3();
   previous_timestamp_ = velocity_dt_ = gamma_reference_ = gamma_ = 0;
   reason_ = KeyframeReason::kNone;
+  covariance_chain_ = PoseCovarianceChain{};
+  variance_factor_ = VarianceFactor{};
 }
 
 void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose,
@@ -125,7 +122,8 @@ double KeyframeOdometry::gamma_inner_product(const registration::PointCloud& key
 // linearised problem: ξ = (H_kf + w H_c)⁻¹ w H_c log(C T_kf⁻¹), T = exp(ξ) T_kf. Fixed-size 6x6
 // algebra: no allocation.
 core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResult& kf,
-                                            const registration::RegistrationResult& f2f, const core::SE3& chain) const {
+                                            const registration::RegistrationResult& f2f, const core::SE3& chain,
+                                            core::Matrix6d& chain_information) const {
   double w = parameters_.tracking.chain_weight;
   if (parameters_.tracking.chain_full_weight_deg > 0) {
     const double ramp = core::degrees(chain.angle()) / parameters_.tracking.chain_full_weight_deg;
@@ -139,7 +137,9 @@ core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResu
   const core::Vector6d xi = H.ldlt().solve(H_chain * d);
   if (!xi.allFinite()) return kf.transform;
   const core::SE3 fused = core::SE3::exp(xi) * kf.transform;
-  return fused.is_finite() ? fused : kf.transform;
+  if (!fused.is_finite()) return kf.transform;
+  chain_information = H_chain;
+  return fused;
 }
 
 // The camera's motion from the colour image's time to the depth image's, at the last measured
@@ -202,7 +202,8 @@ KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& re
     r.kf = registration_.align(clouds_[keyframe_], clouds_[current_], r.chain, f2f_ok ? parameters_.cvo.ell_min : 0.0);
     result.keyframe_registration_ms = ms_since(keyframe_start);
   }
-  r.T_mn = r.kf.converged && f2f_ok && separate ? fuse_with_chain(r.kf, r.f2f, r.chain) : r.kf.transform;
+  r.T_mn = r.kf.converged && f2f_ok && separate ? fuse_with_chain(r.kf, r.f2f, r.chain, r.chain_information)
+                                                : r.kf.transform;
   result.registration_ms = ms_since(start);
   result.iterations = r.f2f.iterations + (separate ? r.kf.iterations : 0);
   result.registration_status = r.kf.converged ? r.f2f.status : r.kf.status;
@@ -235,11 +236,13 @@ core::SE3 KeyframeOdometry::add_to_local_graph(const core::RgbdFrame& frame, con
   result.status = TrackStatus::kOk;
   result.inner_product = r.kf.inner_product;
   auto& graph = graphs_[graph_];
+  const auto f2f_covariance = fill_covariances(r, false, result);
   graph.add_node({frame.index, frame.timestamp, pose});
-  graph.add_edge({keyframe_frame_, frame.index, r.kf.transform, r.kf.hessian});
-  result.edge_covariance = edge_covariance(r.kf.hessian);
+  graph.add_edge({keyframe_frame_, frame.index, r.kf.transform,
+                  registration::information_of(result.edge_covariance, r.kf.hessian)});
   if (r.f2f.converged && keyframe_ != previous_)
-    graph.add_edge({previous_frame_, frame.index, r.f2f.transform, r.f2f.hessian});
+    graph.add_edge(
+        {previous_frame_, frame.index, r.f2f.transform, registration::information_of(f2f_covariance, r.f2f.hessian)});
   return pose;
 }
 
@@ -257,10 +260,45 @@ core::SE3 KeyframeOdometry::keyframe_at_previous(const core::RgbdFrame& frame, c
   result.status = TrackStatus::kOk;
   result.keyframe = true;
   result.inner_product = r.f2f.inner_product;
+  fill_covariances(r, true, result);  // n-1 is the keyframe: the frame-to-frame edge is its edge
   graphs_[graph_].add_node({frame.index, frame.timestamp, pose});
-  graphs_[graph_].add_edge({previous_frame_, frame.index, r.f2f.transform, r.f2f.hessian});
-  result.edge_covariance = edge_covariance(r.f2f.hessian);  // n-1 is the keyframe: this is its edge
+  graphs_[graph_].add_edge({previous_frame_, frame.index, r.f2f.transform,
+                            registration::information_of(result.edge_covariance, r.f2f.hessian)});
   return pose;
+}
+
+// The edges' covariances, calibrated (registration/edge_covariance.hpp, variance_factor.hpp), and the published
+// poses' (pose_covariance.hpp), from the registrations and the information the fusion used. A
+// registration without a covariance (singular) leaves the relative one out and carries the
+// odometry one. Returns the frame-to-frame edge's calibrated covariance when there is one.
+std::optional<core::Matrix6d> KeyframeOdometry::fill_covariances(const Registrations& r, bool from_new_keyframe,
+                                                                 TrackStep& result) {
+  const double factor = variance_factor_.value();
+  const auto calibrated = [factor](const registration::RegistrationResult& e) -> std::optional<core::Matrix6d> {
+    const auto sigma = registration::edge_covariance(e);
+    if (!sigma) return std::nullopt;
+    return factor * *sigma;
+  };
+  const auto f2f = r.f2f.converged ? calibrated(r.f2f) : std::nullopt;
+  result.edge_covariance = from_new_keyframe ? f2f : calibrated(r.kf);
+  PoseCovariances c;
+  if (!result.edge_covariance) {
+    c = track_unmeasured(covariance_chain_, false, from_new_keyframe);
+  } else if (from_new_keyframe) {
+    c = track_from_new_keyframe(covariance_chain_, r.f2f.transform, *result.edge_covariance);
+  } else {
+    std::optional<ChainTerm> chain;
+    if (f2f && !r.chain_information.isZero(0)) {
+      chain = ChainTerm{*f2f, r.chain_information, T_m_previous_};
+      const core::Matrix6d Ad = T_m_previous_.adjoint();
+      const core::Matrix6d S = *result.edge_covariance + Ad * *f2f * Ad.transpose() + covariance_chain_.previous_fused;
+      add_disagreement(variance_factor_, factor * disagreement_chi2((r.chain * r.kf.transform.inverse()).log(), S));
+    }
+    c = track_against_keyframe(covariance_chain_, r.T_mn, *result.edge_covariance, r.kf.hessian, chain);
+  }
+  result.relative_covariance = c.relative;
+  result.odometry_covariance = c.odometry;
+  return f2f;
 }
 
 // A frame with a previous one: registered, then tracked against the keyframe, made the start of a
@@ -277,6 +315,7 @@ core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const
     pose = keyframe_at_previous(frame, r, result);
   } else {
     start_keyframe(current_, frame.index, frame.timestamp, pose, KeyframeReason::kRestart);
+    result.odometry_covariance = track_unmeasured(covariance_chain_, false, true).odometry;
     result.status = TrackStatus::kRegistrationFailed;
     result.keyframe = true;
   }
@@ -318,6 +357,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
   if (!usable(selection.status) || clouds_[current_].size() < 3) {
     // No points: the prediction stands, and the next usable frame starts a new keyframe.
     result.status = TrackStatus::kSelectionFailed;
+    result.odometry_covariance = track_unmeasured(covariance_chain_, false, false).odometry;
     result.pose = last_pose_ = predicted;
     result.motion = velocity_;
     have_frame_ = true;
@@ -335,6 +375,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
     pose = first ? parameters_.initial_pose : predicted;
     start_keyframe(current_, frame.index, frame.timestamp, pose,
                    first ? KeyframeReason::kFirst : KeyframeReason::kRestart);
+    result.odometry_covariance = track_unmeasured(covariance_chain_, first, true).odometry;
     result.status = first ? TrackStatus::kFirstFrame : TrackStatus::kRegistrationFailed;
     result.keyframe = true;
     result.motion = first ? core::SE3() : velocity_;

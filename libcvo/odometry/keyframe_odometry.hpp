@@ -45,7 +45,9 @@
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
 #include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/odometry/pose_covariance.hpp"
 #include "libcvo/odometry/track_result.hpp"
+#include "libcvo/odometry/variance_factor.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 #include "libcvo/registration/point_selection.hpp"
 #include "libcvo/registration/registration.hpp"
@@ -92,14 +94,22 @@ struct TrackStep : TrackResult {
   std::int64_t keyframe_id = -1;                  // the keyframe this frame is tracked against (-1 before the first)
   double gamma = 0;                               // γ of this frame (eq. 9); 0 when no keyframe registration ran
   KeyframeReason reason = KeyframeReason::kNone;  // why this frame made a keyframe
-  // Covariance of this frame's keyframe→frame edge T_m^n (the inverse of its CVO Hessian,
-  // [translation, rotation]); none for a frame without one (a first frame, a restart, a failure).
+  // Covariance of this frame's keyframe→frame edge T_m^n (edge_covariance.hpp: the sandwich of
+  // its registration, left perturbation in the keyframe's frame, [translation, rotation]); none
+  // for a frame without one (a first frame, a restart, a failure).
   std::optional<core::Matrix6d> edge_covariance;
   // The odometry failed: this frame could not be registered (or is the first usable one after
   // frames without points), so its pose is a guess and the session's odometry frame is broken here
   // (a camera carried elsewhere, covered, shaken). The caller ends the session (finish(), reset())
   // and tracks the next frame as the first of a new one, which the back end localizes afresh.
   bool lost = false;
+  // Covariance of the published relative pose T_{n-1}^n = P_{n-1}⁻¹ P_n, right perturbation
+  // (T = T̄ exp(ξ)), [rho; phi] as core::SE3 (pose_covariance.hpp has the maths); none for a frame
+  // without a measured motion (the first frame, a restart, a failure).
+  std::optional<core::Matrix6d> relative_covariance;
+  // Covariance of the published odometry pose P_n, right perturbation, accumulated along the
+  // keyframe chain since the session's first frame (zero there); carried unchanged by a failure.
+  core::Matrix6d odometry_covariance = core::Matrix6d::Zero();
   std::optional<HandedLocalGraph> closed_graph;  // the local graph this frame closed
   std::optional<NewKeyframe> new_keyframe;       // the keyframe this frame made
 };
@@ -129,6 +139,7 @@ class KeyframeOdometry {
   struct Registrations {
     registration::RegistrationResult f2f, kf;
     core::SE3 chain, T_mn;
+    core::Matrix6d chain_information = core::Matrix6d::Zero();  // what the fusion gave the chain (0: not fused)
   };
   Registrations register_frame(TrackResult& result);
   bool keyframe_trips(const Registrations& r, TrackResult& result);
@@ -143,7 +154,8 @@ class KeyframeOdometry {
   [[nodiscard]] core::SE3 colour_T_depth(const core::RgbdFrame& frame) const;
   [[nodiscard]] core::Vector6d twist(const core::RgbdFrame& frame) const;
   core::SE3 fuse_with_chain(const registration::RegistrationResult& kf, const registration::RegistrationResult& f2f,
-                            const core::SE3& chain) const;
+                            const core::SE3& chain, core::Matrix6d& chain_information) const;
+  std::optional<core::Matrix6d> fill_covariances(const Registrations& r, bool from_new_keyframe, TrackStep& result);
 
   KeyframeOdometryParameters parameters_;
   registration::PointSelector selector_;
@@ -166,6 +178,8 @@ class KeyframeOdometry {
   core::SE3 velocity_;       // T_{n-2}^{n-1}
   double velocity_dt_ = 0;   // colour-stamp seconds velocity_ spans; 0: none yet
   core::SE3 last_pose_;      // the last published pose (tracked or predicted)
+  PoseCovarianceChain covariance_chain_;
+  VarianceFactor variance_factor_;  // of this session's registrations (variance_factor.hpp)
 
   // The previous frame (n-1), sharing the caller's images: the keyframe when one is made at n-1.
   core::RgbdFrame previous_images_;

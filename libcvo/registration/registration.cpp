@@ -15,6 +15,9 @@ constexpr double kShrinkFraction = 0.01;  // shrink ℓ once the step is below t
 // Candidate pairs: the slack s as a fraction of r_max. Wider cells cost each collection more;
 // a narrower slack makes points collect again sooner (the first step at each ℓ moves most).
 constexpr double kSlackFraction = 0.25;
+// Moving points per cluster of the gradient scatter (registration.hpp): consecutive points of the
+// semi-dense selection, a run along one image row about as long as the kernel's reach at depth.
+constexpr std::size_t kScatterCluster = 8;
 constexpr std::uint16_t kUncollected = 0xFFFF, kTooMany = 0xFFFE;
 constexpr float kFar = 1e15f;  // where a hidden fixed point is put: beyond every kernel's reach
 
@@ -82,6 +85,7 @@ void Registration::Sums::add(const Sums& o) {
   s2 += o.s2;
   bt += o.bt;
   br += o.br;
+  scatter += o.scatter;
   pairs += o.pairs;
   collections += o.collections;
 }
@@ -310,8 +314,13 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
   for (std::ptrdiff_t chunk = 0; chunk < chunks; ++chunk) {
     Sums sums;
     Cells cells;
+    core::Vector6d cluster = core::Vector6d::Zero();
     const std::size_t begin = static_cast<std::size_t>(chunk) * kChunk, end = std::min(n, begin + kChunk);
     for (std::size_t j = begin + (stride - begin % stride) % stride; j < end; j += stride) {
+      if ((j - begin) % kScatterCluster == 0) {
+        sums.scatter += cluster * cluster.transpose();
+        cluster.setZero();
+      }
       const Eigen::Vector3f w = R * moving.position(j) + t;
       if (candidates && visibility_ && !fixed_view_.sees(w)) continue;
       float feature[kFeatureDim];
@@ -325,8 +334,11 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
       sums.s2 += p.a * wd * wd.transpose();
       sums.bt += D;
       sums.br += wd.cross(D);
+      cluster.head<3>() += D;
+      cluster.tail<3>() += wd.cross(D);
       sums.pairs += p.pairs;
     }
+    sums.scatter += cluster * cluster.transpose();
     chunk_sums_[static_cast<std::size_t>(chunk)] = sums;
   }
   total = Sums{};
@@ -377,6 +389,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
     result.inner_product = sums.s0;
     result.final_ell = ell;
     result.hessian = sums.hessian() / (ell * ell);
+    result.gradient_scatter = sums.scatter / (ell * ell * ell * ell);
     if (pairs_logged_ < pairs_log_.size()) pairs_log_[pairs_logged_++] = sums.pairs;
     if (sums.pairs < kMinPairs) {
       result.status = RegistrationStatus::kNoOverlap;

@@ -19,6 +19,17 @@
 // The reported Hessian is H / ℓ² at the final ℓ, the Gauss-Newton approximation of -∇²F, used as
 // the information of the estimate (pose-graph edges).
 //
+// The gradient scatter. H is not a likelihood's information: F is a kernel correlation, and H
+// scales with the kernel amplitudes σ², σ_c², the density of the fixed cloud and 1/ℓ² (a tuning
+// length, not the sensor's noise), none of which is the measurement's noise. The estimate is an
+// M-estimator, the root of Σ_j g_j(T) = 0 with per-point terms g_j = J_jᵀ D_j / ℓ², so its
+// covariance is the sandwich (Huber-White) H⁻¹ B H⁻¹ with B = Cov(Σ_j g_j), which every amplitude
+// cancels out of and which measures the scatter of what this pair of clouds really shows. The
+// g_j of neighbouring moving points are correlated (they share fixed points within r_max, and a
+// depth sensor's errors are correlated over neighbouring pixels), so B is the cluster-robust sum
+// B = Σ_c G_c G_cᵀ, G_c = Σ_{j∈c} g_j over runs of kScatterCluster consecutive moving points (image
+// order: a short run of one row). `gradient_scatter` is B at the final iteration.
+//
 // Mutual visibility (CvoParameters::mutual_visibility; align() only). Each cloud covers its own
 // camera's view; where the views differ, a moving point near the edge of X's view finds partners on
 // one side only, and a fixed point the moving camera no longer sees has none: both pull T towards
@@ -74,8 +85,9 @@ struct RegistrationResult {
   RegistrationStatus status = RegistrationStatus::kOk;
   double inner_product = 0;  // F(T) at the final length-scale (over what both views see: see above)
   double final_ell = 0;
-  std::size_t pairs = 0;                            // contributing pairs at the last iteration
-  core::Matrix6d hessian = core::Matrix6d::Zero();  // H / ℓ², ordered [translation, rotation]
+  std::size_t pairs = 0;                                     // contributing pairs at the last iteration
+  core::Matrix6d hessian = core::Matrix6d::Zero();           // H / ℓ², ordered [translation, rotation]
+  core::Matrix6d gradient_scatter = core::Matrix6d::Zero();  // B (see above), the same order
 };
 
 struct Capacities {
@@ -124,6 +136,7 @@ class Registration {
     Eigen::Vector3d s1 = Eigen::Vector3d::Zero();
     Eigen::Matrix3d s2 = Eigen::Matrix3d::Zero();
     Eigen::Vector3d bt = Eigen::Vector3d::Zero(), br = Eigen::Vector3d::Zero();
+    core::Matrix6d scatter = core::Matrix6d::Zero();  // Σ_c G_c G_cᵀ of the raw terms [D_j; w_j × D_j]
     std::size_t pairs = 0;
     std::size_t collections = 0;  // candidate collections
     void add(const Sums& o);

@@ -9,11 +9,13 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "eval/test_trajectories.hpp"
+#include "libcvo/io/covariance_io.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/run_tool.hpp"
@@ -71,6 +73,31 @@ TEST_F(CvoEvalCli, JsonHasTheContractKeysAndTheRightNumbers) {
   EXPECT_EQ(json_value(r.out, "estimate"), std::string("\"").append(est_.string()).append("\""));
 }
 
+// The estimate's relative poses err by 5 % of 12.5 cm along x; a covariance of exactly that
+// standard deviation on every axis makes every pair's NEES 1.
+TEST_F(CvoEvalCli, CovarianceAddsTheNeesOfTheRelativePoses) {
+  const fs::path cov = dir_ / "est.cov";
+  std::vector<io::StampedCovariance> covariances;
+  const double sigma = 0.05 * kStep;
+  for (int k = 1; k <= 40; ++k) covariances.push_back({k * kStep, sigma * sigma * core::Matrix6d::Identity()});
+  io::write_covariances(cov, covariances);
+  const ToolRun r = run(q(gt_) + " " + q(est_) + " --covariance " + q(cov) + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json_value(r.out, "nees_pairs"), "40");
+  EXPECT_NEAR(std::stod(json_value(r.out, "nees_mean")), 1.0, 1e-6);
+  EXPECT_NEAR(std::stod(json_value(r.out, "nees_median")), 1.0, 1e-6);
+  EXPECT_NEAR(std::stod(json_value(r.out, "nees_translation_mean")), 1.0, 1e-6);
+  EXPECT_NEAR(std::stod(json_value(r.out, "nees_rotation_mean")), 0.0, 1e-6);
+  const ToolRun table = run(q(gt_) + " " + q(est_) + " --covariance " + q(cov));
+  EXPECT_NE(table.out.find("NEES"), std::string::npos) << table.out;
+  // Without --covariance the keys are absent; a bad file is exit 1 naming it.
+  EXPECT_EQ(json_value(run(q(gt_) + " " + q(est_) + " --json").out, "nees_mean"), "<missing>");
+  std::ofstream(dir_ / "bad.cov") << "1.0 2.0\n";
+  const ToolRun bad = run(q(gt_) + " " + q(est_) + " --covariance " + q(dir_ / "bad.cov"));
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("bad.cov"), std::string::npos) << bad.err;
+}
+
 TEST_F(CvoEvalCli, TableIsTheDefaultAndOptionsApply) {
   const ToolRun r = run(q(gt_) + " " + q(est_));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -115,7 +142,8 @@ TEST_F(CvoEvalCli, BadInputExitsOneNamingTheFile) {
 
 TEST_F(CvoEvalCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   cvo::testing::expect_cli_contract(
-      "cvo-eval", "", {"GROUNDTRUTH", "ESTIMATE", "--json", "--plot", "--max-dt", "--delta", "--offset"}, dir_);
+      "cvo-eval", "",
+      {"GROUNDTRUTH", "ESTIMATE", "--json", "--plot", "--covariance", "--max-dt", "--delta", "--offset"}, dir_);
 }
 
 TEST_F(CvoEvalCli, BadArgumentsExitTwo) {

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
 
+#include "libcvo/registration/edge_covariance.hpp"
 #include "loop_closure/loop_test_frames.hpp"
 
 namespace cvo::loop_closure {
@@ -93,9 +94,14 @@ TEST(LoopVerification, InformationIsTheHessianOfThePoseGraphResidual) {
     const auto other = registration.align(p.j.cloud, p.i.cloud, Z);
     ASSERT_TRUE(other.converged);
     const core::Matrix6d Ad = Z.adjoint();
+    // The convention is the solver's Hessian's; the edge's Ω is that registration's calibrated
+    // information (registration/edge_covariance.hpp), in the same convention.
+    const core::Matrix6d H = v.refinement.hessian;
     const core::Matrix6d expected = Ad.transpose() * other.hessian * Ad;
-    const double agree = relative_difference(expected, v.closure->information);
-    const double raw = relative_difference(other.hessian, v.closure->information);
+    const double agree = relative_difference(expected, H);
+    const double raw = relative_difference(other.hessian, H);
+    EXPECT_TRUE(
+        v.closure->information.isApprox(registration::information_of(registration::edge_covariance(v.refinement), H)));
     std::printf("frames %zu -> %zu: |Ad^T H' Ad - Omega| / |Omega| = %.5f, |H' - Omega| / |Omega| = %.3f\n", a, b,
                 agree, raw);
     EXPECT_LT(agree, 0.01);

@@ -12,6 +12,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include <Eigen/Cholesky>
+
+#include "libcvo/io/covariance_io.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/sim/sequence.hpp"
 #include "tests/odometry/odometry_fixtures.hpp"
@@ -153,7 +156,7 @@ TEST(CvoRunCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   const test::TempDir dir("cvo_run");
   cvo::testing::expect_cli_contract("cvo-run", "",
                                     {"SEQUENCE", "--out", "--mode", "--max-frames", "--groundtruth", "--plot", "--json",
-                                     "--config", "--set", "--vocabulary"},
+                                     "--config", "--set", "--vocabulary", "--covariance-out"},
                                     dir.path());
 }
 
@@ -187,6 +190,54 @@ TEST(CvoRunCli, KeyframeModeEndToEnd) {
   EXPECT_GE(std::stoi(json_value(r.out, "keyframes")), 3);
   EXPECT_EQ(json_value(r.out, "failed_frames"), "0");
   EXPECT_LT(std::stod(json_value(r.out, "ate_rmse_m")), 0.003);
+}
+
+// --covariance-out: a line per frame with a measured motion (all but the first here), the colour
+// stamp and 36 numbers of a symmetric positive-definite matrix; modes without one refuse it.
+TEST(CvoRunCli, CovarianceOutWritesTheRelativePosesCovariancePerFrame) {
+  const test::TempDir dir("cvo_run");
+  const fs::path seq = write_rendered_sequence(dir);
+  const fs::path traj = dir.path() / "traj.txt", cov = dir.path() / "traj.cov";
+  const ToolRun r = run_tool(dir, q(seq) + " --out " + q(traj) + " --mode kf-cvo --covariance-out " + q(cov));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto trajectory = io::read_tum_trajectory(traj);
+  const auto covariances = io::read_covariances(cov);
+  ASSERT_EQ(covariances.size() + 1, trajectory.size());
+  for (std::size_t k = 0; k < covariances.size(); ++k) {
+    EXPECT_EQ(covariances[k].timestamp, trajectory[k + 1].timestamp);
+    EXPECT_EQ(Eigen::LLT<core::Matrix6d>(covariances[k].covariance).info(), Eigen::Success) << "line " << k;
+  }
+  std::ifstream in(cov);
+  std::string line;
+  while (std::getline(in, line) && line.front() == '#') {
+  }
+  std::istringstream fields(line);
+  std::size_t n = 0;
+  for (std::string f; fields >> f;) ++n;
+  EXPECT_EQ(n, 37u) << line;
+  const ToolRun refused = run_tool(dir, q(seq) + " --out " + q(traj) + " --mode cvo --covariance-out " + q(cov));
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("--covariance-out"), std::string::npos) << refused.err;
+}
+
+// With honest edge information the back end never makes the odometry worse: a rendered sequence of
+// fast turns with Kinect-like depth noise.
+TEST(CvoRunCli, SlamIsNoWorseThanItsOwnOdometryOnANoisyRenderedSequence) {
+  const test::TempDir dir("cvo_run");
+  sim::SequenceOptions options;
+  options.path = sim::PathKind::rpy;
+  options.frames = 90;
+  options.seed = 3;
+  options.noise.enabled = true;
+  options.render = testing::fast_render();
+  const fs::path seq = dir.path() / "rpy";
+  sim::write_sequence(seq, options);
+  const ToolRun r = run_tool(dir, q(seq) + " --out " + q(dir.path() / "traj.txt") + " --mode slam --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const double ate = std::stod(json_value(r.out, "ate_rmse_m"));
+  const double odometry = std::stod(json_value(r.out, "ate_rmse_m_odometry"));
+  std::printf("rendered rpy with noise: slam ATE %.5f m, its odometry's %.5f m\n", ate, odometry);
+  EXPECT_LE(ate, odometry);
 }
 
 TEST(CvoRunCli, InputErrorsExitOneAndNameTheFile) {

@@ -18,9 +18,11 @@
 
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/eval/ate.hpp"
+#include "libcvo/eval/nees.hpp"
 #include "libcvo/eval/plot.hpp"
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/eval/trajectory_checks.hpp"
+#include "libcvo/io/covariance_io.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "program/cli.hpp"
@@ -38,12 +40,15 @@ exactly as the TUM RGB-D benchmark scripts do:
        scale, RMSE/mean/median/std/min/max of the position error [m];
   RPE  evaluate_rpe.py --fixed_delta --delta_unit s: errors of the relative motion over delta
        seconds, translation [m per delta] and rotation [deg per delta] (m/s, deg/s for delta 1).
+  NEES with --covariance COV (cvo-run --covariance-out): of each frame-to-frame relative pose that
+       has a covariance, against the ground truth interpolated at both stamps (libcvo/eval/nees.hpp);
+       a consistent estimator averages 6 (3 translation, 3 rotation).
 )";
 
 struct Arguments {
   fs::path groundtruth, estimate;
   bool json = false;
-  std::optional<fs::path> plot;
+  std::optional<fs::path> plot, covariance;
   double max_dt = 0.02, delta = 1.0, offset = 0.0;
 };
 
@@ -53,6 +58,8 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_flag("--json", args.json, "print one JSON object instead of the table");
   app.add_option("--plot", args.plot, "write a figure: top view with the aligned estimate, and the error over time")
       ->type_name("PNG");
+  app.add_option("--covariance", args.covariance, "NEES of the relative poses with these covariances")
+      ->type_name("COV");
   app.add_option("--max-dt", args.max_dt, "association window for ATE, seconds")->check(program::kPositive);
   app.add_option("--delta", args.delta, "RPE time step, seconds")->check(program::kPositive);
   app.add_option("--offset", args.offset, "time offset added to the estimate's timestamps, seconds");
@@ -73,7 +80,8 @@ core::Trajectory load_tum(const fs::path& file) {
 // branch here (told apart by the log's magic number); nothing after loading needs to change.
 core::Trajectory load_estimate(const fs::path& file) { return load_tum(file); }
 
-void print_json(const Arguments& args, const eval::AteResult& ate, const std::optional<eval::RpeResult>& rpe) {
+void print_json(const Arguments& args, const eval::AteResult& ate, const std::optional<eval::RpeResult>& rpe,
+                const std::optional<eval::NeesResult>& nees) {
   const auto rpe_value = [&](auto get) -> program::Json { return rpe ? program::Json(get(*rpe)) : program::Json(); };
   program::Json o;
   o["groundtruth"] = args.groundtruth.string();
@@ -96,11 +104,18 @@ void print_json(const Arguments& args, const eval::AteResult& ate, const std::op
   o["rpe_rot_mean_deg_s"] = rpe_value([](const auto& r) { return r.rotation_deg.mean; });
   o["rpe_rot_median_deg_s"] = rpe_value([](const auto& r) { return r.rotation_deg.median; });
   o["rpe_rot_max_deg_s"] = rpe_value([](const auto& r) { return r.rotation_deg.max; });
+  if (nees) {
+    o["nees_pairs"] = nees->pairs.size();
+    o["nees_mean"] = nees->nees.mean;
+    o["nees_median"] = nees->nees.median;
+    o["nees_translation_mean"] = nees->translation.mean;
+    o["nees_rotation_mean"] = nees->rotation.mean;
+  }
   std::cout << program::to_text(o);
 }
 
 void print_table(const Arguments& args, std::size_t gt_poses, std::size_t est_poses, const eval::AteResult& ate,
-                 const std::optional<eval::RpeResult>& rpe) {
+                 const std::optional<eval::RpeResult>& rpe, const std::optional<eval::NeesResult>& nees) {
   std::printf("ground truth  %s (%zu poses)\nestimate      %s (%zu poses)\n\n", args.groundtruth.c_str(), gt_poses,
               args.estimate.c_str(), est_poses);
   std::printf("%-20s %11s %11s %11s %11s  %s\n", "", "rmse", "mean", "median", "max", "pairs");
@@ -117,6 +132,12 @@ void print_table(const Arguments& args, std::size_t gt_poses, std::size_t est_po
     row("RPE rot [deg" + per + "]", rpe->rotation_deg, "");
   } else {
     std::printf("%-20s %11s\n", "RPE", "n/a (see the warning above)");
+  }
+  if (nees) {
+    std::snprintf(note, sizeof note, "%zu (consistent: mean 6)", nees->pairs.size());
+    row("NEES", nees->nees, note);
+    row("NEES translation", nees->translation, "(consistent: mean 3)");
+    row("NEES rotation", nees->rotation, "(consistent: mean 3)");
   }
 }
 
@@ -136,11 +157,19 @@ int run(const Arguments& args) {
   } catch (const std::invalid_argument& e) {
     std::cerr << "cvo-eval: warning: " << args.estimate.string() << ": no RPE: " << e.what() << "\n";
   }
+  std::optional<eval::NeesResult> nees;
+  if (args.covariance) {
+    try {
+      nees = eval::relative_pose_nees(gt, est, io::read_covariances(*args.covariance), {.max_difference = args.max_dt});
+    } catch (const std::invalid_argument& e) {
+      throw io::InputError(*args.covariance, std::string("against ") + args.estimate.string() + ": " + e.what());
+    }
+  }
   if (args.plot) eval::write_evaluation_plot(*args.plot, gt, est, ate, {.title = args.estimate.filename().string()});
   if (args.json)
-    print_json(args, ate, rpe);
+    print_json(args, ate, rpe, nees);
   else
-    print_table(args, gt.size(), est.size(), ate, rpe);
+    print_table(args, gt.size(), est.size(), ate, rpe, nees);
   return 0;
 }
 

@@ -19,6 +19,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "libcvo/eval/plot.hpp"
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/io/accelerometer.hpp"
+#include "libcvo/io/covariance_io.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/map_files.hpp"
@@ -106,7 +108,7 @@ struct Arguments {
   fs::path out;
   std::string mode = "cvo";
   std::size_t max_frames = 0;  // 0 = all
-  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot, store, map_store;
+  std::optional<fs::path> groundtruth, plot, config, vocabulary, map, map_plot, store, map_store, covariance_out;
   std::vector<std::string> sets;
   bool json = false;
 };
@@ -137,6 +139,11 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_option("--map-store", args.map_store,
                  "--mode localize: the keyframe store of the map to localize in (read only, never changed)")
       ->type_name("FILE");
+  app.add_option("--covariance-out", args.covariance_out,
+                 "kf-cvo and slam: per frame its timestamp, then the 36 entries (row-major, [rho; phi], right "
+                 "perturbation) of the frame-to-frame relative pose's covariance; frames without a measured motion "
+                 "(the first, a restart, a failure) have no line")
+      ->type_name("COV");
   app.add_option("--config", args.config, "parameters (YAML, see libcvo/config/default.yaml)")->type_name("FILE");
   program::add_set_option(app, args.sets, "cvo.ell_init=0.12");
   app.add_option("--vocabulary", args.vocabulary, "the ORB vocabulary of --mode slam and localize (default: see below)")
@@ -220,6 +227,12 @@ core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::T
   return all;
 }
 
+// --covariance-out: the frame's relative covariance, when it has one.
+void record_covariance(const core::RgbdFrame& frame, const odometry::TrackStep& step,
+                       std::vector<io::StampedCovariance>& covariances) {
+  if (step.relative_covariance) covariances.push_back({frame.timestamp, *step.relative_covariance});
+}
+
 // Streams one folder through `track` (frame -> TrackResult), adding its frames to the report;
 // returns the poses of the frames tracked. `keyframes` counts this folder's keyframes.
 template <class Track>
@@ -291,7 +304,8 @@ tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mappin
 // every joined session's frames in the map frame, kf-cvo's own poses corrected by the back end
 // (slam::correct_trajectory fills in the frames it never saw).
 core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
-                          const core::Trajectory& groundtruth, tools::RunReport& report) {
+                          const core::Trajectory& groundtruth, tools::RunReport& report,
+                          std::vector<io::StampedCovariance>& covariances) {
   tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value(), args.store);
   std::vector<core::Trajectory> odometry(sequences.size());
   report.slam = tools::SlamReport{};
@@ -304,7 +318,13 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
                                                                  : std::vector<io::AccelerometerSample>{});
     tools::SessionEntry entry{args.sequences[k].string(), session, report.frames, 0, false, std::nullopt};
     odometry[k] = stream(
-        sequences[k], [&](const core::RgbdFrame& f) { return pipeline.track(f); }, report, entry.keyframes);
+        sequences[k],
+        [&](const core::RgbdFrame& f) -> odometry::TrackResult {
+          const odometry::TrackStep step = pipeline.track(f);
+          record_covariance(f, step, covariances);
+          return step;
+        },
+        report, entry.keyframes);
     entry.frames = report.frames - entry.frames;
     report.keyframes += entry.keyframes;
     report.slam->sessions.push_back(entry);
@@ -392,6 +412,10 @@ int run(const Arguments& args) {
   if (args.store && args.mode != "slam") throw UsageError("--store needs --mode slam (it stores the SLAM keyframes)");
   if ((args.mode == "localize") != args.map_store.has_value())
     throw UsageError(args.map_store ? "--map-store needs --mode localize" : "--mode localize needs --map-store FILE");
+  if (args.covariance_out && args.mode != "kf-cvo" && args.mode != "slam")
+    throw UsageError("--covariance-out needs --mode kf-cvo or slam (mode '" + args.mode + "' has no covariance)");
+  if (args.covariance_out && !std::ofstream(*args.covariance_out))
+    throw io::InputError(*args.covariance_out, "cannot write the covariances here");
   if (args.plot && groundtruth.empty())
     throw UsageError("--plot needs ground truth: " + args.sequences.front().string() +
                      " has no groundtruth.txt and no --groundtruth was given");
@@ -403,8 +427,9 @@ int run(const Arguments& args) {
   report.trajectory = args.out.string();
 
   core::Trajectory trajectory;
+  std::vector<io::StampedCovariance> covariances;
   if (args.mode == "slam") {
-    trajectory = run_slam(args, config, sequences, groundtruth, report);
+    trajectory = run_slam(args, config, sequences, groundtruth, report, covariances);
   } else if (args.mode == "localize") {
     trajectory = run_localize(args, config, sequences.front(), report);
   } else {
@@ -412,7 +437,14 @@ int run(const Arguments& args) {
     trajectory = stream(
         sequences.front(),
         [&](const core::RgbdFrame& f) {
-          return std::visit([&](auto& t) -> odometry::TrackResult { return t.track(f); }, tracker);
+          return std::visit(
+              [&](auto& t) -> odometry::TrackResult {
+                auto step = t.track(f);
+                if constexpr (std::is_same_v<decltype(step), odometry::TrackStep>)
+                  record_covariance(f, step, covariances);
+                return step;
+              },
+              tracker);
         },
         report, report.keyframes);
   }
@@ -424,6 +456,7 @@ int run(const Arguments& args) {
   }
   report.poses = trajectory.size();
   io::write_tum_trajectory(args.out, trajectory);
+  if (args.covariance_out) io::write_covariances(*args.covariance_out, covariances);
   if (!groundtruth.empty() && !trajectory.empty()) evaluate(args, groundtruth, trajectory, report);
 
   tools::print_text(args.json ? stderr : stdout, report);

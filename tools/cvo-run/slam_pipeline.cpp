@@ -41,7 +41,7 @@ void SlamPipeline::begin_session(core::SessionId session, int width, int height,
   session_ = std::make_unique<Session>(session, width, height, config_, std::move(accelerometer));
 }
 
-odometry::TrackResult SlamPipeline::track(const core::RgbdFrame& frame) {
+odometry::TrackStep SlamPipeline::track(const core::RgbdFrame& frame) {
   Session& s = *session_;
   const odometry::TrackStep step = s.tracker.track(frame);
   const auto start = Clock::now();

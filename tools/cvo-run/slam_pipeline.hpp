@@ -54,7 +54,7 @@ class SlamPipeline {
   void begin_session(core::SessionId session, int width, int height,
                      std::vector<io::AccelerometerSample> accelerometer = {});
   /// Tracks the frame, then does the back end's share of work for it (see above).
-  odometry::TrackResult track(const core::RgbdFrame& frame);
+  odometry::TrackStep track(const core::RgbdFrame& frame);
   /// Hands the session's open local graph to the mapper (nothing when none is open).
   void end_session();
   /// Ends the session and runs the global optimisation.
