@@ -93,9 +93,8 @@ void KeyframeOdometry::start_over() {
   keyframe_frame_ = previous_frame_ = 0;
   keyframe_pose_ = previous_pose_ = T_m_previous_ = velocity_ = last_pose_ = core::SE3();
   previous_timestamp_ = velocity_dt_ = gamma_reference_ = gamma_ = 0;
-  compensation_velocity_ = before_previous_pose_ = core::SE3();
-  compensation_dt_ = before_previous_timestamp_ = 0;
-  have_before_previous_ = false;
+  compensation_velocity_ = core::SE3();
+  compensation_dt_ = 0;
   reason_ = KeyframeReason::kNone;
 }
 
@@ -171,24 +170,6 @@ core::Vector6d KeyframeOdometry::twist(const core::RgbdFrame& frame) const {
   const core::Vector6d xi = compensation_velocity_.log() / compensation_dt_;
   const double edge_deg = core::degrees(xi.tail<3>().norm() * 0.5 * frame.intrinsics.readout_s);
   return xi.allFinite() && edge_deg <= kMaxCompensationDeg ? xi : core::Vector6d::Zero();
-}
-
-// After frame n (pose P_n in result): the published motion over the last two intervals when
-// frames n-2, n-1 and n were all tracked, over the last one when only n-1 and n were, else the
-// prediction's velocity (a restart keeps compensating at the motion it predicts with).
-void KeyframeOdometry::update_compensation_velocity(const TrackStep& result, double timestamp) {
-  if (result.status != TrackStatus::kOk) {
-    compensation_velocity_ = velocity_;
-    compensation_dt_ = velocity_dt_;
-    have_before_previous_ = false;
-    return;
-  }
-  const bool two = have_before_previous_;
-  compensation_velocity_ = two ? before_previous_pose_.inverse() * result.pose : result.motion;
-  compensation_dt_ = timestamp - (two ? before_previous_timestamp_ : previous_timestamp_);
-  before_previous_pose_ = previous_pose_;
-  before_previous_timestamp_ = previous_timestamp_;
-  have_before_previous_ = true;
 }
 
 bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
@@ -307,6 +288,9 @@ core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const
     velocity_ = r.f2f.transform;
   else if (result.status == TrackStatus::kOk)
     velocity_ = result.motion;
+  // The compensations' velocity: the published motion when this frame was tracked (see the header).
+  compensation_velocity_ = result.status == TrackStatus::kOk ? result.motion : velocity_;
+  compensation_dt_ = velocity_dt_;
   return pose;
 }
 
@@ -341,7 +325,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.pose = last_pose_ = predicted;
     result.motion = velocity_;
     have_frame_ = true;
-    have_previous_ = have_before_previous_ = false;
+    have_previous_ = false;
     hand_out(frame, result);
     return result;
   }
@@ -361,7 +345,6 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
   }
 
   result.pose = last_pose_ = pose;
-  update_compensation_velocity(result, frame.timestamp);
   hand_out(frame, result);
   // The current frame becomes the previous one; the free cloud takes the next frame.
   previous_images_ = frame;  // its images are the caller's: a header copy
