@@ -88,6 +88,8 @@ void KeyframeOdometry::start_over() {
   keyframe_frame_ = previous_frame_ = 0;
   keyframe_pose_ = previous_pose_ = T_m_previous_ = velocity_ = last_pose_ = core::SE3();
   previous_timestamp_ = velocity_dt_ = gamma_reference_ = gamma_ = 0;
+  compensation_velocity_ = core::SE3();
+  compensation_dt_ = 0;
   reason_ = KeyframeReason::kNone;
   covariance_chain_ = PoseCovarianceChain{};
   variance_factor_ = VarianceFactor{};
@@ -149,12 +151,12 @@ core::SE3 KeyframeOdometry::fuse_with_chain(const registration::RegistrationResu
 // kMaxCompensationDeg: a wrong compensation corrupts the next velocity, which would feed back.
 core::SE3 KeyframeOdometry::colour_T_depth(const core::RgbdFrame& frame) const {
   constexpr double kMaxDt = 0.05, kMaxCompensationDeg = 5.0;
-  if (!have_previous_ || !(velocity_dt_ > 0) || !(frame.depth_timestamp > 0) ||
+  if (!have_previous_ || !(compensation_dt_ > 0) || !(frame.depth_timestamp > 0) ||
       frame.depth_timestamp == frame.timestamp)
     return {};
   const double dt = frame.depth_timestamp - frame.timestamp + parameters_.selection.depth_time_offset_s;
   if (!(std::abs(dt) <= kMaxDt) || dt == 0) return {};
-  const core::SE3 motion = core::SE3::exp((dt / velocity_dt_) * velocity_.log());
+  const core::SE3 motion = core::SE3::exp((dt / compensation_dt_) * compensation_velocity_.log());
   if (!motion.is_finite() || core::degrees(motion.angle()) > kMaxCompensationDeg) return {};
   return motion;
 }
@@ -164,8 +166,8 @@ core::SE3 KeyframeOdometry::colour_T_depth(const core::RgbdFrame& frame) const {
 // first or last row would turn more than kMaxCompensationDeg (a wrong velocity would feed back).
 core::Vector6d KeyframeOdometry::twist(const core::RgbdFrame& frame) const {
   constexpr double kMaxCompensationDeg = 2.0;
-  if (!frame.intrinsics.rolling_shutter() || !have_previous_ || !(velocity_dt_ > 0)) return core::Vector6d::Zero();
-  const core::Vector6d xi = velocity_.log() / velocity_dt_;
+  if (!frame.intrinsics.rolling_shutter() || !have_previous_ || !(compensation_dt_ > 0)) return core::Vector6d::Zero();
+  const core::Vector6d xi = compensation_velocity_.log() / compensation_dt_;
   const double edge_deg = core::degrees(xi.tail<3>().norm() * 0.5 * frame.intrinsics.readout_s);
   return xi.allFinite() && edge_deg <= kMaxCompensationDeg ? xi : core::Vector6d::Zero();
 }
@@ -325,6 +327,9 @@ core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const
     velocity_ = r.f2f.transform;
   else if (result.status == TrackStatus::kOk)
     velocity_ = result.motion;
+  // The compensations' velocity: the published motion when this frame was tracked (see the header).
+  compensation_velocity_ = result.status == TrackStatus::kOk ? result.motion : velocity_;
+  compensation_dt_ = velocity_dt_;
   return pose;
 }
 

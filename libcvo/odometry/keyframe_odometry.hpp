@@ -28,6 +28,13 @@
 // stamps differ by up to ±17 ms, plus SelectionParameters::depth_time_offset_s). Each frame's
 // points are selected with colour_T_depth, the last velocity scaled to that interval
 // (PointSelector::select explains the rest); what it gains on fr1/rpy: bench/odometry-tuning.md.
+// The velocity of both compensations (depth time, rolling shutter) is the published motion of the
+// last interval, P_{n-2}^{-1} P_{n-1}, not the last frame-to-frame registration alone: a
+// compensation moves frame n's points by whatever error its velocity has, that error enters
+// T_{n-1}^n and through it the next velocity, so a one-registration velocity makes the published
+// increments jitter. The published motion carries the keyframe registration's information as
+// well, over the same interval (no more lag). The frame-to-frame registration still starts from
+// the last frame-to-frame result (the constant-velocity guess).
 //
 // Failures never crash and never jump: a frame whose points cannot be selected, or whose two
 // registrations both fail, keeps the constant-velocity prediction, is marked, and the next usable
@@ -173,11 +180,13 @@ class KeyframeOdometry {
 
   std::uint64_t previous_frame_ = 0;
   double previous_timestamp_ = 0;
-  core::SE3 previous_pose_;  // P_{n-1}
-  core::SE3 T_m_previous_;   // T_m^{n-1}
-  core::SE3 velocity_;       // T_{n-2}^{n-1}
-  double velocity_dt_ = 0;   // colour-stamp seconds velocity_ spans; 0: none yet
-  core::SE3 last_pose_;      // the last published pose (tracked or predicted)
+  core::SE3 previous_pose_;          // P_{n-1}
+  core::SE3 T_m_previous_;           // T_m^{n-1}
+  core::SE3 velocity_;               // T_{n-2}^{n-1}
+  double velocity_dt_ = 0;           // colour-stamp seconds velocity_ spans; 0: none yet
+  core::SE3 compensation_velocity_;  // the compensations' velocity (see the header)
+  double compensation_dt_ = 0;       // colour-stamp seconds it spans; 0: none yet
+  core::SE3 last_pose_;              // the last published pose (tracked or predicted)
   PoseCovarianceChain covariance_chain_;
   VarianceFactor variance_factor_;  // of this session's registrations (variance_factor.hpp)
 
