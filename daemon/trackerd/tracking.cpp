@@ -177,9 +177,27 @@ void Tracking::track(const RingSlot& slot, Event& event) {
   e.points = static_cast<int>(step.points);
   e.keyframe_id = step.keyframe_id;
   e.is_keyframe = step.keyframe;
-  if (step.edge_covariance) e.covariance = *step.edge_covariance;
+  e.relative_covariance = step.relative_covariance;
+  e.covariance = map_pose_covariance(frame, step, placement);
   if (!step.tracked()) ++shared_.counters.failed_frames;
   hand_over(step, event);
+}
+
+// The map pose's covariance: the back end's covariance of a keyframe's map pose composed with the
+// odometry since (libcvo/odometry/pose_covariance.hpp); before the session is placed, or when the
+// back end gives none for a keyframe still held, the odometry pose's own (since the first frame).
+core::Matrix6d Tracking::map_pose_covariance(const core::RgbdFrame& frame, const odometry::TrackStep& step,
+                                             const MapPlacement& placement) {
+  if (const auto& k = step.new_keyframe) {  // frame n itself (the first, a restart) or frame n-1
+    const bool itself = k->frame.index == frame.index;
+    keyframe_covariances_.add(k->id, k->pose, itself ? step.odometry_covariance : previous_odometry_covariance_);
+  }
+  previous_odometry_covariance_ = step.odometry_covariance;
+  if (placement.placed && placement.keyframe_covariance)
+    if (const auto c = keyframe_covariances_.map_pose_covariance(
+            placement.covariance_keyframe, *placement.keyframe_covariance, step.pose, step.odometry_covariance))
+      return *c;
+  return step.odometry_covariance;
 }
 
 // The closed local graph and the new keyframe into preallocated outbox slots (copies within
@@ -228,6 +246,7 @@ void Tracking::end_session() {
 // session's first pose goes out: this thread does not allocate).
 void Tracking::start_new_session() {
   end_session();
+  keyframe_covariances_.clear();
   session_frames_ = 0;
   shared_.session = new_session_id(static_cast<std::uint64_t>(shared_.session.load()));
 }

@@ -17,6 +17,7 @@
 #include <memory>
 
 #include "daemon/trackerd/shared.hpp"
+#include "libcvo/odometry/keyframe_covariances.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 
 namespace cvo::daemon::trackerd {
@@ -33,6 +34,8 @@ class Tracking {
   void follow_connection(const RingSlot& slot);
   void track(const RingSlot& slot, Event& event);
   void hand_over(const odometry::TrackStep& step, Event& event);
+  core::Matrix6d map_pose_covariance(const core::RgbdFrame& frame, const odometry::TrackStep& step,
+                                     const MapPlacement& placement);
   void end_session();
   void start_new_session();
   void count_allocations();
@@ -48,6 +51,10 @@ class Tracking {
   std::size_t other_frames_ = 0;
   // Warm-up, again after a camera change: allocations are defects from warmup_frames frames on.
   std::int64_t warm_frames_ = 0, allocations_at_warmup_ = 0, defects_before_ = 0;
+  // The running session's recent keyframes (pose, covariance) and the last frame's covariance, for
+  // the map pose's covariance.
+  odometry::KeyframeCovariances keyframe_covariances_;
+  core::Matrix6d previous_odometry_covariance_ = core::Matrix6d::Zero();
 };
 
 }  // namespace cvo::daemon::trackerd

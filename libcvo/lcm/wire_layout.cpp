@@ -23,9 +23,10 @@ constexpr std::array kKeyframeCounts{CountField{"num_points", 190, 8 * 4}, Count
 constexpr std::array kLocalGraphCounts{CountField{"num_nodes", 28, kGraphNode},
                                        CountField{"num_edges", 32, kGraphEdge}};
 // map_t: version, utime, revision, epoch (28), then the counts of map_session_t (session, placed, piece,
-// keyframes, joined_at_keyframe, correction), map_keyframe_t (session, id, utime, pose) and
-// map_loop_t (two sessions, an edge).
-constexpr int kMapSession = 8 + 1 + 8 + 4 + 8 + kPose3d;
+// keyframes, joined_at_keyframe, correction, state, visitor, last_match_utime, covariance_keyframe,
+// keyframe_covariance[36]), map_keyframe_t (session, id, utime, pose) and map_loop_t (two
+// sessions, an edge).
+constexpr int kMapSession = 8 + 1 + 8 + 4 + 8 + kPose3d + 1 + 1 + 8 + 8 + 36 * 8;
 constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
 constexpr int kMapLoop = 8 + 8 + kGraphEdge;
 constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession},

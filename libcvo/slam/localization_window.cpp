@@ -1,6 +1,9 @@
 #include "libcvo/slam/localization_window.hpp"
 
+#include <stdexcept>
+
 #include "libcvo/posegraph/cost.hpp"
+#include "libcvo/posegraph/marginals.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
 
 namespace cvo::slam {
@@ -52,6 +55,10 @@ std::optional<WindowSolution> solve_window(const std::deque<WindowKeyframe>& win
   const WindowKeyframe& newest = window.back();
   WindowSolution solution;
   solution.correction = graph.node(newest.node).pose * newest.odometry.inverse();
+  try {
+    solution.covariance = posegraph::marginal_covariances(graph, {newest.node}, options).at(newest.node);
+  } catch (const std::runtime_error&) {  // a window node no edge constrains: no covariance to give
+  }
   const posegraph::RobustKernel kernel{parameters.cauchy_delta};
   const auto& edges = graph.edges();
   for (std::size_t e = edges.size() - matches.size(); e < edges.size(); ++e)

@@ -1,5 +1,7 @@
 #include "libcvo/slam/mapper.hpp"
 
+#include "libcvo/posegraph/marginals.hpp"
+
 #include <algorithm>
 #include <tuple>
 #include <utility>
@@ -185,10 +187,36 @@ MapLoop Mapper::describe(const loop_closure::LoopClosure& loop) const {
   return m;
 }
 
+// The marginal covariance of each session's newest keyframe in the keyframe graph (the map's
+// uncertainty of where it is, posegraph/marginals.hpp), keyed by session: one factorisation for all.
+std::map<core::SessionId, std::pair<std::int64_t, core::Matrix6d>> Mapper::keyframe_covariances() const {
+  std::map<core::SessionId, std::pair<std::int64_t, core::Matrix6d>> out;
+  const auto& graph = backend_.keyframe_graph();
+  std::map<posegraph::NodeId, std::pair<core::SessionId, std::int64_t>> newest;
+  for (const auto& [id, s] : sessions_)
+    for (auto k = s.keyframes.rbegin(); k != s.keyframes.rend(); ++k)
+      if (const auto n = node(s, k->second.frame); graph.contains(n)) {
+        newest.emplace(n, std::pair{id, k->first});
+        break;
+      }
+  if (newest.empty()) return out;
+  std::vector<posegraph::NodeId> nodes;
+  for (const auto& [n, key] : newest) nodes.push_back(n);
+  posegraph::OptimizerOptions options;
+  options.pose_graph = backend_.parameters();
+  try {
+    for (const auto& [n, covariance] : posegraph::marginal_covariances(graph, nodes, options))
+      out.emplace(newest.at(n).first, std::pair{newest.at(n).second, covariance});
+  } catch (const std::runtime_error&) {  // a piece no edge holds yet: no covariances this time
+  }
+  return out;
+}
+
 Map Mapper::map() const {
   Map map;
   map.revision = revision_ + backend_.revision();
   const auto poses = backend_.keyframe_poses();
+  const auto covariances = keyframe_covariances();
   for (const core::SessionId id : order_) {
     const Session& s = sessions_.at(id);
     const core::SE3 correction = backend_.odometry_correction(id);
@@ -205,6 +233,10 @@ Map Mapper::map() const {
     // The first session is the map: each of its keyframes is in it.
     entry.last_match_time =
         id == order_.front() && !s.keyframes.empty() ? s.keyframes.rbegin()->second.timestamp : s.last_match_time;
+    if (const auto c = covariances.find(id); c != covariances.end()) {
+      entry.covariance_keyframe = c->second.first;
+      entry.keyframe_covariance = c->second.second;
+    }
     if (entry.last_match_time >= 0 && !s.keyframes.empty())
       entry.since_match_s = s.keyframes.rbegin()->second.timestamp - entry.last_match_time;
     for (const auto& [keyframe, record] : s.keyframes) {

@@ -214,6 +214,7 @@ class Mapper {
   void solve(Visitor& v, std::int64_t newest_id);
   void forget_idle_visitors();
   [[nodiscard]] MapSession describe(core::SessionId id, const Visitor& v) const;
+  [[nodiscard]] std::map<core::SessionId, std::pair<std::int64_t, core::Matrix6d>> keyframe_covariances() const;
   [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
   [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
   std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
