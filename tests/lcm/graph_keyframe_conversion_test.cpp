@@ -203,7 +203,8 @@ TEST(MapConversion, RoundTripKeepsSessionsKeyframesAndLoops) {
   slam::Map map;
   map.revision = 42;
   const core::SE3 correction = core::SE3::from_translation({0.5, -0.25, 2.0});
-  map.sessions = {test::map_session(-7, true, -7, 2, 0, core::SE3()), test::map_session(99, false, 99, 1, -1, correction)};
+  map.sessions = {test::map_session(-7, true, -7, 2, 0, core::SE3()),
+                  test::map_session(99, false, 99, 1, -1, correction)};
   map.keyframes = {{-7, 0, 1305031229.528748, core::SE3()},
                    {-7, 1, 1305031230.5, core::SE3::from_translation({1, 0, 0})},
                    {99, 0, 1305031240.25, correction}};

@@ -55,7 +55,8 @@ TEST(MapDecision, ANewerMapPlacingTheSessionIsApplied) {
   const auto far =
       decide(map_bytes(4, {placed(kSession, core::SE3::from_translation({40, 0, 0}))}), AppliedCorrection{});
   EXPECT_TRUE(far.apply) << far.why;
-  const auto unplaced = decide(map_bytes(5, {test::map_session(kSession, false, kSession, 1, -1, kOneMetre)}), d.correction);
+  const auto unplaced =
+      decide(map_bytes(5, {test::map_session(kSession, false, kSession, 1, -1, kOneMetre)}), d.correction);
   ASSERT_TRUE(unplaced.apply) << unplaced.why;
   EXPECT_FALSE(unplaced.correction.placed);
   EXPECT_EQ(unplaced.correction.T_map_odom.translation().norm(), 0) << "identity when not placed";

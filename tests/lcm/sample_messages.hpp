@@ -144,7 +144,7 @@ inline cvo_lcm::map_t sample_map() {
   m.revision = 17;
   constexpr std::int64_t kFirst = 0x5e5510'0000'0001, kSecond = -0x2222'3333'4444'5555;
   const auto session = [](std::int64_t id, bool placed, std::int32_t keyframes, std::int64_t joined,
-                           const cvo_lcm::pose3d_t& correction) {
+                          const cvo_lcm::pose3d_t& correction) {
     cvo_lcm::map_session_t s{};
     s.session = id;
     s.placed = placed;
