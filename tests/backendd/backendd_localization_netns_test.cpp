@@ -59,11 +59,6 @@ std::vector<int> range(int first, int last) {
   return out;
 }
 
-std::vector<std::uint8_t> bytes_of(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
 // The stored map: cvo-backendd in mapping mode over a file:// recording of a live tracker.
 fs::path make_map(const fs::path& dir) {
   const auto folder = write_folder(dir / "fr1_first_half", range(0, 24));
@@ -81,7 +76,7 @@ TEST(BackenddLocalization, StatesReachCvoPoseAndTheStoredMapIsUnchanged) {
   if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
   const cvo::test::TempDir dir("cvo_localization");
   const auto store = make_map(dir.path());
-  const auto before = bytes_of(store);
+  const auto before = cvo::testing::slurp(store);
   ASSERT_GT(before.size(), 1000u);
 
   std::vector<int> frames = range(25, 49);
@@ -110,7 +105,7 @@ TEST(BackenddLocalization, StatesReachCvoPoseAndTheStoredMapIsUnchanged) {
   EXPECT_EQ(second, (std::vector<std::int8_t>{P::STATE_LOCALIZING, P::STATE_LOCALIZED})) << logs;
   EXPECT_NE(logs.find("lost at frame 26"), std::string::npos) << logs;
   EXPECT_NE(logs.find("localized in the stored map"), std::string::npos) << logs;
-  EXPECT_TRUE(bytes_of(store) == before) << "the stored map changed";
+  EXPECT_TRUE(cvo::testing::slurp(store) == before) << "the stored map changed";
 }
 
 }  // namespace

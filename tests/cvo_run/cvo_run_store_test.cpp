@@ -33,11 +33,6 @@ using testing::run_tool;
 using testing::slurp;
 using testing::ToolRun;
 
-std::string bytes_of(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 // The number after `label` in a tool's text ("records: 17 intact" -> 17), -1 when absent.
 long number_after(const std::string& text, const std::string& label) {
   std::smatch m;
@@ -89,7 +84,7 @@ TEST(CvoRunStore, TheSameInputWritesTheSameStore) {
   ASSERT_EQ(slam_with_store({dir.path() / "fr1_first"}, dir.path() / "a.store", dir.path()).exit_code, 0);
   ASSERT_EQ(slam_with_store({dir.path() / "fr1_first"}, dir.path() / "b.store", dir.path()).exit_code, 0);
   EXPECT_GT(fs::file_size(dir.path() / "a.store"), 8u);
-  EXPECT_TRUE(bytes_of(dir.path() / "a.store") == bytes_of(dir.path() / "b.store"));
+  EXPECT_TRUE(slurp(dir.path() / "a.store") == slurp(dir.path() / "b.store"));
 }
 
 // A log with one event on a channel nobody reads: the file:// provider needs a first event.
@@ -106,7 +101,7 @@ TEST(CvoRunStore, ACvoBackenddStartedOnTheStoreReplaysIt) {
   const ToolRun r = slam_with_store({test::kSample}, store, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const long keyframes = std::stol(json_value(r.out, "keyframes"));
-  const std::string before = bytes_of(store);
+  const std::string before = slurp(store);
 
   const auto published = dir.path() / "published.lcmlog";
   testing::DaemonProcess backendd(
@@ -125,7 +120,7 @@ TEST(CvoRunStore, ACvoBackenddStartedOnTheStoreReplaysIt) {
   EXPECT_EQ(map.sessions[0].session, 1) << "cvo-run numbers its sessions 1, 2, ...";
   EXPECT_TRUE(map.sessions[0].placed);
   EXPECT_EQ(map.num_keyframes, keyframes);
-  EXPECT_TRUE(bytes_of(store) == before) << "the daemon found nothing to repair or add";
+  EXPECT_TRUE(slurp(store) == before) << "the daemon found nothing to repair or add";
 }
 
 TEST(CvoRunStore, AStoreThatExistsIsLeftAloneAndOnlySlamModeStores) {
@@ -135,7 +130,7 @@ TEST(CvoRunStore, AStoreThatExistsIsLeftAloneAndOnlySlamModeStores) {
   EXPECT_EQ(exists.exit_code, 1) << exists.err;
   EXPECT_NE(exists.err.find(store.string()), std::string::npos) << exists.err;
   EXPECT_NE(exists.err.find("exists already"), std::string::npos) << exists.err;
-  EXPECT_EQ(bytes_of(store), "a robot's map");
+  EXPECT_EQ(slurp(store), "a robot's map");
 
   const ToolRun kf = run_tool("cvo-run",
                               quoted(test::kSample) + " --mode kf-cvo --out " + quoted(dir.path() / "t.txt") +
