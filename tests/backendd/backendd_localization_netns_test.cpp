@@ -1,9 +1,9 @@
 // Localization through the real daemons: a map is made by cvo-backendd from a recording of the
-// first half of the embedded clip (a file:// log); then cvo-backendd --set backendd.mode=localization
-// serves it read only while a live cvo-trackerd (real LCM UDP multicast) runs the second half, a
-// frame without depth (the camera covered: the odometry fails), and the whole clip again. CVO_POSE
-// must say LOCALIZING, then LOCALIZED in the first session, LOST where the odometry failed, and
-// LOCALIZED again in the session that follows; the store is byte for byte what it was.
+// first half of the embedded clip (a file:// log), or offline by cvo-run --mode slam --store; then cvo-backendd --set
+// backendd.mode=localization serves it read only while a live cvo-trackerd (real LCM UDP multicast) runs the second
+// half, a frame without depth (the camera covered: the odometry fails), and the whole clip again. CVO_POSE must say
+// LOCALIZING, then LOCALIZED in the first session, LOST where the odometry failed, and LOCALIZED again in the session
+// that follows; the store is byte for byte what it was.
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone.
 #include <filesystem>
@@ -60,7 +60,7 @@ std::vector<int> range(int first, int last) {
 }
 
 // The stored map: cvo-backendd in mapping mode over a file:// recording of a live tracker.
-fs::path make_map(const fs::path& dir) {
+fs::path map_by_the_daemon(const fs::path& dir) {
   const auto folder = write_folder(dir / "fr1_first_half", range(0, 24));
   cvo::testing::tracker_recording(dir, {}, folder);
   const auto store = dir / "map.store";
@@ -72,31 +72,42 @@ fs::path make_map(const fs::path& dir) {
   return store;
 }
 
-TEST(BackenddLocalization, StatesReachCvoPoseAndTheStoredMapIsUnchanged) {
-  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
-  const cvo::test::TempDir dir("cvo_localization");
-  const auto store = make_map(dir.path());
+// The stored map made offline: cvo-run --mode slam --store.
+fs::path map_by_cvo_run(const fs::path& dir) {
+  const auto folder = write_folder(dir / "fr1_first_half", range(0, 24));
+  const auto store = dir / "offline.store";
+  const auto run = cvo::testing::run_tool("cvo-run",
+                                          cvo::testing::quoted(folder.string()) + " --mode slam --out " +
+                                              cvo::testing::quoted((dir / "first.txt").string()) + " --store " +
+                                              cvo::testing::quoted(store.string()),
+                                          dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  return store;
+}
+
+// The visitor through both daemons in the map of `store`: its states on CVO_POSE, the store unchanged.
+void localize_through_the_daemons(const fs::path& dir, const fs::path& store) {
   const auto before = cvo::testing::slurp(store);
   ASSERT_GT(before.size(), 1000u);
 
   std::vector<int> frames = range(25, 49);
   frames.push_back(-1);  // the camera covered: no depth, the odometry fails at the next frame
   for (const int i : range(0, 49)) frames.push_back(i);
-  const auto visitor = write_folder(dir.path() / "fr1_visitor", frames);
+  const auto visitor = write_folder(dir / "fr1_visitor", frames);
 
-  LcmCapture capture(dir.path() / "maps.lcmlog");
+  LcmCapture capture(dir / "maps.lcmlog");
   ASSERT_TRUE(capture.good());
-  const auto backend_log = dir.path() / "localization.txt";
+  const auto backend_log = dir / "localization.txt";
   auto backendd = cvo::testing::start_backendd(store, backend_log, {"backendd.mode=localization"});
   const int pid = backendd->pid();
   ASSERT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(pid) && c.map.has_value(); }, 120s))
       << cvo::testing::slurp(backend_log);
-  auto trackerd = cvo::testing::start_trackerd(visitor, dir.path() / "tracker_live.txt", true);
-  EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0) << cvo::testing::slurp(dir.path() / "tracker_live.txt");
+  auto trackerd = cvo::testing::start_trackerd(visitor, dir / "tracker_live.txt", true);
+  EXPECT_EQ(trackerd.wait_for(120s).value_or(-9), 0) << cvo::testing::slurp(dir / "tracker_live.txt");
   EXPECT_EQ(cvo::testing::stop(*backendd, 120s).value_or(-9), 0) << cvo::testing::slurp(backend_log);
 
   const Captured c = capture.snapshot();
-  const std::string logs = cvo::testing::slurp(backend_log) + cvo::testing::slurp(dir.path() / "tracker_live.txt");
+  const std::string logs = cvo::testing::slurp(backend_log) + cvo::testing::slurp(dir / "tracker_live.txt");
   ASSERT_EQ(c.state_changes.size(), 2u) << logs;  // two tracker sessions
   const auto& first = c.state_changes.at(0).second;
   const auto& second = c.state_changes.at(1).second;
@@ -106,6 +117,18 @@ TEST(BackenddLocalization, StatesReachCvoPoseAndTheStoredMapIsUnchanged) {
   EXPECT_NE(logs.find("lost at frame 26"), std::string::npos) << logs;
   EXPECT_NE(logs.find("localized in the stored map"), std::string::npos) << logs;
   EXPECT_TRUE(cvo::testing::slurp(store) == before) << "the stored map changed";
+}
+
+TEST(BackenddLocalization, StatesReachCvoPoseAndTheStoredMapIsUnchanged) {
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+  const cvo::test::TempDir dir("cvo_localization");
+  localize_through_the_daemons(dir.path(), map_by_the_daemon(dir.path()));
+}
+
+TEST(BackenddLocalization, AMapMadeOfflineByCvoRunServesTheDaemon) {
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+  const cvo::test::TempDir dir("cvo_localization_offline");
+  localize_through_the_daemons(dir.path(), map_by_cvo_run(dir.path()));
 }
 
 }  // namespace
