@@ -185,8 +185,9 @@ MapSession Mapper::describe(core::SessionId id, const Visitor& v) const {
 
 MapSession Mapper::session(core::SessionId id) const {
   if (const auto v = visitors_.find(id); v != visitors_.end()) return describe(id, v->second);
-  for (const auto& s : map().sessions)  // a mapped session: as map() has it
-    if (s.session == id) return s;
+  if (sessions_.contains(id))
+    for (const auto& s : map().sessions)  // a mapped session: as map() has it
+      if (s.session == id) return s;
   MapSession unknown;
   unknown.session = id;
   unknown.piece = id;
