@@ -164,7 +164,7 @@ void Tracking::track(const RingSlot& slot, Event& event) {
   e.odom_pose = step.pose;
   e.map_pose = placement.T_map_odom * step.pose;
   e.map_placed = placement.placed;
-  e.has_map_pose = placement.placed || shared_.config.trackerd.map_pose_until_localized == "odometry";
+  e.has_map_pose = placement.placed || odometry_until_localized_;
   e.map_epoch = placement.epoch;
   e.map_revision = placement.revision;
   e.state = step.lost          ? core::LocalizationState::kLost

@@ -24,7 +24,8 @@ namespace cvo::daemon::trackerd {
 
 class Tracking {
  public:
-  explicit Tracking(Shared& shared) : shared_(shared) {}
+  explicit Tracking(Shared& shared)
+      : shared_(shared), odometry_until_localized_(shared.config.trackerd.map_pose_until_localized == "odometry") {}
   void run();  // the thread's body: until the ring is closed and drained
 
  private:
@@ -41,6 +42,7 @@ class Tracking {
   void count_allocations();
 
   Shared& shared_;
+  const bool odometry_until_localized_;                  // trackerd.map_pose_until_localized, read once
   core::Intrinsics camera_;                              // of the frames tracked
   std::unique_ptr<odometry::KeyframeOdometry> tracker_;  // sized by the camera
   Outbox* outbox_ = nullptr;                             // shared_.out's, once made

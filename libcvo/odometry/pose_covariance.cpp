@@ -9,6 +9,18 @@ namespace {
 
 core::Matrix6d symmetric(const core::Matrix6d& m) { return 0.5 * (m + m.transpose()); }
 
+// What frame n publishes from T_m^n and its left covariances (relative pose's, fused edge's), and
+// the chain advanced to it.
+PoseCovariances publish(PoseCovarianceChain& chain, const core::SE3& T_mn, const core::Matrix6d& relative,
+                        const core::Matrix6d& fused) {
+  PoseCovariances out;
+  out.relative = left_to_right(T_mn, relative);
+  out.odometry = left_to_right(T_mn, chain.keyframe_odometry + fused);
+  chain.previous_fused = symmetric(fused);
+  chain.previous_odometry = out.odometry;
+  return out;
+}
+
 }  // namespace
 
 core::Matrix6d left_to_right(const core::SE3& T, const core::Matrix6d& left) {
@@ -32,23 +44,13 @@ PoseCovariances track_against_keyframe(PoseCovarianceChain& chain, const core::S
   const core::Matrix6d fused =
       K_kf * keyframe_covariance * K_kf.transpose() + K_c * chain.previous_fused * K_c.transpose() + chain_part;
   const core::Matrix6d innovation = K_kf * (keyframe_covariance + chain.previous_fused) * K_kf.transpose() + chain_part;
-  PoseCovariances out;
-  out.relative = left_to_right(T_mn, innovation);
-  out.odometry = left_to_right(T_mn, chain.keyframe_odometry + fused);
-  chain.previous_fused = symmetric(fused);
-  chain.previous_odometry = out.odometry;
-  return out;
+  return publish(chain, T_mn, innovation, fused);
 }
 
 PoseCovariances track_from_new_keyframe(PoseCovarianceChain& chain, const core::SE3& T_f,
                                         const core::Matrix6d& frame_covariance) {
   chain.keyframe_odometry = chain.previous_odometry;
-  PoseCovariances out;
-  out.relative = left_to_right(T_f, frame_covariance);
-  out.odometry = left_to_right(T_f, chain.keyframe_odometry + frame_covariance);
-  chain.previous_fused = symmetric(frame_covariance);
-  chain.previous_odometry = out.odometry;
-  return out;
+  return publish(chain, T_f, frame_covariance, frame_covariance);
 }
 
 PoseCovariances track_unmeasured(PoseCovarianceChain& chain, bool first, bool starts_keyframe) {
