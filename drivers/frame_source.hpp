@@ -19,6 +19,10 @@
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/io/input_error.hpp"
 
+namespace cvo::auth {
+class KeyRing;  // libcvo/auth/key.hpp
+}
+
 namespace cvo::drivers {
 
 enum class ReadStatus {
@@ -47,6 +51,11 @@ struct SourceOptions {
   // (depth_registration.hpp) before the frame leaves the driver. nullopt: depth is registered.
   std::optional<core::DepthSensor> depth_sensor;
   int width = 640, height = 480, fps = 30;  // requested mode of devices (openni2, v4l2)
+  // lcm: the deployment's keys (auth.key_file, libcvo/auth): every message is verified on its raw
+  // bytes before it is decoded (a refusal is kBadInput kAuth or kReplay; a file:// log is checked
+  // for authenticity only, it is a recording). null: an open bus.
+  std::shared_ptr<const auth::KeyRing> bus_keys;
+  std::int64_t bus_max_age_us = 30'000'000;  // auth.max_age_s
 };
 
 /// The spec did not name a known source, or the source could not be opened (missing folder,

@@ -10,6 +10,7 @@
 
 #include "drivers/frame_gaps.hpp"
 #include "drivers/read_result.hpp"
+#include "libcvo/auth/authenticator.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
@@ -26,7 +27,11 @@ constexpr int kQueueCapacity = 64;
 class LcmSource final : public FrameSource {
  public:
   LcmSource(std::string url, const SourceOptions& options)
-      : url_(std::move(url)), channel_(options.lcm_channel), is_log_(url_.starts_with("file://")), lcm_(url_) {
+      : url_(std::move(url)),
+        channel_(options.lcm_channel),
+        is_log_(url_.starts_with("file://")),
+        lcm_(url_),
+        verifier_(options.bus_keys, options.bus_max_age_us, !is_log_) {
     if (!lcm_.good())
       throw SourceError("lcm:" + url_,
                         "LCM cannot open this provider (a bad URL, or a log file that is missing or empty)");
@@ -68,7 +73,7 @@ class LcmSource final : public FrameSource {
     }
   }
 
-  void on_message(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
+  void on_message(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
     if (result_ || target_ == nullptr) {  // cannot happen (one event per handle), but never silently
       ++overflow_;
       return;
@@ -77,6 +82,12 @@ class LcmSource final : public FrameSource {
       gaps_.unreadable();
       result_ =
           bad_input(core::BadKind::kBody, "CVO_RGBD: a message of " + std::to_string(buffer->data_size) + " bytes");
+      return;
+    }
+    if (const auto v = verifier_.verify(channel, buffer->data, buffer->data_size); v.verdict != auth::Verdict::kOk) {
+      gaps_.unreadable();  // never decoded
+      result_ = bad_input(v.verdict == auth::Verdict::kReplay ? core::BadKind::kReplay : core::BadKind::kAuth,
+                          channel + ": " + v.why);
       return;
     }
     std::string error;
@@ -103,6 +114,7 @@ class LcmSource final : public FrameSource {
   const std::string channel_;
   const bool is_log_;
   ::lcm::LCM lcm_;
+  auth::Verifier verifier_;            // before any decoding (an open bus: accepts all)
   core::RgbdFrame* target_ = nullptr;  // the frame of the read() in progress
   std::optional<ReadResult> result_;   // what the handler made of the message it was given
   FrameGaps gaps_;

@@ -5,7 +5,8 @@
 // rate). The channel is matched as LCM does, as a regular expression.
 //
 // Each message on the channel is one read() result: kFrame, or kBadInput with the check that
-// refused it (lcm::decode: too short, fingerprint, body, version; lcm::from_message: content).
+// refused it (with options.bus_keys, libcvo/auth first: auth, replay; then lcm::decode: too short,
+// fingerprint, body, version; lcm::from_message: content).
 // Events on other channels are skipped. At the end of a file:// log, kEndOfStream; when a live
 // provider fails, kDisconnected. Frames that never reached us (LCM's receive queue was full, the
 // network lost them) show as gaps in the sender's frame_index and are counted in lost_frames().

@@ -23,6 +23,7 @@
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "daemon/common/status.hpp"
+#include "libcvo/auth/lcm_publish.hpp"
 #include "daemon/common/supervise.hpp"
 #include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
@@ -207,6 +208,7 @@ Backendd::~Backendd() = default;
 int Backendd::run() {
   const auto recovered = recovered_.size();
   let_in_recovered(std::exchange(recovered_, {}));
+  notes_.note(bus_.describe());
   notes_.note((localization() ? "localization in the map of " : "store ") + config_.backendd.store + " (" +
               std::to_string(recovered) + " records " + (localization() ? "read" : "recovered") + "), LCM " +
               config_.backendd.lcm_url);
@@ -251,21 +253,26 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
 void Backendd::receive_loop() {
   name_this_thread("cvo-receive");
   ::lcm::LCM lcm(config_.backendd.lcm_url);
+  auth::Verifier verifier = bus_.verifier(config_.backendd.lcm_url);  // every buffer, before decoding
   struct Handler {
     Backendd* self;
+    auth::Verifier* verifier;
     RecordKind kind;
-    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
-      self->receive(kind, static_cast<const std::uint8_t*>(buffer->data), buffer->data_size);
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
+      if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
+        self->receive(kind, static_cast<const std::uint8_t*>(buffer->data), buffer->data_size);
     }
-  } keyframes{this, RecordKind::kKeyframe}, local_graphs{this, RecordKind::kLocalGraph};
+  } keyframes{this, &verifier, RecordKind::kKeyframe}, local_graphs{this, &verifier, RecordKind::kLocalGraph};
   lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
   lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &local_graphs);
   struct PoseHandler {
     Backendd* self;
-    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& /*channel*/) {
-      self->saw_pose(buffer->data, buffer->data_size);
+    auth::Verifier* verifier;
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
+      if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
+        self->saw_pose(buffer->data, buffer->data_size);
     }
-  } poses{this};
+  } poses{this, &verifier};
   lcm.subscribe("CVO_POSE", &PoseHandler::handle, &poses);
   const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
@@ -294,6 +301,15 @@ void Backendd::receive_loop() {
   receiver_done_ = true;
 }
 
+bool Backendd::authentic(auth::Verifier& verifier, const std::string& channel, const void* data, std::size_t size) {
+  const auto v = verifier.verify(channel, data, size);
+  if (v.verdict == auth::Verdict::kOk) return true;
+  const auto why = static_cast<std::size_t>(bad_kind(v.verdict));
+  ++bad_messages_[why];
+  notes_.note_limited("refused " + std::to_string(why), "skipped " + channel + ": " + v.why + " (never decoded)");
+  return false;
+}
+
 void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t size) {
   const std::string channel = kind == RecordKind::kKeyframe ? "CVO_KEYFRAME" : "CVO_LOCAL_GRAPH";
   const auto refuse = [&](std::size_t why, const std::string& detail) {
@@ -306,7 +322,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
     const auto message = identify(kind, data, size, &error, &bad);
     if (!message) return refuse(bad, "skipped " + channel + ": " + error);
     const MessageKey key = message->key;
-    const auto crc = crc32_of(data, size);
+    const auto crc = content_crc(data, size);  // a re-send, signed afresh, is a repeat
     switch (door_.check(key, crc)) {
       case Admission::kRepeat:
         return notes_.note_limited("repeat", describe(key) + " received again: stored already, not used twice");
@@ -396,7 +412,7 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
     m.session = request.session;
     m.ids = request.ids;
     m.num_ids = static_cast<std::int32_t>(m.ids.size());
-    lcm.publish("CVO_KEYFRAME_REQUEST", &m);
+    auth::publish(lcm, bus_.signer(), "CVO_KEYFRAME_REQUEST", m);
     std::string ids;
     for (const auto id : request.ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);
     notes_.note_limited("keyframe request", "asking session " + core::session_name(request.session) +
@@ -563,7 +579,7 @@ void Backendd::publish_map(const std::vector<std::int64_t>& joined, bool after_l
   Work& w = *work_;
   const slam::Map map = w.mapper.map();
   const auto message = lcm::to_message(map, core::wall_utime(), w.epoch);
-  w.lcm.publish("CVO_MAP", &message);
+  auth::publish(w.lcm, bus_.signer(), "CVO_MAP", message);
   w.summary = summarise(map);
   for (const auto session : joined) {
     const auto arrived = w.first_arrival.find(session);
@@ -594,7 +610,7 @@ void Backendd::publish_grid(bool after_loop) {
   const auto grid = w.mapping.grid();
   if (!grid) return;
   const auto message = lcm::to_message(*grid, core::wall_utime(), w.epoch);
-  w.lcm.publish("CVO_GRID", &message);
+  auth::publish(w.lcm, bus_.signer(), "CVO_GRID", message);
   const bool first = w.grid.published == 0;
   w.grid.last = Clock::now();
   w.grid.revision = message.revision;
@@ -631,8 +647,10 @@ void Backendd::publish_status(std::int8_t state) {
   s.keyframes_requested = keyframes_requested_;
   s.keyframes_recovered = keyframes_recovered_;
   s.keyframes_lost = keyframes_lost_;
+  s.bus = bus_.status_bus();
+  s.sender = bus_.sender();
   const cvo_lcm::status_t message = status_message(std::move(s), notes_);
-  w.lcm.publish("CVO_STATUS", &message);
+  auth::publish(w.lcm, bus_.signer(), "CVO_STATUS", message);
   const std::string summary = text(w.summary) + "; " + text(w.grid, w.mapping.statistics());
   systemd_.status(store.degraded() ? "degraded: " + describe(store) + "; " + summary : summary);
   w.processed_at_last_status = w.processed;

@@ -45,6 +45,7 @@
 #include "daemon/backendd/message_door.hpp"
 #include "daemon/backendd/replay.hpp"
 #include "daemon/backendd/work_queue.hpp"
+#include "daemon/common/bus_auth.hpp"
 #include "daemon/common/heartbeat.hpp"
 #include "daemon/common/notes.hpp"
 #include "daemon/common/systemd_notify.hpp"
@@ -90,6 +91,8 @@ class Backendd {
   void let_in_recovered(std::vector<StoredRecord> recovered);
   void receive_loop();
   void receive(RecordKind kind, const std::uint8_t* data, std::size_t size);
+  // Whether a received buffer is authentic and new (cvo-receive); counted by kind when not.
+  bool authentic(auth::Verifier& verifier, const std::string& channel, const void* data, std::size_t size);
   void saw_pose(const void* data, std::size_t size);
   void ask_for_missing(::lcm::LCM& lcm, bool stopping);
   static GapPolicy gap_policy(const config::Config& config);
@@ -112,6 +115,7 @@ class Backendd {
 
   config::Config config_;
   Notes notes_{"cvo-backendd"};  // the journal and CVO_STATUS's detail, at one log-rate policy
+  BusAuth bus_{config_.auth, "cvo-backendd"};  // the key ring (auth.key_file) and signer, all threads
   SystemdNotifier systemd_;
   std::unique_ptr<KeyframeStore> store_;  // none in localization mode: the store is only read
   std::vector<StoredRecord> recovered_;

@@ -1,7 +1,8 @@
 #pragma once
 // What cvo-receive lets into the keyframe store. A keyframe is named by (session, id), a local
 // graph by (session, its keyframe's id); each name is stored once. The same name again with the
-// same bytes (the CRC-32 of the LCM payload) is a repeat, a re-send: not stored or used again.
+// same content (the CRC-32 of the LCM payload less its auth_t trailer, content_crc: a re-send is
+// signed afresh) is a repeat, a re-send: not stored or used again.
 // With other bytes it contradicts what was accepted and is refused (status_t::BAD_CONFLICT):
 // stored, it would be replayed into the back end on every restart.
 #include <compare>
@@ -60,6 +61,10 @@ std::optional<Identified> identify(RecordKind kind, const std::uint8_t* data, st
 /// nullopt with *error and *bad, the status_t::BAD_* index (BAD_CONTENT, BAD_NOT_FINITE,
 /// BAD_INFORMATION, BAD_IMAGE_*).
 std::optional<RecordValue> usable(const Identified& message, std::string* error, std::size_t* bad);
+
+/// CRC-32 of a message's bytes before its auth_t trailer (lcm::kAuthTrailerBytes): what it says,
+/// not who signed it when.
+std::uint32_t content_crc(const std::uint8_t* data, std::size_t size);
 
 enum class Admission { kNew, kRepeat, kConflict };
 

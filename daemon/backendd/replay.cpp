@@ -20,7 +20,7 @@ std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, cons
     *why = "stored record skipped: " + error;
     return std::nullopt;
   }
-  const auto crc = crc32_of(data, size);
+  const auto crc = content_crc(data, size);
   if (door.check(message->key, crc) != Admission::kNew) {
     *why = "stored record skipped: " + describe(message->key) + " is in the store twice";
     return std::nullopt;

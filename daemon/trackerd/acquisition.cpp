@@ -17,9 +17,11 @@ bool is_device(const std::string& spec) { return spec.starts_with("openni2:") ||
 
 // Intrinsics for the sources that carry none (v4l2): the configured camera, and its depth sensor
 // when depth is separate. The others bring their own (TUM folder, CVO_RGBD message, OpenNI2 stream).
-drivers::SourceOptions source_options(const config::Config& config) {
+drivers::SourceOptions source_options(const config::Config& config, const BusAuth& bus) {
   drivers::SourceOptions options;
   options.realtime = config.trackerd.paced;
+  options.bus_keys = bus.keys();  // an lcm: source verifies every CVO_RGBD
+  options.bus_max_age_us = bus.max_age_us();
   if (config.trackerd.source.starts_with("v4l2:")) {
     const io::CameraFile camera = io::load_camera_file(config.camera);
     options.intrinsics = camera.colour;
@@ -30,8 +32,8 @@ drivers::SourceOptions source_options(const config::Config& config) {
 
 }  // namespace
 
-SourceFactory configured_source(const config::Config& config) {
-  return [spec = config.trackerd.source, options = source_options(config)]() -> std::unique_ptr<drivers::FrameSource> {
+SourceFactory configured_source(const config::Config& config, const BusAuth& bus) {
+  return [spec = config.trackerd.source, options = source_options(config, bus)]() -> std::unique_ptr<drivers::FrameSource> {
     if (is_device(spec)) return std::make_unique<drivers::ReconnectingSource>(spec, options);
     return drivers::open_source(spec, options);
   };

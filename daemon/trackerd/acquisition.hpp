@@ -15,7 +15,7 @@ using SourceFactory = std::function<std::unique_ptr<drivers::FrameSource>()>;
 
 /// The source trackerd.source names (devices re-opened with back-off). Throws io::InputError for a
 /// camera file that cannot be used, at start-up rather than in a thread.
-SourceFactory configured_source(const config::Config& config);
+SourceFactory configured_source(const config::Config& config, const BusAuth& bus);
 
 class Acquisition {
  public:

@@ -16,6 +16,7 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/status.hpp"
+#include "libcvo/auth/lcm_publish.hpp"
 #include "libcvo/core/session.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -62,6 +63,7 @@ std::string id_list(const std::vector<std::int64_t>& ids) {
 Publishing::Publishing(Shared& shared)
     : shared_(shared),
       lcm_(shared.config.trackerd.lcm_url),
+      verifier_(shared.bus.verifier(shared.config.trackerd.lcm_url)),
       receives_(!shared.config.trackerd.lcm_url.starts_with("file://")),
       encoding_{*lcm::parse_colour_encoding(shared.config.trackerd.keyframe_colour_encoding), lcm::DepthEncoding::kPng},
       session_(shared.session.load()) {}
@@ -78,11 +80,12 @@ void Publishing::run() {
   name_this_thread("cvo-publish");
   struct Handler {
     Publishing* self;
-    void map(const ::lcm::ReceiveBuffer* b, const std::string&) {
-      self->apply_map(b->data, static_cast<int>(b->data_size));
+    void map(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
+      if (self->authentic(channel, b->data, b->data_size)) self->apply_map(b->data, static_cast<int>(b->data_size));
     }
-    void request(const ::lcm::ReceiveBuffer* b, const std::string&) {
-      self->answer_request(b->data, static_cast<int>(b->data_size));
+    void request(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
+      if (self->authentic(channel, b->data, b->data_size))
+        self->answer_request(b->data, static_cast<int>(b->data_size));
     }
   } handler{this};
   if (receives_) {
@@ -117,6 +120,13 @@ void Publishing::receive() {
   while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) lcm_.handle();
 }
 
+bool Publishing::authentic(const std::string& channel, const void* data, std::size_t size) {
+  const auto v = verifier_.verify(channel, data, size);
+  if (v.verdict == auth::Verdict::kOk) return true;
+  shared_.count_bad(bad_kind(v.verdict), "skipped " + channel, std::string(v.why) + " (never decoded)");
+  return false;
+}
+
 void Publishing::publish(const Event& event) {
   Outbox& outbox = *shared_.out.outbox;
   if (event.session != session_) {  // noted here: the tracking thread does not allocate
@@ -128,8 +138,8 @@ void Publishing::publish(const Event& event) {
   if (event.has_pose && event.pose.keyframe_id >= 0) history().made(event.session, event.pose.keyframe_id);
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = outbox.graph(event.graph_slot);
-    const auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime()));
-    lcm_.publish("CVO_LOCAL_GRAPH", bytes.data(), static_cast<unsigned>(bytes.size()));
+    auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime()));
+    auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_LOCAL_GRAPH", bytes);
     history().keep_graph(event.session, g.keyframe_id, bytes);
   }
   if (event.keyframe_slot >= 0)
@@ -139,7 +149,7 @@ void Publishing::publish(const Event& event) {
   if (event.has_pose) {
     const double latency_ms = core::ms_since(event.pose.received);
     const cvo_lcm::pose_t m = lcm::pose_message(event.session, event.pose, latency_ms);
-    lcm_.publish("CVO_POSE", &m);
+    auth::publish(lcm_, shared_.bus.signer(), "CVO_POSE", m);
     latency_.add(m.latency_ms);
     if (m.latency_ms > shared_.config.trackerd.deadline_ms) ++deadline_misses_;
     if (published_++ == 0) shared_.notes.note("first pose published");
@@ -163,8 +173,8 @@ void Publishing::publish_keyframe(const Event& event) {
     shared_.notes.note("keyframe " + std::to_string(k.id) + " not published (lost): " + error);
     return;
   }
-  const auto bytes = lcm::encode(*message);
-  lcm_.publish("CVO_KEYFRAME", bytes.data(), static_cast<unsigned>(bytes.size()));
+  auto bytes = lcm::encode(*message);
+  auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_KEYFRAME", bytes);
   if (!history().keep_keyframe(event.session, k.id, bytes) && history().capacity() > 0)
     shared_.notes.note("keyframe " + std::to_string(k.id) + " (" + std::to_string(bytes.size()) +
                        " bytes) is larger than a history slot: it cannot be sent again");
@@ -189,7 +199,8 @@ void Publishing::answer_request(const void* data, int size) {
     return;
   }
   const auto send = [&](const char* channel, std::span<const std::uint8_t> bytes) {
-    lcm_.publish(channel, bytes.data(), static_cast<unsigned>(bytes.size()));
+    resend_.assign(bytes.begin(), bytes.end());  // the bytes first sent, with a new counter
+    auth::publish_bytes(lcm_, shared_.bus.signer(), channel, resend_);
   };
   const auto answer = history().answer(request->session, request->ids, send);
   if (!answer.ours) return;
@@ -232,12 +243,14 @@ void Publishing::publish_status(std::int8_t state_override) {
     outbox_lost_noted_ = outbox_lost;
   }
   s.keyframes_requested = shared_.out.ready ? history().resent() : 0;
+  s.bus = shared_.bus.status_bus();
+  s.sender = shared_.bus.sender();
   s.keyframes_lost = outbox_lost + unsent_ + (shared_.out.ready ? history().lost() : 0);
   s.state = state_override >= 0 ? state_override
                                 : lcm::tracker_state({published_, c.source_connected.load(), now - last_frame_ > 1s,
                                                       c.failed_frames > failed_at_last_status_});
   const cvo_lcm::status_t message = daemon::status_message(std::move(s), shared_.notes);
-  lcm_.publish("CVO_STATUS", &message);
+  auth::publish(lcm_, shared_.bus.signer(), "CVO_STATUS", message);
   shared_.systemd.status(std::to_string(published_) + " frames, " + std::to_string(std::lround(s.rate_hz)) +
                          " Hz, latency p99 " + std::to_string(std::lround(s.latency_p99_ms)) + " ms, " +
                          std::to_string(s.dropped_frames) + " dropped");

@@ -3,7 +3,9 @@
 // here, and kept as sent in the KeyframeHistory, so the back end's CVO_KEYFRAME_REQUEST is answered
 // with the very bytes it missed), CVO_STATUS once a period and systemd's STATUS. In from LCM:
 // CVO_MAP (what lcm::decide_map_correction trusts sets the running session's MapCorrection) and
-// CVO_KEYFRAME_REQUEST. Runs until the tracker is done and the outbox is empty.
+// CVO_KEYFRAME_REQUEST. Runs until the tracker is done and the outbox is empty. With a key
+// (auth.key_file) every message out is signed (a re-sent keyframe afresh: its counter is new), and
+// every one in verified on its raw bytes first; a refusal counts BAD_AUTH or BAD_REPLAY.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -11,6 +13,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/latency_window.hpp"
+#include "libcvo/auth/authenticator.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "daemon/trackerd/shared.hpp"
 #include "libcvo/lcm/map_decision.hpp"
@@ -25,6 +28,8 @@ class Publishing {
 
  private:
   void receive();
+  /// Whether a received buffer is authentic and new (counted by kind when not).
+  bool authentic(const std::string& channel, const void* data, std::size_t size);
   void publish(const Event& event);
   void publish_keyframe(const Event& event);
   void answer_request(const void* data, int size);
@@ -34,6 +39,8 @@ class Publishing {
 
   Shared& shared_;
   ::lcm::LCM lcm_;
+  auth::Verifier verifier_;                   // CVO_MAP and CVO_KEYFRAME_REQUEST, before decoding
+  std::vector<std::uint8_t> resend_;          // a kept message, signed afresh for its re-send
   const bool receives_;  // a file:// output is a log being written: nothing comes back on it
   const lcm::RgbdEncoding encoding_;
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready

@@ -27,6 +27,7 @@ std::int64_t new_session_id(std::uint64_t previous) {
 Shared::Shared(config::Config c)
     : config(std::move(c)),
       parameters(config::keyframe_odometry_parameters(config)),
+      bus(config.auth, "cvo-trackerd"),
       session(new_session_id()),
       ring(config.trackerd.ring_slots,
            config.trackerd.deterministic ? FrameRing::Overflow::kBlock : FrameRing::Overflow::kDropOldest) {}

@@ -4,6 +4,7 @@
 // (publishing.hpp); Trackerd (trackerd.hpp) owns this and supervises them.
 //
 //   config, parameters, ring  made before the threads start; the ring is thread-safe
+//   bus                       the key ring and signer (thread-safe), read from auth.key_file at start
 //   counters                  each counter written by one thread, read by the publisher
 //   session                   cvo-track (a new session when the camera comes back or changes)
 //   correction                cvo-publish (each CVO_MAP), read by cvo-track for the map pose
@@ -17,6 +18,7 @@
 #include <string>
 
 #include "cvo_lcm/status_t.hpp"
+#include "daemon/common/bus_auth.hpp"
 #include "daemon/common/heartbeat.hpp"
 #include "daemon/common/notes.hpp"
 #include "daemon/common/systemd_notify.hpp"
@@ -60,6 +62,7 @@ struct Shared {
 
   const config::Config config;
   const odometry::KeyframeOdometryParameters parameters;  // the tracker's (config::module_parameters)
+  BusAuth bus;                                            // signs every publish; verifiers per receiver
   Notes notes{"cvo-trackerd"};
   const SystemdNotifier systemd;
   Counters counters;

@@ -31,8 +31,8 @@ Trackerd::Trackerd(config::Config config, SourceFactory open_source) : open_sour
                          "'" + t.keyframe_colour_encoding + "': expected raw, jpeg or png");
   ::lcm::LCM probe(t.lcm_url);  // the publisher opens its own; a bad URL should fail at start-up
   if (!probe.good()) throw io::InputError("trackerd.lcm_url", "cannot open LCM provider '" + t.lcm_url + "'");
-  if (!open_source_) open_source_ = configured_source(config);
-  shared_ = std::make_unique<Shared>(std::move(config));
+  shared_ = std::make_unique<Shared>(std::move(config));  // reads the key file
+  if (!open_source_) open_source_ = configured_source(shared_->config, shared_->bus);
 }
 
 Trackerd::~Trackerd() = default;
@@ -41,6 +41,7 @@ int Trackerd::run() {
   Shared& s = *shared_;
   const auto& t = s.config.trackerd;
   s.notes.note("session " + core::session_name(s.session));
+  s.notes.note(s.bus.describe());
   s.notes.note("source " + t.source + ", publishing on " + t.lcm_url + (t.deterministic ? " (deterministic)" : ""));
   if (t.lock_memory)
     if (const auto why = lock_all_memory(); !why.empty())

@@ -286,6 +286,12 @@ const std::vector<Field>& table() {
       row("backendd.mode", &Config::backendd, &BackenddParameters::mode, kAny,
           "mapping (every session grows the stored map) or localization (the stored map is read only; sessions "
           "are localized in it, never stored)"),
+      row("auth.key_file", &Config::auth, &AuthParameters::key_file, kAny,
+          "the deployment key file (cvo-keygen, mode 0600; under systemd $CREDENTIALS_DIRECTORY/cvo-slam.key): every "
+          "message sent is signed and every one received verified; none: an open bus"),
+      row("auth.max_age_s", &Config::auth, &AuthParameters::max_age_s, kPositive,
+          "a message whose counter (its sender's clock) is older than this by the receiver's clock is refused as "
+          "a replay (s); clocks must agree within it"),
       Field{"camera", Get<std::string>([](Config& c) -> std::string& { return c.camera; }), kAny,
             "tum_fr1, tum_fr2, tum_fr3, synthetic, or a path to an intrinsics file"},
   };

@@ -74,6 +74,17 @@ struct BackenddParameters {
   std::string mode = "mapping";
 };
 
+/// Authenticated messages on the bus (libcvo/auth): both daemons and every program that puts
+/// messages on the bus read the same key file.
+struct AuthParameters {
+  // The deployment key file (cvo-keygen; mode 0600), e.g. $CREDENTIALS_DIRECTORY/cvo-slam.key under
+  // systemd; none: an open bus, nothing signed or verified (said at start and in CVO_STATUS).
+  std::string key_file = "none";
+  // A message whose counter (its sender's clock, µs) is older than this by the receiver's clock is
+  // refused as a replay: a recording played back, or a sender whose clock is this far behind.
+  double max_age_s = 30.0;
+};
+
 struct Config {
   core::SelectionParameters selection;
   core::CvoParameters cvo;
@@ -88,6 +99,7 @@ struct Config {
   core::LocalizationParameters localization;
   TrackerdParameters trackerd;
   BackenddParameters backendd;
+  AuthParameters auth;
   std::string camera = "tum_fr1";  // a preset name or a path to an intrinsics file (io::load_camera)
 };
 

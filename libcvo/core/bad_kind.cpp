@@ -18,6 +18,8 @@ const char* to_string(BadKind kind) {
     case BadKind::kStale: return "stale";
     case BadKind::kForeign: return "foreign";
     case BadKind::kImplausible: return "implausible";
+    case BadKind::kAuth: return "auth";
+    case BadKind::kReplay: return "replay";
   }
   return "?";
 }

@@ -24,8 +24,10 @@ enum class BadKind : std::int32_t {
   kStale = 11,           // a CVO_MAP not newer than the last one applied
   kForeign = 12,         // a CVO_MAP without an entry for this tracker's session
   kImplausible = 13,     // a CVO_MAP correction that jumps further than allowed
+  kAuth = 14,            // no valid authenticator under a key the receiver holds (libcvo/auth)
+  kReplay = 15,          // authentic, but its counter was seen already or is too old (libcvo/auth)
 };
-inline constexpr int kNumBadKinds = 14;
+inline constexpr int kNumBadKinds = 16;
 
 /// "too short", "fingerprint", ..., as cvo-log and the daemons' notes name them.
 const char* to_string(BadKind kind);

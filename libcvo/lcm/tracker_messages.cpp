@@ -76,6 +76,8 @@ cvo_lcm::status_t status_message(const ProcessStatus& s) {
   m.keyframes_requested = s.keyframes_requested;
   m.keyframes_recovered = s.keyframes_recovered;
   m.keyframes_lost = s.keyframes_lost;
+  m.bus = s.bus;
+  m.sender = s.sender;
   m.process = s.process;
   m.detail = s.detail;
   return m;

@@ -70,6 +70,8 @@ struct ProcessStatus {
   std::array<std::int64_t, core::kNumBadKinds> bad_messages{};  // by core::BadKind
   std::int64_t unsaved_records = 0, queue_drops = 0;
   std::int64_t keyframes_requested = 0, keyframes_recovered = 0, keyframes_lost = 0;
+  std::int8_t bus = cvo_lcm::status_t::BUS_OPEN;  // BUS_AUTHENTICATED when it signs and verifies
+  std::int64_t sender = 0;                        // its auth_t sender id
   std::string detail;
 };
 

@@ -9,6 +9,10 @@
 //
 // Offsets are in bytes from the start of the body, i.e. after the 8-byte fingerprint. The tests
 // check this table against lcm-gen's own encodings.
+//
+// Every type sent on a channel ends with auth_t (proto/auth_t.lcm), fixed size, after all
+// variable-length data: its kAuthTrailerBytes are the last bytes of every encoded message
+// (libcvo/auth signs and verifies them there, on the raw buffer).
 #include <cstdint>
 #include <span>
 #include <string>
@@ -33,6 +37,9 @@ struct WireLayout {
   int num_strings = 0;
 };
 inline constexpr int kStringsAfterArrays = -2;
+
+/// auth_t on the wire: sender, counter, key id (int64 each), authenticator (32 bytes).
+inline constexpr int kAuthTrailerBytes = 3 * 8 + 32;
 
 /// The layout of the type named by lcm-gen's getTypeName() ("rgbd_frame_t", ...); an empty layout
 /// for types with neither arrays nor strings.

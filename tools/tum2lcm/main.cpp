@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <system_error>
 
@@ -22,7 +23,7 @@ using namespace cvo;
 
 constexpr const char* kSynopsis =
     "tum2lcm TUM_DIR OUT.lcmlog [--colour png|jpeg|raw] [--depth png|raw] [--channel NAME]\n"
-    "               [--max-frames N] [--jpeg-quality Q]\n"
+    "               [--max-frames N] [--jpeg-quality Q] [--key-file FILE]\n"
     "       tum2lcm --to-tum IN.lcmlog OUT_DIR [--channel NAME]";
 
 constexpr const char* kDescription =
@@ -36,6 +37,7 @@ struct Arguments {
   bool to_tum = false;
   fs::path input, output;
   std::string colour = "png", depth = "png", channel = "CVO_RGBD";
+  fs::path keys;  // --key-file
   int jpeg_quality = 90;
   std::size_t max_frames = 0;  // 0 = all
 };
@@ -67,6 +69,10 @@ void add_options(CLI::App& app, Arguments& args) {
   app.add_option("--channel", args.channel, "LCM channel")->check([](const std::string& name) {
     return name.empty() ? std::string("needs a non-empty name") : std::string();
   });
+  app.add_option("--key-file", args.keys,
+                 "sign every event with this deployment key file (auth.key_file; cvo-keygen), as a driver on an "
+                 "authenticated bus does")
+      ->default_str("none (unsigned)");
   app.add_option("--max-frames", args.max_frames, "only the first N frames")
       ->transform(kDecimal)
       ->check(CLI::Range(1, 1'000'000'000))
@@ -88,6 +94,7 @@ int run(const Arguments& args) {
   options.encoding.jpeg_quality = args.jpeg_quality;
   options.channel = args.channel;
   options.max_frames = args.max_frames;
+  if (!args.keys.empty()) options.keys = std::make_shared<const auth::KeyRing>(auth::read_key_file(args.keys));
   const auto s = tools::tum_to_log(args.input, args.output, options);
   std::cout << "tum2lcm: wrote " << s.frames << " frames to " << args.output.string() << " on " << options.channel
             << ", colour " << lcm::to_string(options.encoding.colour) << ", depth "

@@ -2,6 +2,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "libcvo/auth/authenticator.hpp"
+#include "libcvo/auth/sender.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/decode.hpp"
 
@@ -13,6 +15,7 @@ LogSummary tum_to_log(const std::filesystem::path& tum_dir, const std::filesyste
   tum_options.max_frames = options.max_frames;
   auto sequence = io::TumSequence::open(tum_dir, tum_options);
 
+  auth::Signer signer(options.keys, auth::this_process_sender_id("tum2lcm"));
   LogSummary summary;
   {
     ::lcm::LogFile out(log.string(), "w");
@@ -22,6 +25,7 @@ LogSummary tum_to_log(const std::filesystem::path& tum_dir, const std::filesyste
       const auto message = lcm::to_message(*frame, options.encoding, &error);
       if (!message) throw io::InputError(sequence.files()[frame->index].rgb, error);
       auto bytes = lcm::encode(*message);
+      signer.sign(options.channel, bytes);
       ::lcm::LogEvent event{};
       event.eventnum = static_cast<std::int64_t>(summary.frames);  // LogFile numbers events itself
       event.timestamp = message->utime;

@@ -5,8 +5,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 
+#include "libcvo/auth/key.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
 namespace cvo::tools {
@@ -15,6 +17,9 @@ struct TumToLogOptions {
   lcm::RgbdEncoding encoding;
   std::string channel = "CVO_RGBD";
   std::size_t max_frames = 0;  // 0 = all
+  // The deployment's keys (--key-file): every event signed as a camera driver on the bus signs
+  // (libcvo/auth, sender "tum2lcm"); null: unsigned, for an open bus.
+  std::shared_ptr<const auth::KeyRing> keys;
 };
 
 struct LogSummary {
