@@ -114,7 +114,7 @@ class Backendd {
   [[nodiscard]] bool localization() const { return config_.backendd.mode == "localization"; }
 
   config::Config config_;
-  Notes notes_{"cvo-backendd"};  // the journal and CVO_STATUS's detail, at one log-rate policy
+  Notes notes_{"cvo-backendd"};                // the journal and CVO_STATUS's detail, at one log-rate policy
   BusAuth bus_{config_.auth, "cvo-backendd"};  // the key ring (auth.key_file) and signer, all threads
   SystemdNotifier systemd_;
   std::unique_ptr<KeyframeStore> store_;  // none in localization mode: the store is only read

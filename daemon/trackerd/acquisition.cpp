@@ -33,7 +33,8 @@ drivers::SourceOptions source_options(const config::Config& config, const BusAut
 }  // namespace
 
 SourceFactory configured_source(const config::Config& config, const BusAuth& bus) {
-  return [spec = config.trackerd.source, options = source_options(config, bus)]() -> std::unique_ptr<drivers::FrameSource> {
+  return [spec = config.trackerd.source,
+          options = source_options(config, bus)]() -> std::unique_ptr<drivers::FrameSource> {
     if (is_device(spec)) return std::make_unique<drivers::ReconnectingSource>(spec, options);
     return drivers::open_source(spec, options);
   };

@@ -13,9 +13,9 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/latency_window.hpp"
-#include "libcvo/auth/authenticator.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "daemon/trackerd/shared.hpp"
+#include "libcvo/auth/authenticator.hpp"
 #include "libcvo/lcm/map_decision.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
@@ -39,9 +39,9 @@ class Publishing {
 
   Shared& shared_;
   ::lcm::LCM lcm_;
-  auth::Verifier verifier_;                   // CVO_MAP and CVO_KEYFRAME_REQUEST, before decoding
-  std::vector<std::uint8_t> resend_;          // a kept message, signed afresh for its re-send
-  const bool receives_;  // a file:// output is a log being written: nothing comes back on it
+  auth::Verifier verifier_;           // CVO_MAP and CVO_KEYFRAME_REQUEST, before decoding
+  std::vector<std::uint8_t> resend_;  // a kept message, signed afresh for its re-send
+  const bool receives_;               // a file:// output is a log being written: nothing comes back on it
   const lcm::RgbdEncoding encoding_;
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   lcm::AppliedCorrection applied_;            // the last CVO_MAP correction applied

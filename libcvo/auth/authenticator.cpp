@@ -91,7 +91,8 @@ Verification Verifier::verify(std::string_view channel, const void* data, std::s
   if (t.key_id == 0) return {Verdict::kAuth, 0, false, "not signed (a sender on an open bus, or no cvo-slam sender)"};
   const Key* key = keys_->find(t.key_id);
   if (key == nullptr)
-    return {Verdict::kAuth, 0, false, "signed with a key this receiver does not hold (another deployment's, or retired)"};
+    return {Verdict::kAuth, 0, false,
+            "signed with a key this receiver does not hold (another deployment's, or retired)"};
   std::uint8_t expected[kTagBytes];
   authenticator(*key, channel, bytes, size - kTagBytes, expected);
   if (crypto_verify_32(expected, bytes + size - kTagBytes) != 0)

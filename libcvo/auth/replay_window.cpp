@@ -43,8 +43,9 @@ void ReplayWindow::make_room(std::int64_t now_us) {
       ++it;
   }
   if (senders_.size() < max_senders_) return;
-  const auto oldest = std::min_element(senders_.begin(), senders_.end(),
-                                       [](const auto& a, const auto& b) { return a.second.heard_us < b.second.heard_us; });
+  const auto oldest = std::min_element(senders_.begin(), senders_.end(), [](const auto& a, const auto& b) {
+    return a.second.heard_us < b.second.heard_us;
+  });
   senders_.erase(oldest);
 }
 

@@ -19,10 +19,9 @@ std::string read_all(const char* file) {
 }
 
 void hash_field(crypto_generichash_state& state, std::string_view field) {
-  const unsigned char length[4] = {static_cast<unsigned char>(field.size() >> 24),
-                                   static_cast<unsigned char>(field.size() >> 16),
-                                   static_cast<unsigned char>(field.size() >> 8),
-                                   static_cast<unsigned char>(field.size())};
+  const unsigned char length[4] = {
+      static_cast<unsigned char>(field.size() >> 24), static_cast<unsigned char>(field.size() >> 16),
+      static_cast<unsigned char>(field.size() >> 8), static_cast<unsigned char>(field.size())};
   crypto_generichash_update(&state, length, sizeof length);
   crypto_generichash_update(&state, reinterpret_cast<const unsigned char*>(field.data()), field.size());
 }

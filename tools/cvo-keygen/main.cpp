@@ -78,7 +78,10 @@ int run(const Arguments& args) {
   }
   const auth::KeyRing ring = changed(auth::read_key_file(args.file), args);
   auth::replace_key_file(args.file, ring);
-  std::cout << "cvo-keygen: " << (args.add ? "added a key to " : args.rotate ? "rotated " : "retired a key of ")
+  std::cout << "cvo-keygen: "
+            << (args.add      ? "added a key to "
+                : args.rotate ? "rotated "
+                              : "retired a key of ")
             << args.file.string() << ": " << describe(ring) << "\n";
   return 0;
 }
