@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "daemon/backendd/keyframe_store.hpp"
+#include "fuzz/auth_harness.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
@@ -20,11 +21,20 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void write(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
+void write_file(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
   fs::create_directories(file.parent_path());
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
   out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (!out.flush()) throw std::runtime_error("cannot write " + file.string());
+}
+
+// An LCM seed, signed with the fuzzing key (fuzz/auth_harness.hpp) so that the verify step of every
+// harness reaches the replay window; the same bytes are a seed of the auth harness too.
+void write(const fs::path& file, std::vector<std::uint8_t> bytes) {
+  cvo::auth::Signer signer(cvo::fuzz::fuzz_keys(), 0x5eed);
+  signer.sign(cvo::fuzz::kFuzzChannel, bytes);
+  write_file(file, bytes);
+  write_file(file.parent_path().parent_path() / "auth" / (file.parent_path().filename().string() + "-" + file.filename().string()), bytes);
 }
 
 // 8x6 with a gradient, so that PNG and JPEG are real images of a few hundred bytes.
@@ -107,6 +117,8 @@ int main(int argc, char** argv) try {
   const auto store_size = fs::file_size(store_file);
   fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
   fs::resize_file(out / "keyframe_store/torn", store_size - 17);
+  const std::string key_file = "cvo-slam key file 1\nkey " + std::string(cvo::fuzz::kFuzzKeyHex) + "\n";
+  write_file(out / "auth/key-file", {key_file.begin(), key_file.end()});
   std::printf("fuzz-seeds: wrote %s\n", out.c_str());
   return 0;
 } catch (const std::exception& e) {

@@ -1,12 +1,13 @@
 #pragma once
 // The LCM message harnesses: the bytes go through lcm::decode<T> exactly as a daemon receives them,
-// then through the type's conversion. Refusals are nullopt by contract (decode.hpp), so the only
+// then through the type's conversion, after the verify step every receiver runs (auth_harness.hpp). Refusals are nullopt by contract (decode.hpp), so the only
 // checks here are the ones decoding promises beyond "no crash".
 #include <climits>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 
+#include "fuzz/auth_harness.hpp"
 #include "fuzz/harness.hpp"
 #include "libcvo/lcm/decode.hpp"
 
@@ -15,6 +16,9 @@ namespace cvo::fuzz {
 template <class T, class Convert>
 void fuzz_message(const std::uint8_t* data, std::size_t size, Convert&& convert) {
   if (size > static_cast<std::size_t>(INT_MAX)) return;  // LCM sizes are int; the transport never delivers more
+  // A receiver with a key verifies the raw bytes first (the seeds are signed with the fuzzing key);
+  // decoding is fuzzed whatever the verdict, as a receiver on an open bus decodes everything.
+  (void)verify_raw(data, size);
   std::string error;
   const auto message = lcm::decode<T>(data, static_cast<int>(size), &error);
   if (!message) return;

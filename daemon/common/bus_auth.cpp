@@ -25,7 +25,8 @@ auth::Verifier BusAuth::verifier(std::string_view url) const {
 }
 
 std::int8_t BusAuth::status_bus() const {
-  return open() ? cvo_lcm::status_t::BUS_OPEN : cvo_lcm::status_t::BUS_AUTHENTICATED;
+  if (open()) return cvo_lcm::status_t::BUS_OPEN;
+  return cvo_lcm::status_t::BUS_AUTHENTICATED;
 }
 
 std::string BusAuth::describe() const {
@@ -38,7 +39,8 @@ std::string BusAuth::describe() const {
 }
 
 int bad_kind(auth::Verdict verdict) {
-  return verdict == auth::Verdict::kReplay ? cvo_lcm::status_t::BAD_REPLAY : cvo_lcm::status_t::BAD_AUTH;
+  if (verdict == auth::Verdict::kReplay) return cvo_lcm::status_t::BAD_REPLAY;
+  return cvo_lcm::status_t::BAD_AUTH;
 }
 
 }  // namespace cvo::daemon

@@ -1,6 +1,7 @@
 #include "libcvo/auth/replay_window.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace cvo::auth {
 
@@ -8,7 +9,8 @@ ReplayWindow::ReplayWindow(std::int64_t max_age_us, std::size_t max_senders)
     : max_age_us_(max_age_us), max_senders_(std::max<std::size_t>(max_senders, 1)) {}
 
 WindowCheck ReplayWindow::accept(std::int64_t sender, std::int64_t counter, std::int64_t now_us) {
-  if (counter < now_us - max_age_us_) return {false, "older than auth.max_age_s (a recording, or a clock behind)"};
+  const bool too_old = now_us >= std::numeric_limits<std::int64_t>::min() + max_age_us_ && counter < now_us - max_age_us_;
+  if (too_old) return {false, "older than auth.max_age_s (a recording, or a clock behind)"};
   auto it = senders_.find(sender);
   if (it == senders_.end()) {
     if (senders_.size() >= max_senders_) make_room(now_us);
@@ -37,7 +39,7 @@ WindowCheck ReplayWindow::accept(std::int64_t sender, std::int64_t counter, std:
 
 void ReplayWindow::make_room(std::int64_t now_us) {
   for (auto it = senders_.begin(); it != senders_.end();) {
-    if (it->second.highest < now_us - max_age_us_)
+    if (now_us >= std::numeric_limits<std::int64_t>::min() + max_age_us_ && it->second.highest < now_us - max_age_us_)
       it = senders_.erase(it);
     else
       ++it;
