@@ -34,7 +34,9 @@ void write(const fs::path& file, std::vector<std::uint8_t> bytes) {
   cvo::auth::Signer signer(cvo::fuzz::fuzz_keys(), 0x5eed);
   signer.sign(cvo::fuzz::kFuzzChannel, bytes);
   write_file(file, bytes);
-  write_file(file.parent_path().parent_path() / "auth" / (file.parent_path().filename().string() + "-" + file.filename().string()), bytes);
+  write_file(file.parent_path().parent_path() / "auth" /
+                 (file.parent_path().filename().string() + "-" + file.filename().string()),
+             bytes);
 }
 
 // 8x6 with a gradient, so that PNG and JPEG are real images of a few hundred bytes.

@@ -1,7 +1,7 @@
 #pragma once
 // The LCM message harnesses: the bytes go through lcm::decode<T> exactly as a daemon receives them,
-// then through the type's conversion, after the verify step every receiver runs (auth_harness.hpp). Refusals are nullopt by contract (decode.hpp), so the only
-// checks here are the ones decoding promises beyond "no crash".
+// then through the type's conversion, after the verify step every receiver runs (auth_harness.hpp). Refusals are
+// nullopt by contract (decode.hpp), so the only checks here are the ones decoding promises beyond "no crash".
 #include <climits>
 #include <cstddef>
 #include <cstdint>

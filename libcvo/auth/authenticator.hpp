@@ -10,7 +10,8 @@
 // uint32). Channel, fingerprint, body, s, c and k are all covered: a message cannot be changed,
 // moved to another channel or claimed for another sender without K. Keyed BLAKE2b rather than
 // crypto_auth (HMAC-SHA-512-256): a MAC by construction (no length extension to guard against) and
-// measured faster (bench/auth_bench.cpp: about twice at 300 kB, three times at 500 bytes). The
+// measured faster (bench/auth_bench.cpp: 0.39 ms against 1.08 ms for a 300 kB keyframe, 1.5 µs against
+// 4.9 µs for an 858-byte pose). The
 // comparison is constant time (crypto_verify_32); the key is found by its id (key.hpp), so a
 // receiver holding two keys (a rotation) computes one authenticator, not two.
 //

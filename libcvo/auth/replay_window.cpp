@@ -9,7 +9,8 @@ ReplayWindow::ReplayWindow(std::int64_t max_age_us, std::size_t max_senders)
     : max_age_us_(max_age_us), max_senders_(std::max<std::size_t>(max_senders, 1)) {}
 
 WindowCheck ReplayWindow::accept(std::int64_t sender, std::int64_t counter, std::int64_t now_us) {
-  const bool too_old = now_us >= std::numeric_limits<std::int64_t>::min() + max_age_us_ && counter < now_us - max_age_us_;
+  const bool too_old =
+      now_us >= std::numeric_limits<std::int64_t>::min() + max_age_us_ && counter < now_us - max_age_us_;
   if (too_old) return {false, "older than auth.max_age_s (a recording, or a clock behind)"};
   auto it = senders_.find(sender);
   if (it == senders_.end()) {
