@@ -259,8 +259,8 @@ void Backendd::receive_loop() {
     auth::Verifier* verifier;
     RecordKind kind;
     void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
-      if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
-        self->receive(kind, static_cast<const std::uint8_t*>(buffer->data), buffer->data_size);
+      if (const auto sender = self->authentic(*verifier, channel, buffer->data, buffer->data_size))
+        self->receive(kind, static_cast<const std::uint8_t*>(buffer->data), buffer->data_size, *sender);
     }
   } keyframes{this, &verifier, RecordKind::kKeyframe}, local_graphs{this, &verifier, RecordKind::kLocalGraph};
   lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
@@ -301,16 +301,17 @@ void Backendd::receive_loop() {
   receiver_done_ = true;
 }
 
-bool Backendd::authentic(auth::Verifier& verifier, const std::string& channel, const void* data, std::size_t size) {
+std::optional<std::int64_t> Backendd::authentic(auth::Verifier& verifier, const std::string& channel, const void* data,
+                                                std::size_t size) {
   const auto v = verifier.verify(channel, data, size);
-  if (v.verdict == auth::Verdict::kOk) return true;
+  if (v.verdict == auth::Verdict::kOk) return v.sender;
   const auto why = static_cast<std::size_t>(bad_kind(v.verdict));
   ++bad_messages_[why];
   notes_.note_limited("refused " + std::to_string(why), "skipped " + channel + ": " + v.why + " (never decoded)");
-  return false;
+  return std::nullopt;
 }
 
-void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t size) {
+void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender) {
   const std::string channel = kind == RecordKind::kKeyframe ? "CVO_KEYFRAME" : "CVO_LOCAL_GRAPH";
   const auto refuse = [&](std::size_t why, const std::string& detail) {
     ++bad_messages_[why];
@@ -328,7 +329,8 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
         return notes_.note_limited("repeat", describe(key) + " received again: stored already, not used twice");
       case Admission::kConflict:
         return refuse(cvo_lcm::status_t::BAD_CONFLICT,
-                      describe(key) + " repeats an existing one with other content: refused");
+                      describe(key) + " repeats an existing one with other content" +
+                          (sender != 0 ? " (sender " + auth::key_name(sender) + ")" : "") + ": refused");
       case Admission::kNew: break;
     }
     auto value = usable(*message, &error, &bad);

@@ -90,9 +90,12 @@ class Backendd {
 
   void let_in_recovered(std::vector<StoredRecord> recovered);
   void receive_loop();
-  void receive(RecordKind kind, const std::uint8_t* data, std::size_t size);
-  // Whether a received buffer is authentic and new (cvo-receive); counted by kind when not.
-  bool authentic(auth::Verifier& verifier, const std::string& channel, const void* data, std::size_t size);
+  // `sender`: the verified sender (auth_t; on an open bus the claimed one, 0 when unsigned), for
+  // what is said of a refusal and for per-sender bounds.
+  void receive(RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender);
+  // The verified sender of an authentic, new buffer (cvo-receive); nullopt, counted by kind, when not.
+  std::optional<std::int64_t> authentic(auth::Verifier& verifier, const std::string& channel, const void* data,
+                                        std::size_t size);
   void saw_pose(const void* data, std::size_t size);
   void ask_for_missing(::lcm::LCM& lcm, bool stopping);
   static GapPolicy gap_policy(const config::Config& config);

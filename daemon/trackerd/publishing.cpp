@@ -84,8 +84,8 @@ void Publishing::run() {
       if (self->authentic(channel, b->data, b->data_size)) self->apply_map(b->data, static_cast<int>(b->data_size));
     }
     void request(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
-      if (self->authentic(channel, b->data, b->data_size))
-        self->answer_request(b->data, static_cast<int>(b->data_size));
+      if (const auto requester = self->authentic(channel, b->data, b->data_size))
+        self->answer_request(b->data, static_cast<int>(b->data_size), *requester);
     }
   } handler{this};
   if (receives_) {
@@ -120,11 +120,11 @@ void Publishing::receive() {
   while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) lcm_.handle();
 }
 
-bool Publishing::authentic(const std::string& channel, const void* data, std::size_t size) {
+std::optional<std::int64_t> Publishing::authentic(const std::string& channel, const void* data, std::size_t size) {
   const auto v = verifier_.verify(channel, data, size);
-  if (v.verdict == auth::Verdict::kOk) return true;
+  if (v.verdict == auth::Verdict::kOk) return v.sender;
   shared_.count_bad(bad_kind(v.verdict), "skipped " + channel, std::string(v.why) + " (never decoded)");
-  return false;
+  return std::nullopt;
 }
 
 void Publishing::publish(const Event& event) {
@@ -183,7 +183,7 @@ void Publishing::publish_keyframe(const Event& event) {
 // CVO_KEYFRAME_REQUEST: the back end missed keyframes of a session; those of this tracker's sessions
 // that the history still holds go out again as first sent (keyframe, then its local graph).
 // Requests for other sessions are other trackers'.
-void Publishing::answer_request(const void* data, int size) {
+void Publishing::answer_request(const void* data, int size, std::int64_t requester) {
   std::string error;
   auto failure = lcm::DecodeFailure::kBody;
   const auto request = lcm::decode<cvo_lcm::keyframe_request_t>(data, size, &error, &failure);
@@ -213,7 +213,8 @@ void Publishing::answer_request(const void* data, int size) {
   if (!answer.lost.empty())
     done += (done.empty() ? "" : "; ") + std::string("lost (not in the history of ") +
             std::to_string(history().capacity()) + "): " + id_list(answer.lost);
-  shared_.notes.note_limited("keyframe request", "the back end asked again for keyframes of session " +
+  const std::string by = requester != 0 ? " (sender " + auth::key_name(requester) + ")" : "";
+  shared_.notes.note_limited("keyframe request", "the back end" + by + " asked again for keyframes of session " +
                                                      core::session_name(request->session) + " (#" + std::to_string(n) +
                                                      "): " + done);
 }

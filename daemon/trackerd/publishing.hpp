@@ -8,6 +8,7 @@
 // every one in verified on its raw bytes first; a refusal counts BAD_AUTH or BAD_REPLAY.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <lcm/lcm-cpp.hpp>
@@ -28,11 +29,12 @@ class Publishing {
 
  private:
   void receive();
-  /// Whether a received buffer is authentic and new (counted by kind when not).
-  bool authentic(const std::string& channel, const void* data, std::size_t size);
+  /// The verified sender of an authentic, new buffer (on an open bus the claimed one, 0 unsigned);
+  /// nullopt, counted by kind, when not.
+  std::optional<std::int64_t> authentic(const std::string& channel, const void* data, std::size_t size);
   void publish(const Event& event);
   void publish_keyframe(const Event& event);
-  void answer_request(const void* data, int size);
+  void answer_request(const void* data, int size, std::int64_t requester);
   void publish_status(std::int8_t state_override);
   void apply_map(const void* data, int size);
   KeyframeHistory& history();

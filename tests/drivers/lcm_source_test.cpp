@@ -1,9 +1,11 @@
 // lcm: CVO_RGBD messages replayed from a log by LCM's file provider: every refused message is
 // reported with the right kind and in order, frames come through bit-exact, the end of the log is
-// the end of the stream, and lost frames are counted.
+// the end of the stream, and lost frames are counted. With the deployment's keys, only frames
+// signed with one of them come through; the rest are refused as kAuth before decoding.
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
+#include <memory>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -14,6 +16,7 @@
 #include "drivers/frame_source.hpp"
 #include "drivers/open_source.hpp"
 #include "drivers/tum_copy.hpp"
+#include "libcvo/auth/authenticator.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
@@ -182,6 +185,52 @@ TEST(LcmSource, ChannelOptionAndTimeout) {
   const double waited = std::chrono::duration<double>(Clock::now() - start).count();
   EXPECT_GE(waited, 0.09);
   EXPECT_LT(waited, 1.0);
+}
+
+std::shared_ptr<const auth::KeyRing> new_keys() {
+  std::vector<auth::Key> keys;
+  keys.push_back(auth::Key::generate());
+  return std::make_shared<const auth::KeyRing>(std::move(keys));
+}
+
+Bytes signed_frame(std::uint64_t index, const std::shared_ptr<const auth::KeyRing>& keys) {
+  auto bytes = lcm::encode(message_of(small_frame(index)));
+  auth::Signer(keys, 42).sign("CVO_RGBD", bytes);
+  return bytes;
+}
+
+TEST(LcmSource, WithTheDeploymentsKeysOnlyFramesSignedWithThemComeThrough) {
+  test::TempDir dir;
+  const auto ours = new_keys();
+  auto changed = signed_frame(3, ours);
+  changed[40] ^= 1;
+  const auto log = dir.path() / "signed.lcm";
+  write_log(log, {{"CVO_RGBD", signed_frame(0, ours)},
+                  {"CVO_RGBD", lcm::encode(message_of(small_frame(1)))},  // unsigned: an open-bus driver
+                  {"CVO_RGBD", signed_frame(2, new_keys())},              // another deployment's
+                  {"CVO_RGBD", changed},
+                  {"CVO_RGBD", signed_frame(4, ours)}});
+  SourceOptions options;
+  options.bus_keys = ours;
+  auto source = open_source(replay_url(log), options);
+  core::RgbdFrame frame;
+  std::vector<std::uint64_t> frames;
+  int refused = 0;
+  for (ReadResult r; (r = source->read(frame, milliseconds(2000))).status != ReadStatus::kEndOfStream;) {
+    if (r.status == ReadStatus::kFrame) frames.push_back(frame.index);
+    if (r.status == ReadStatus::kBadInput) {
+      EXPECT_EQ(r.bad_input, core::BadKind::kAuth) << r.message;
+      ++refused;
+    }
+  }
+  EXPECT_EQ(frames, (std::vector<std::uint64_t>{0, 4}));
+  EXPECT_EQ(refused, 3);
+  // Without keys (an open bus) every frame decodes.
+  auto open = open_source(replay_url(log));
+  int decoded = 0;
+  for (ReadResult r; (r = open->read(frame, milliseconds(2000))).status != ReadStatus::kEndOfStream;)
+    decoded += r.status == ReadStatus::kFrame ? 1 : 0;
+  EXPECT_EQ(decoded, 5);
 }
 
 TEST(LcmSource, MissingLogOrBadUrlIsSourceError) {

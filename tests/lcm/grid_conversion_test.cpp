@@ -97,7 +97,7 @@ TEST(GridConversion, ForgedGridsAreRefusedSayingWhy) {
       {"another frame", [](auto& m) { m.frame = "map"; }, "frame 'map'", ContentFailure::kContent},
       {"an unknown up source", [](auto& m) { m.up = 3; }, "up source 3", ContentFailure::kContent},
       {"a negative revision", [](auto& m) { m.revision = -1; }, "negative revision", ContentFailure::kContent},
-      {"another schema version", [](auto& m) { m.version = 2; }, "schema version 2", ContentFailure::kVersion},
+      {"another schema version", [](auto& m) { m.version = 1; }, "schema version 1", ContentFailure::kVersion},
   };
   for (const auto& f : forgeries) {
     auto message = test::sample_grid();
@@ -116,7 +116,8 @@ TEST(GridConversion, ForgedGridsAreRefusedSayingWhy) {
 // refused before lcm-gen's decoder reads it.
 TEST(GridConversion, AForgedFrameLengthAfterTheCellsIsRefusedBeforeDecoding) {
   auto bytes = encode(test::sample_grid());
-  const std::size_t frame_length = bytes.size() - 4 - 5;  // 4-byte length, "grid" and its NUL
+  // 4-byte length, "grid" and its NUL, then the auth trailer.
+  const std::size_t frame_length = bytes.size() - 4 - 5 - static_cast<std::size_t>(kAuthTrailerBytes);
   ASSERT_EQ(bytes[frame_length + 3], 5);
   for (const std::uint32_t bad : {0u, 6u, 0x7f000005u, 0xffffffffu}) {
     for (int i = 0; i < 4; ++i)

@@ -82,7 +82,9 @@ TYPED_TEST(MessageRoundTrip, WireLayoutTableMatchesTheEncoding) {
   if (layout.strings_at == kStringsAfterArrays)  // grid_t's frame: its length, "grid" and its NUL
     for (int i = 0; i < layout.num_strings; ++i)
       size += 4 + ((body[size] << 24) | (body[size + 1] << 16) | (body[size + 2] << 8) | body[size + 3]);
-  EXPECT_EQ(size, static_cast<std::int64_t>(bytes.size()) - 8) << "header and element sizes of the table";
+  // Then auth_t, the last field of every type sent on a channel: the last kAuthTrailerBytes.
+  EXPECT_EQ(size + kAuthTrailerBytes, static_cast<std::int64_t>(bytes.size()) - 8)
+      << "header and element sizes of the table, then the auth trailer";
 }
 
 TEST(MessageRoundTrip, SpotChecksOfDecodedFields) {
