@@ -24,6 +24,21 @@ std::vector<std::uint8_t> encoded(const T& message) {
 
 std::uint32_t crc(const std::vector<std::uint8_t>& bytes) { return crc32_of(bytes.data(), bytes.size()); }
 
+// A keyframe sent again on request is signed afresh (a new counter in its auth_t trailer): the door
+// compares what it says, not who signed it when, so the re-send is a repeat, not a conflict.
+TEST(MessageDoor, ComparesContentWithoutTheAuthTrailer) {
+  auto keyframe = test::sample_keyframe();
+  const auto first = lcm::encode(keyframe);
+  keyframe.auth.counter = 12345;
+  keyframe.auth.authenticator[7] = 9;
+  const auto resent = lcm::encode(keyframe);
+  ASSERT_NE(first, resent);
+  EXPECT_EQ(content_crc(first.data(), first.size()), content_crc(resent.data(), resent.size()));
+  keyframe.id += 1;
+  const auto other = lcm::encode(keyframe);
+  EXPECT_NE(content_crc(first.data(), first.size()), content_crc(other.data(), other.size()));
+}
+
 TEST(MessageDoor, NamesMessagesBySessionAndKeyframeId) {
   const auto keyframe = cvo::test::sample_keyframe();
   const auto k = encoded(keyframe);

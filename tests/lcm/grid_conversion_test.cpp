@@ -126,7 +126,10 @@ TEST(GridConversion, AForgedFrameLengthAfterTheCellsIsRefusedBeforeDecoding) {
     DecodeFailure failure = DecodeFailure::kTooShort;
     EXPECT_FALSE(decode<cvo_lcm::grid_t>(bytes.data(), static_cast<int>(bytes.size()), &error, &failure)) << bad;
     EXPECT_EQ(failure, DecodeFailure::kBody) << error;
-    EXPECT_NE(error.find("corrupt string length"), std::string::npos) << error;
+    // A length within the buffer (6: the trailer follows) ends on a byte that is no NUL.
+    EXPECT_TRUE(error.find("corrupt string length") != std::string::npos ||
+                error.find("not one NUL-terminated text") != std::string::npos)
+        << error;
   }
 }
 

@@ -165,6 +165,8 @@ program::Json status_json(const cvo_lcm::status_t& s) {
   o["keyframes_recovered"] = s.keyframes_recovered;
   o["keyframes_lost"] = s.keyframes_lost;
   o["bad_messages"] = s.bad_messages;
+  o["bus"] = int{s.bus};   // BUS_OPEN 0, BUS_AUTHENTICATED 1
+  o["sender"] = s.sender;  // its auth_t sender id
   o["detail"] = s.detail;
   return o;
 }
@@ -174,7 +176,7 @@ void print_status_text(const std::string& process, const program::Json& status) 
   std::cout << process << ":\n";
   for (const auto& [key, value] : status.items()) {
     std::cout << "  " << key << ":";
-    if (key == "session")
+    if (key == "session" || key == "sender")
       std::cout << " " << core::session_name(value.get<std::int64_t>());
     else if (value.is_array())
       for (const auto& count : value) std::cout << " " << count.dump();
