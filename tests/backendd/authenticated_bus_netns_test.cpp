@@ -3,7 +3,8 @@
 //   - a CVO_MAP copied from the back end's and changed (its session's correction moved 0.5 m,
 //     revision + 1000), sent as copied, and signed with another deployment's key, and the real map
 //     sent again unchanged: no map pose moves, the refusals are counted as BAD_AUTH and BAD_REPLAY
-//     in the tracker's CVO_STATUS, and the genuine maps are still applied;
+//     in the tracker's CVO_STATUS, and the genuine maps are still applied; 50 keyframe requests
+//     (unsigned) for the tracker's session re-send nothing;
 //   - a tracker with another deployment's key, and one on an open bus, are refused whole by the
 //     back end (every message counted, none stored or mapped);
 //   - rotation: a tracker holding {old, new} and a back end holding {old} interoperate, and so do
@@ -29,6 +30,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
@@ -255,6 +257,16 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
       attacker.publish("CVO_MAP", bytes->data(), static_cast<unsigned>(bytes->size()));
       std::this_thread::sleep_for(100ms);
     }
+    cvo_lcm::keyframe_request_t request{};  // the amplifier: each would re-send a keyframe of ~100 kB
+    request.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
+    request.session = session;
+    request.ids = {0};
+    request.num_ids = 1;
+    for (int i = 0; i < 50; ++i) {  // in a second (a faster burst only overflows LCM's queue: fewer are seen)
+      const auto bytes = lcm::encode(request);
+      attacker.publish("CVO_KEYFRAME_REQUEST", bytes.data(), static_cast<unsigned>(bytes.size()));
+      std::this_thread::sleep_for(20ms);
+    }
   }
   const auto poses_at_forgery = listener.snapshot().poses.size();
   EXPECT_TRUE(player.wait_for(scaled(60s))) << "lcm-logplayer did not finish";
@@ -269,7 +281,9 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
   EXPECT_LT(largest_map_shift_m(heard.poses), 0.25) << "the forged correction moved a map pose";
   const auto& status = heard.last_status.at("cvo-trackerd");
   EXPECT_EQ(status.bus, std::int8_t{S::BUS_AUTHENTICATED});
-  EXPECT_EQ(status.bad_messages[S::BAD_AUTH], 2) << "the copied forgery and the one of another deployment";
+  EXPECT_EQ(status.bad_messages[S::BAD_AUTH], 2 + 50)
+      << "the copied forgery, the one of another deployment and the keyframe requests";
+  EXPECT_EQ(status.keyframes_requested, 0) << "no keyframe sent again (the genuine back end lost none)";
   EXPECT_EQ(status.bad_messages[S::BAD_REPLAY], 1) << "the real map, sent again";
   const auto& backend = heard.last_status.at("cvo-backendd");
   EXPECT_EQ(backend.bad_messages[S::BAD_AUTH] + backend.bad_messages[S::BAD_REPLAY], 0)
