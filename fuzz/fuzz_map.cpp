@@ -24,8 +24,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   placed.revision = 1;
   placed.session = kSession;
   placed.placed = true;
+  // Keyframes of its own, so that a placement's loop check runs too.
+  const cvo::lcm::OwnKeyframe own[] = {{0, {}}, {1, cvo::core::SE3::from_translation({0.1, 0, 0})}};
   for (const cvo::lcm::AppliedCorrection& last : {cvo::lcm::AppliedCorrection{}, placed}) {
-    (void)cvo::lcm::decide_map_correction(data, static_cast<int>(size), kSession, last, cvo::lcm::CorrectionLimits{});
+    (void)cvo::lcm::decide_map_correction(data, static_cast<int>(size), kSession, last, cvo::lcm::CorrectionLimits{},
+                                          cvo::lcm::MapContext{0, 0, own});
   }
   return 0;
 }

@@ -65,7 +65,7 @@ std::optional<KeyframeHistory::Held> KeyframeHistory::find(std::int64_t session,
 }
 
 KeyframeHistory::Answer KeyframeHistory::answer(std::int64_t session, std::span<const std::int64_t> ids,
-                                                const Send& send) {
+                                                const Send& send, const Afford& afford) {
   Answer answer;
   const auto newest = newest_.find(session);
   if (newest == newest_.end()) return answer;
@@ -77,6 +77,10 @@ KeyframeHistory::Answer KeyframeHistory::answer(std::int64_t session, std::span<
     if (id < 0 || id > newest->second) {
       answer.never.push_back(id);
     } else if (const auto held = find(session, id)) {
+      if (afford && !afford(held->keyframe.size() + held->graph.size())) {
+        answer.over.push_back(id);
+        continue;
+      }
       send("CVO_KEYFRAME", held->keyframe);  // the keyframe first: the back end refuses a graph without it
       if (!held->graph.empty()) send("CVO_LOCAL_GRAPH", held->graph);
       ++resent_;

@@ -51,13 +51,17 @@ class KeyframeHistory {
     std::vector<std::int64_t> sent;   // sent again
     std::vector<std::int64_t> lost;   // no longer held
     std::vector<std::int64_t> never;  // never made in that session: a bad request
+    std::vector<std::int64_t> over;   // held, not sent: over the re-send budget (asked again, sent later)
   };
   using Send = std::function<void(const char* channel, std::span<const std::uint8_t> message)>;
+  using Afford = std::function<bool(std::size_t bytes)>;  // may a keyframe and its graph of `bytes` go out?
   /// A request for keyframes `ids` of `session`: nothing when the session is not this tracker's
   /// (another tracker answers). Else each distinct id still held is sent again through `send`, its
   /// CVO_KEYFRAME then its CVO_LOCAL_GRAPH when it has one; an id made but no longer held is
-  /// counted lost, once however often it is asked for.
-  Answer answer(std::int64_t session, std::span<const std::int64_t> ids, const Send& send);
+  /// counted lost, once however often it is asked for. A held id that `afford` (when given)
+  /// refuses is not sent (Answer::over).
+  Answer answer(std::int64_t session, std::span<const std::int64_t> ids, const Send& send,
+                const Afford& afford = nullptr);
 
   [[nodiscard]] std::int64_t resent() const { return resent_; }  // keyframes sent again
   [[nodiscard]] std::int64_t lost() const { return lost_; }      // asked for, no longer held, each once

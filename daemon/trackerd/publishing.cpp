@@ -52,6 +52,10 @@ std::size_t max_local_graph_bytes(const odometry::KeyframeOdometryParameters& pa
   return empty + parameters.tracking.local_graph_capacity * (node + 2 * edge);
 }
 
+// Keyframes whose odometry poses the loop check of a placement can use: a loop of the back end is
+// to one of the session's recent keyframes (it joins the map as soon as it can).
+constexpr std::size_t kOwnKeyframes = 64;
+
 std::string id_list(const std::vector<std::int64_t>& ids) {
   std::string out;
   for (const auto id : ids) out += (out.empty() ? "" : ", ") + std::to_string(id);
@@ -66,6 +70,7 @@ Publishing::Publishing(Shared& shared)
       verifier_(shared.bus.verifier(shared.config.trackerd.lcm_url)),
       receives_(!shared.config.trackerd.lcm_url.starts_with("file://")),
       encoding_{*lcm::parse_colour_encoding(shared.config.trackerd.keyframe_colour_encoding), lcm::DepthEncoding::kPng},
+      resend_budget_(shared.config.trackerd.resend_bytes_per_s),
       session_(shared.session.load()) {}
 
 KeyframeHistory& Publishing::history() {
@@ -81,7 +86,8 @@ void Publishing::run() {
   struct Handler {
     Publishing* self;
     void map(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
-      if (self->authentic(channel, b->data, b->data_size)) self->apply_map(b->data, static_cast<int>(b->data_size));
+      if (const auto sender = self->authentic(channel, b->data, b->data_size))
+        self->apply_map(b->data, static_cast<int>(b->data_size), *sender);
     }
     void request(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
       if (const auto requester = self->authentic(channel, b->data, b->data_size))
@@ -134,7 +140,10 @@ void Publishing::publish(const Event& event) {
     shared_.notes.note("camera re-initialised: new session " + core::session_name(event.session));
     // A camera change may have made keyframes larger.
     history().reserve_keyframe_bytes(max_keyframe_bytes(shared_.out.camera_size, shared_.parameters));
+    own_keyframes_.clear();
+    own_next_ = 0;
   }
+  if (event.has_pose && event.pose.is_keyframe) remember_keyframe(event.pose.keyframe_id, event.pose.odom_pose);
   if (event.has_pose && event.pose.keyframe_id >= 0) history().made(event.session, event.pose.keyframe_id);
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = outbox.graph(event.graph_slot);
@@ -160,6 +169,14 @@ void Publishing::publish(const Event& event) {
     last_frame_ = Clock::now();
   }
   outbox.release(event);
+}
+
+void Publishing::remember_keyframe(std::int64_t id, const core::SE3& odometry_pose) {
+  if (own_keyframes_.size() < kOwnKeyframes)
+    own_keyframes_.push_back({id, odometry_pose});
+  else
+    own_keyframes_[own_next_] = {id, odometry_pose};
+  own_next_ = (own_next_ + 1) % kOwnKeyframes;
 }
 
 void Publishing::publish_keyframe(const Event& event) {
@@ -202,8 +219,17 @@ void Publishing::answer_request(const void* data, int size, std::int64_t request
     resend_.assign(bytes.begin(), bytes.end());  // the bytes first sent, with a new counter
     auth::publish_bytes(lcm_, shared_.bus.signer(), channel, resend_);
   };
-  const auto answer = history().answer(request->session, request->ids, send);
+  const double now_s = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+  const auto afford = [&](std::size_t bytes) {
+    return resend_budget_.take(static_cast<std::uint64_t>(requester), request->session, bytes, now_s);
+  };
+  const auto answer = history().answer(request->session, request->ids, send, afford);
   if (!answer.ours) return;
+  if (!answer.over.empty())
+    shared_.notes.note_limited("re-send budget", "keyframes " + id_list(answer.over) + " of session " +
+                                                     core::session_name(request->session) +
+                                                     " not sent again: over trackerd.resend_bytes_per_s (" +
+                                                     std::to_string(resend_budget_.refused()) + " refused so far)");
   if (!answer.never.empty())
     shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped part of " + what,
                       "keyframes " + id_list(answer.never) + " were never made");
@@ -262,11 +288,12 @@ void Publishing::publish_status(std::int8_t state_override) {
 
 // CVO_MAP: what lcm::decide_map_correction trusts moves the running session's map poses (placed:
 // its correction; not placed: map pose = odometry pose); anything else is counted by kind.
-void Publishing::apply_map(const void* data, int size) {
+void Publishing::apply_map(const void* data, int size, std::int64_t sender) {
   const std::int64_t session = shared_.session.load();
   const auto& t = shared_.config.trackerd;
-  const lcm::CorrectionDecision d =
-      lcm::decide_map_correction(data, size, session, applied_, {t.max_map_jump_m, t.max_map_jump_deg});
+  const lcm::CorrectionLimits limits{t.max_map_jump_m, t.max_map_jump_deg, t.map_epoch_slack_s, t.map_revisions_per_s};
+  const lcm::MapContext context{core::wall_utime(), static_cast<std::uint64_t>(sender), own_keyframes_};
+  const lcm::CorrectionDecision d = lcm::decide_map_correction(data, size, session, applied_, limits, context);
   if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
   const bool was_placed = applied_.session == session && applied_.placed;
   if (d.correction.placed != was_placed)

@@ -10,11 +10,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 
 #include "daemon/common/latency_window.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
+#include "daemon/trackerd/resend_budget.hpp"
 #include "daemon/trackerd/shared.hpp"
 #include "libcvo/auth/authenticator.hpp"
 #include "libcvo/lcm/map_decision.hpp"
@@ -34,9 +36,11 @@ class Publishing {
   std::optional<std::int64_t> authentic(const std::string& channel, const void* data, std::size_t size);
   void publish(const Event& event);
   void publish_keyframe(const Event& event);
+  void remember_keyframe(std::int64_t id, const core::SE3& odometry_pose);
   void answer_request(const void* data, int size, std::int64_t requester);
   void publish_status(std::int8_t state_override);
-  void apply_map(const void* data, int size);
+  /// `sender`: the map's verified sender (auth_t; 0 on an open bus, unsigned).
+  void apply_map(const void* data, int size, std::int64_t sender);
   KeyframeHistory& history();
 
   Shared& shared_;
@@ -46,7 +50,12 @@ class Publishing {
   const bool receives_;               // a file:// output is a log being written: nothing comes back on it
   const lcm::RgbdEncoding encoding_;
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
+  ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again
   lcm::AppliedCorrection applied_;            // the last CVO_MAP correction applied
+  // The running session's newest keyframes' odometry poses, for the check of a placement against
+  // the session's loops (lcm::decide_map_correction); a ring of kOwnKeyframes.
+  std::vector<lcm::OwnKeyframe> own_keyframes_;
+  std::size_t own_next_ = 0;
   LatencyWindow latency_{1024};
   std::int64_t session_;  // of the last event published
   std::int64_t published_ = 0, published_at_last_status_ = 0, deadline_misses_ = 0, failed_at_last_status_ = 0;

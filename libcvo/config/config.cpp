@@ -255,6 +255,9 @@ const std::vector<Field>& table() {
       row("trackerd.keyframe_history", &Config::trackerd, &TrackerdParameters::keyframe_history, kNonNegative,
           "last keyframes and their local graphs kept to send again when the back end asks (CVO_KEYFRAME_REQUEST); "
           "each preallocated, about 2.2 MB at 640x480; 0: none"),
+      row("trackerd.resend_bytes_per_s", &Config::trackerd, &TrackerdParameters::resend_bytes_per_s, kPositive,
+          "bytes a second that CVO_KEYFRAME_REQUESTs may make the tracker send again, per requester and per session "
+          "(a burst of one second's worth); beyond it a keyframe waits for a later request"),
       row("trackerd.camera_change_frames", &Config::trackerd, &TrackerdParameters::camera_change_frames, kAtLeastOne,
           "frames of another camera (size or intrinsics) in a row that make the tracker re-initialise for it in a "
           "new session; fewer are refused"),
@@ -263,6 +266,12 @@ const std::vector<Field>& table() {
       row("trackerd.max_map_jump_deg", &Config::trackerd, &TrackerdParameters::max_map_jump_deg, kHalfTurnDeg,
           "a CVO_MAP correction that turns the map frame further than this (degrees) from the last one applied is "
           "refused"),
+      row("trackerd.map_epoch_slack_s", &Config::trackerd, &TrackerdParameters::map_epoch_slack_s, kNonNegative,
+          "a CVO_MAP whose epoch (its back end's start) lies further than this (s) in the future of this clock is "
+          "refused: clocks of one deployment agree within it"),
+      row("trackerd.map_revisions_per_s", &Config::trackerd, &TrackerdParameters::map_revisions_per_s, kPositive,
+          "a CVO_MAP revision further ahead of the applied one than this many per second since then (at least one "
+          "second's worth) is refused: a back end revises its map at a bounded rate"),
       row("trackerd.map_pose_until_localized", &Config::trackerd, &TrackerdParameters::map_pose_until_localized, kAny,
           "map pose published before the back end localizes the session: odometry or none"),
       row("backendd.lcm_url", &Config::backendd, &BackenddParameters::lcm_url, kAny,

@@ -43,6 +43,9 @@ struct TrackerdParameters {
   // Keyframes (with their local graphs) kept, as sent, to answer CVO_KEYFRAME_REQUEST; each slot is
   // preallocated for the largest message (about 2.2 MB at 640x480).
   std::size_t keyframe_history = 32;
+  // Bytes a second that CVO_KEYFRAME_REQUESTs may make the tracker send again, per requester and
+  // per session (daemon/trackerd/resend_budget.hpp).
+  double resend_bytes_per_s = 2e6;
   // Frames of another camera (size or intrinsics) in a row that make the tracker re-initialise for
   // it in a new session; fewer are refused as bad content (a lone odd frame does not reset tracking).
   std::size_t camera_change_frames = 5;
@@ -50,6 +53,11 @@ struct TrackerdParameters {
   // the correction applied last is refused as implausible (a loop closure corrects drift).
   double max_map_jump_m = 1.0;
   double max_map_jump_deg = 30.0;
+  // Guards on the order of CVO_MAPs (libcvo/lcm/map_decision.hpp): an epoch further than this in
+  // the future of this machine's clock, and a revision further ahead of the applied one than this
+  // many per second since it was applied, are refused as implausible.
+  double map_epoch_slack_s = 10.0;
+  double map_revisions_per_s = 100.0;
   // The map pose published while the back end has not localized the session: its odometry pose
   // (a pose in the session's own frame, as before any map), or none (map_pose left out: a consumer
   // that needs the map frame waits).

@@ -10,9 +10,27 @@
 //   - and, while the session is placed, the new correction moves the map frame by at most
 //     max_jump_m and max_jump_deg from the correction applied last (kImplausible): a back end's
 //     loop closure corrects drift, it does not teleport the camera.
-// An entry that is not placed is applied too (map pose = odometry pose again).
+// Guards that hold even against a peer that may send maps (a faulty, stale or restarted back end,
+// or anyone on an open bus; authentication, libcvo/auth, keeps strangers out):
+//   - the epoch (its back end's start) lies at most epoch_slack_s in the future of the receiver's
+//     clock (kImplausible): a newer epoch always wins over an older one, so one from the future
+//     would lock out every real back end until it had been running that long;
+//   - within an epoch the revision leaps at most revisions_per_s times the seconds since the map
+//     applied last (at least one second's worth) (kImplausible): a back end makes revisions at a
+//     bounded rate, and one leap to a huge revision would make every real map stale;
+//   - within an epoch, maps come from the one sender whose map was applied (kConflict): a back end
+//     has one identity (the verified sender id; 0 on an open bus, where all senders are one);
+//   - within an epoch a placed session stays placed (kConflict): a back end's sessions join the
+//     map for good, so "unplaced, then placed elsewhere" cannot sidestep the jump bound;
+//   - a placement (the session not placed by this epoch's maps yet) agrees with the session's own
+//     loops that the map carries (kImplausible): for a loop edge T_a^b between keyframe a of this
+//     session, whose odometry pose O_a the tracker holds, and keyframe b of the map, C · O_a and
+//     M_b · (T_a^b)⁻¹ are the same map pose of a up to the jump bound.
+// An entry that is not placed is applied (map pose = odometry pose again) while the session has
+// not been placed in this epoch.
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "libcvo/core/bad_kind.hpp"
@@ -31,11 +49,28 @@ struct AppliedCorrection {
   // The back end's covariance of keyframe covariance_keyframe's map pose, when it gives one.
   std::optional<core::Matrix6d> keyframe_covariance = std::nullopt;
   std::int64_t covariance_keyframe = -1;
+  std::uint64_t sender = 0;        // the verified sender of the map it came from (0: an open bus)
+  std::int64_t applied_utime = 0;  // the receiver's clock when it was applied
 };
 
 struct CorrectionLimits {
   double max_jump_m = 1.0;
   double max_jump_deg = 30.0;
+  double epoch_slack_s = 10.0;
+  double revisions_per_s = 100.0;
+};
+
+/// A keyframe of the tracker's running session and its odometry pose (what the loop check needs).
+struct OwnKeyframe {
+  std::int64_t id = -1;
+  core::SE3 odometry_pose;
+};
+
+/// What the receiver knows besides the bytes.
+struct MapContext {
+  std::int64_t now_utime = 0;              // the receiver's wall clock (µs since 1970)
+  std::uint64_t sender = 0;                // the map's verified sender (0: an open bus)
+  std::span<const OwnKeyframe> keyframes;  // of the running session, any order
 };
 
 struct CorrectionDecision {
@@ -48,6 +83,7 @@ struct CorrectionDecision {
 /// The decision for the CVO_MAP bytes `data` (as received) for `session`, given the correction
 /// applied last (`last`).
 CorrectionDecision decide_map_correction(const void* data, int size, std::int64_t session,
-                                         const AppliedCorrection& last, const CorrectionLimits& limits);
+                                         const AppliedCorrection& last, const CorrectionLimits& limits,
+                                         const MapContext& context);
 
 }  // namespace cvo::lcm

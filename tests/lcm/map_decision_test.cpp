@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cvo_lcm/map_t.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/map_decision.hpp"
@@ -36,8 +37,12 @@ slam::MapSession placed(std::int64_t session, const core::SE3& correction) {
   return test::map_session(session, true, kOther, 1, 0, correction);
 }
 
-CorrectionDecision decide(const std::vector<std::uint8_t>& bytes, const AppliedCorrection& last) {
-  return decide_map_correction(bytes.data(), static_cast<int>(bytes.size()), kSession, last, kLimits);
+// The receiver's clock: ten seconds after the epochs of the maps below (µs since 1970, as epochs).
+constexpr std::int64_t kNow = 10'000'000;
+
+CorrectionDecision decide(const std::vector<std::uint8_t>& bytes, const AppliedCorrection& last,
+                          const MapContext& context = {kNow, 0, {}}) {
+  return decide_map_correction(bytes.data(), static_cast<int>(bytes.size()), kSession, last, kLimits, context);
 }
 
 const core::SE3 kOneMetre = core::SE3::from_translation({1, 0, 0});
@@ -50,13 +55,13 @@ TEST(MapDecision, ANewerMapPlacingTheSessionIsApplied) {
   EXPECT_TRUE(d.correction.placed);
   EXPECT_LT((d.correction.T_map_odom.translation() - kOneMetre.translation()).norm(), 1e-12);
 
-  // Any first placement is taken, however far (the map frame is another session's); and a later
-  // entry that is not placed returns the session to its odometry frame.
+  // Any first placement is taken, however far (the map frame is another session's); and an entry
+  // of a newer back end (epoch) that is not placed returns the session to its odometry frame.
   const auto far =
       decide(map_bytes(4, {placed(kSession, core::SE3::from_translation({40, 0, 0}))}), AppliedCorrection{});
   EXPECT_TRUE(far.apply) << far.why;
   const auto unplaced =
-      decide(map_bytes(5, {test::map_session(kSession, false, kSession, 1, -1, kOneMetre)}), d.correction);
+      decide(map_bytes(1, {test::map_session(kSession, false, kSession, 1, -1, kOneMetre)}, 5), d.correction);
   ASSERT_TRUE(unplaced.apply) << unplaced.why;
   EXPECT_FALSE(unplaced.correction.placed);
   EXPECT_EQ(unplaced.correction.T_map_odom.translation().norm(), 0) << "identity when not placed";
@@ -107,7 +112,9 @@ TEST(MapDecision, StaleForeignImplausibleAndNonFiniteMapsAreRefusedByKind) {
   // Within the bound it is applied; the bound is the caller's.
   EXPECT_TRUE(decide(map_bytes(8, {placed(kSession, nearby)}), last).apply);
   const auto far = map_bytes(8, {placed(kSession, core::SE3::from_translation({3, 0, 0}))});
-  EXPECT_TRUE(decide_map_correction(far.data(), static_cast<int>(far.size()), kSession, last, {5.0, 30.0}).apply);
+  EXPECT_TRUE(
+      decide_map_correction(far.data(), static_cast<int>(far.size()), kSession, last, {5.0, 30.0}, {kNow, 0, {}})
+          .apply);
 }
 
 // A back end that restarts numbers its revisions afresh in a newer epoch: its first map is taken
@@ -133,6 +140,99 @@ TEST(MapDecision, TheJumpBoundHoldsOnlyWithinTheSessionItPlaced) {
   // Nor is a placement after the session was unplaced.
   const AppliedCorrection unplaced{0, 7, kSession, false, {}, -1, std::nullopt, -1};
   EXPECT_TRUE(decide(map_bytes(8, {placed(kSession, core::SE3::from_translation({9, 0, 0}))}), unplaced).apply);
+}
+
+// A map from the future would win over every real back end (a newer epoch always wins): an epoch
+// beyond the clock slack is refused, and the genuine back end's next map is applied as if it had
+// never come.
+TEST(MapDecision, AnEpochFromTheFarFutureIsRefusedAndLocksNoBackEndOut) {
+  const AppliedCorrection last{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  const std::int64_t in_a_year = kNow + 365LL * 86400 * 1'000'000;
+  const auto future = decide(map_bytes(8, {placed(kSession, kOneMetre)}, in_a_year), last);
+  EXPECT_FALSE(future.apply);
+  EXPECT_EQ(future.refusal, BadKind::kImplausible);
+  EXPECT_NE(future.why.find("in the future of this clock"), std::string::npos) << future.why;
+  EXPECT_TRUE(decide(map_bytes(8, {placed(kSession, kOneMetre)}), last).apply);
+  // Within the slack (clocks of one deployment differ a little) a newer epoch is taken.
+  EXPECT_TRUE(decide(map_bytes(1, {placed(kSession, kOneMetre)}, kNow + 5'000'000), last).apply);
+}
+
+// One map with a huge revision would make every real map stale: a revision may lead the applied
+// one by at most revisions_per_s for each second since (and one second's worth at least).
+TEST(MapDecision, ARevisionLeapBeyondTheBackEndsRateIsRefused) {
+  AppliedCorrection last{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  last.applied_utime = kNow - 2'000'000;  // two seconds ago: 200 revisions at 100 a second
+  const auto leap = decide(map_bytes(7 + 1'000'000, {placed(kSession, kOneMetre)}), last);
+  EXPECT_FALSE(leap.apply);
+  EXPECT_EQ(leap.refusal, BadKind::kImplausible);
+  EXPECT_NE(leap.why.find("leaps 1000000 revisions"), std::string::npos) << leap.why;
+  EXPECT_FALSE(decide(map_bytes(7 + 201, {placed(kSession, kOneMetre)}), last).apply);
+  EXPECT_TRUE(decide(map_bytes(7 + 200, {placed(kSession, kOneMetre)}), last).apply);
+  // After a long silence (a link down for ten minutes) the back end's real progress is taken.
+  last.applied_utime = kNow - 600'000'000;
+  EXPECT_TRUE(decide(map_bytes(7 + 9000, {placed(kSession, kOneMetre)}), last).apply);
+}
+
+TEST(MapDecision, WithinAnEpochOnlyTheSenderOfTheAppliedMapMovesTheSession) {
+  AppliedCorrection last{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  last.sender = 5;
+  const auto other = decide(map_bytes(8, {placed(kSession, kOneMetre)}), last, {kNow, 6, {}});
+  EXPECT_FALSE(other.apply);
+  EXPECT_EQ(other.refusal, BadKind::kConflict);
+  EXPECT_NE(other.why.find("another sender"), std::string::npos) << other.why;
+  const auto same = decide(map_bytes(8, {placed(kSession, kOneMetre)}), last, {kNow, 5, {}});
+  ASSERT_TRUE(same.apply) << same.why;
+  EXPECT_EQ(same.correction.sender, 5u);
+  EXPECT_EQ(same.correction.applied_utime, kNow);
+  // A restarted back end (a newer epoch) is taken from whoever sends it.
+  EXPECT_TRUE(decide(map_bytes(1, {placed(kSession, kOneMetre)}, 1000), last, {kNow, 6, {}}).apply);
+}
+
+// The attack of issue 26: "unplaced", then "placed 100 m away" sidestepped the jump bound.
+TEST(MapDecision, APlacedSessionIsNotUnplacedWithinItsEpoch) {
+  const AppliedCorrection last{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  const auto unplaced = decide(map_bytes(8, {test::map_session(kSession, false, kSession, 1, -1, {})}), last);
+  EXPECT_FALSE(unplaced.apply);
+  EXPECT_EQ(unplaced.refusal, BadKind::kConflict);
+  EXPECT_NE(unplaced.why.find("placed in this epoch"), std::string::npos) << unplaced.why;
+  const auto far = decide(map_bytes(9, {placed(kSession, core::SE3::from_translation({100, 0, 0}))}), last);
+  EXPECT_FALSE(far.apply);
+  EXPECT_EQ(far.refusal, BadKind::kImplausible);
+}
+
+// A first placement C of the session must put its keyframe a where the map's loop from a to a
+// placed keyframe b says: C · O_a = M_b · (T_a^b)⁻¹, up to the jump bound.
+TEST(MapDecision, AFirstPlacementAgreesWithTheSessionsOwnLoops) {
+  const core::SE3 O_a = core::SE3::from_translation({0.3, 0, 0});     // a's odometry pose
+  const core::SE3 M_b = core::SE3::from_translation({5, 1, 0});       // b, in the map
+  const core::SE3 T_ab = core::SE3::from_translation({0.2, 0, 0.1});  // the loop a -> b
+  const core::SE3 C = M_b * T_ab.inverse() * O_a.inverse();           // what the loop implies
+  const auto with_loop = [&](const core::SE3& correction) {
+    slam::Map map;
+    map.revision = 3;
+    map.sessions = {placed(kOther, {}), placed(kSession, correction)};
+    map.keyframes = {{kOther, 4, 1.0, M_b}, {kSession, 2, 1.5, correction * O_a}};
+    auto m = to_message(map, 1, 0);
+    cvo_lcm::map_loop_t loop{};
+    loop.from_session = kSession;
+    loop.to_session = kOther;
+    loop.edge.from = 2;
+    loop.edge.to = 4;
+    loop.edge.measurement = to_message(T_ab);
+    for (int i = 0; i < 6; ++i) loop.edge.information[i * 7] = 1;
+    m.loops.push_back(loop);
+    m.num_loops = 1;
+    return encode(m);
+  };
+  const OwnKeyframe own[] = {{1, {}}, {2, O_a}};
+  const auto agrees = decide(with_loop(C), AppliedCorrection{}, {kNow, 0, own});
+  EXPECT_TRUE(agrees.apply) << agrees.why;
+  const auto off = decide(with_loop(core::SE3::from_translation({5, 0, 0}) * C), AppliedCorrection{}, {kNow, 0, own});
+  EXPECT_FALSE(off.apply);
+  EXPECT_EQ(off.refusal, BadKind::kImplausible);
+  EXPECT_NE(off.why.find("disagrees with the loop of keyframe 2"), std::string::npos) << off.why;
+  // Without the keyframe's odometry pose (older than the tracker holds) there is nothing to check.
+  EXPECT_TRUE(decide(with_loop(core::SE3::from_translation({5, 0, 0}) * C), AppliedCorrection{}, {kNow, 0, {}}).apply);
 }
 
 }  // namespace

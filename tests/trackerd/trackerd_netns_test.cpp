@@ -8,11 +8,13 @@
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): a private network
 // namespace with lo alone, so no packet can leave the host.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <mutex>
 #include <regex>
 #include <string>
 #include <thread>
@@ -21,8 +23,12 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
+#include "cvo_lcm/pose_t.hpp"
+#include "libcvo/core/units.hpp"
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "tests/support/daemon_process.hpp"
@@ -63,8 +69,9 @@ std::int64_t logged_session(const fs::path& stderr_file) {
   return static_cast<std::int64_t>(std::stoull(match[1].str(), nullptr, 16));
 }
 
-// One replay: logger and daemon up, the recording played (at half speed: the daemon tracks every
-// frame and nothing queues up in the socket), maps sent from 1 s on, half a second apart, SIGTERM,
+// One replay: logger and daemon up, the recording played (at 0.3 times its speed: the daemon tracks
+// every frame, nothing queues up in the socket, and every map comes mid-clip), maps sent from 0.75 s
+// on, a quarter of a second apart, SIGTERM,
 // logger stopped.
 Replay replay(const fs::path& dir, const fs::path& recording, const std::string& name, const MapsFor& maps) {
   Replay r;
@@ -80,12 +87,12 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
   std::this_thread::sleep_for(scaled(700ms));  // both subscribed
   r.session = logged_session(dir / (name + ".trackerd.txt"));
   DaemonProcess player(which("lcm-logplayer"),
-                       {"--lcm-url=" + std::string(kUrl), "-s", std::to_string(0.5 / kSlowdown), recording.string()},
+                       {"--lcm-url=" + std::string(kUrl), "-s", std::to_string(0.3 / kSlowdown), recording.string()},
                        dir / (name + ".player.txt"));
   std::this_thread::sleep_for(scaled(500ms));
   ::lcm::LCM lcm(kUrl);
   for (const auto& map : maps(r.session)) {
-    std::this_thread::sleep_for(scaled(500ms));
+    std::this_thread::sleep_for(scaled(250ms));
     lcm.publish("CVO_MAP", map.data(), static_cast<unsigned>(map.size()));
   }
   EXPECT_TRUE(player.wait_for(scaled(30s))) << "lcm-logplayer did not finish";
@@ -103,12 +110,12 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
 
 // A map of the back end, of `revision`, that holds `sessions`, one keyframe each.
 std::vector<std::uint8_t> map_message(std::uint64_t revision, const std::vector<slam::MapSession>& sessions,
-                                      std::int32_t version = cvo_lcm::map_t::SCHEMA_VERSION) {
+                                      std::int32_t version = cvo_lcm::map_t::SCHEMA_VERSION, std::int64_t epoch = 0) {
   slam::Map map;
   map.revision = revision;
   map.sessions = sessions;
   for (const auto& s : sessions) map.keyframes.push_back({s.session, 0, 1305031102.175304, s.correction});
-  auto message = lcm::to_message(map, 1);
+  auto message = lcm::to_message(map, 1, epoch);
   message.version = version;
   return lcm::encode(message);
 }
@@ -138,16 +145,29 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   // The back end places the tracker's session 1 m along x in the map, after a map that places
   // only another session (at 5 m along y): only the tracker's own entry may move its map poses.
   // Then an older map (replayed) and a newer one that would move the map frame 9 m: both refused,
-  // counted, and the correction stays.
+  // counted, and the correction stays. Then the attacks of issue 26 that an open bus let through
+  // (the guards of libcvo/lcm/map_decision.hpp): a map of an epoch a year ahead, one whose revision
+  // leaps a million, "unplaced" followed by "placed 100 m away": all refused, and the genuine back
+  // end's next map (revision 5) is still applied.
   const auto placed = core::SE3::from_translation({1, 0, 0});
   const auto elsewhere = core::SE3::from_translation({0, 5, 0});
+  const std::int64_t in_a_year = core::wall_utime() + 365LL * 86400 * 1'000'000;
   const auto first = replay(dir.path(), recording, "first", [&](std::int64_t session) {
     const std::int64_t other = session ^ 0x5a5a;
+    const slam::MapSession genuine{session, true, other, 1, 0, placed};
+    const auto kAt = [&](const core::SE3& correction) {
+      return std::vector<slam::MapSession>{{session, true, other, 1, 0, correction}};
+    };
     return std::vector<std::vector<std::uint8_t>>{
         map_message(2, {{other, true, other, 1, 0, elsewhere}}),
-        map_message(3, {{other, true, other, 1, 0, elsewhere}, {session, true, other, 1, 0, placed}}),
+        map_message(3, {{other, true, other, 1, 0, elsewhere}, genuine}),
         map_message(2, {{session, true, other, 1, 0, elsewhere}}),
-        map_message(4, {{session, true, other, 1, 0, core::SE3::from_translation({10, 0, 0})}})};
+        map_message(4, kAt(core::SE3::from_translation({10, 0, 0}))),
+        map_message(1, kAt(core::SE3::from_translation({0.5, 0, 0})), cvo_lcm::map_t::SCHEMA_VERSION, in_a_year),
+        map_message(1'000'000, kAt(core::SE3::from_translation({1.5, 0, 0}))),
+        map_message(4, {{session, false, session, 1, -1, {}}}),
+        map_message(4, kAt(core::SE3::from_translation({100, 0, 0}))),
+        map_message(5, {genuine})};
   });
   EXPECT_EQ(first.trackerd_exit, 0) << cvo::testing::slurp(dir.path() / "first.trackerd.txt");
   EXPECT_LT(first.shutdown_ms, 1000 * kSlowdown);
@@ -160,7 +180,9 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   EXPECT_EQ(status.allocations_after_warmup, 0);
   EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_FOREIGN], 1);
   EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_STALE], 1);
-  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_IMPLAUSIBLE], 1);
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_IMPLAUSIBLE], 4) << "9 m, a year ahead, the leap, 100 m";
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_CONFLICT], 1) << "unplaced within the epoch";
+  EXPECT_EQ(poses.back().map_revision, 5) << "the genuine back end is not locked out";
   std::printf("UDP replay: end-to-end latency (receipt to publication) median %.2f ms, p99 %.2f ms; shutdown %.0f ms\n",
               status.latency_median_ms, status.latency_p99_ms, first.shutdown_ms);
 
@@ -205,6 +227,87 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   for (std::size_t i = 0; i < poses.size(); ++i)
     for (int k = 0; k < 3; ++k)
       EXPECT_EQ(second.published.poses[i].odom_pose.position[k], poses[i].odom_pose.position[k]) << "frame " << i;
+}
+
+// The amplification of issue 26: 50 requests (each for 16 keyframes, under 10 kB in all) made the
+// tracker send 796 keyframes, 210 MB, in 5 s. Now a live tracker on the clip (it stays up after
+// its last frame, as a robot's does), asked 50 times in a second for every keyframe it made, sends
+// again at most trackerd.resend_bytes_per_s a second plus one second's worth, and notes the rest.
+TEST(TrackerdNetns, AFloodOfKeyframeRequestsReSendsAtMostTheBudget) {
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+  cvo::test::TempDir dir;
+  constexpr double kBudget = 1e6;  // bytes a second
+  const auto err = dir.path() / "trackerd.txt";
+  DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
+                         {"--source", "tum:" + kClip.string(), "--lcm-url", kUrl, "--deterministic", "--set",
+                          "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false", "--set",
+                          "trackerd.resend_bytes_per_s=" + std::to_string(kBudget)},
+                         err);
+  struct Seen {
+    std::mutex mutex;
+    std::int64_t session = 0, newest_keyframe = -1, last_frame = -1;
+    double keyframe_bytes = 0;  // CVO_KEYFRAMEs after the flood began
+    int keyframes = 0;
+    bool flooding = false;
+    void pose(const ::lcm::ReceiveBuffer* b, const std::string&) {
+      const auto p = lcm::decode<cvo_lcm::pose_t>(b->data, static_cast<int>(b->data_size), nullptr);
+      if (!p) return;
+      const std::lock_guard lock(mutex);
+      session = p->session;
+      newest_keyframe = std::max(newest_keyframe, p->keyframe_id);
+      last_frame = std::max(last_frame, p->frame_index);
+    }
+    void keyframe(const ::lcm::ReceiveBuffer* b, const std::string&) {
+      const std::lock_guard lock(mutex);
+      if (!flooding) return;
+      keyframe_bytes += static_cast<double>(b->data_size);
+      ++keyframes;
+    }
+  } seen;
+  ::lcm::LCM lcm(kUrl);
+  ASSERT_TRUE(lcm.good());
+  lcm.subscribe("CVO_POSE", &Seen::pose, &seen);
+  lcm.subscribe("CVO_KEYFRAME", &Seen::keyframe, &seen);
+  const auto handle_for = [&](std::chrono::duration<double> d) {
+    const auto end = std::chrono::steady_clock::now() + d;
+    while (std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);
+  };
+  for (int i = 0; i < 600; ++i) {  // until the clip's 50 frames are tracked (at most a minute)
+    handle_for(100ms);
+    const std::lock_guard lock(seen.mutex);
+    if (seen.last_frame == 49) break;
+  }
+  ASSERT_EQ(seen.last_frame, 49) << cvo::testing::slurp(err);
+  ASSERT_GE(seen.newest_keyframe, 3) << "too few keyframes to flood with";
+  handle_for(500ms);  // the last keyframe's messages are out
+
+  cvo_lcm::keyframe_request_t request{};
+  request.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
+  request.session = seen.session;
+  for (std::int64_t id = 0; id <= seen.newest_keyframe && id < cvo_lcm::keyframe_request_t::MAX_IDS; ++id)
+    request.ids.push_back(id);
+  request.num_ids = static_cast<std::int32_t>(request.ids.size());
+  const auto t0 = std::chrono::steady_clock::now();
+  seen.flooding = true;
+  for (int i = 0; i < 50; ++i) {
+    request.utime = core::wall_utime();
+    lcm.publish("CVO_KEYFRAME_REQUEST", &request);
+    handle_for(20ms);
+  }
+  handle_for(1s);  // what the flood set going
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::lock_guard lock(seen.mutex);
+  std::printf("50 requests for %d keyframes in 1 s: %d keyframes (%.0f kB) sent again in %.1f s (budget %.0f kB/s)\n",
+              request.num_ids, seen.keyframes, seen.keyframe_bytes / 1e3, elapsed, kBudget / 1e3);
+  EXPECT_GT(seen.keyframes, 0) << "a genuine request is still answered";
+  // The bound, with one keyframe of slack for the bucket that a full one lets go into debt.
+  const double one_keyframe = seen.keyframes > 0 ? seen.keyframe_bytes / seen.keyframes : 0;
+  EXPECT_LE(seen.keyframe_bytes, kBudget * (elapsed + 1) + one_keyframe);
+  EXPECT_LT(seen.keyframes, 50 * request.num_ids / 4) << "without the budget every request is answered whole";
+  trackerd.signal(SIGTERM);
+  EXPECT_EQ(trackerd.wait_for(scaled(10s)).value_or(-9), 0);
+  EXPECT_NE(cvo::testing::slurp(err).find("over trackerd.resend_bytes_per_s"), std::string::npos)
+      << cvo::testing::slurp(err);
 }
 
 }  // namespace
