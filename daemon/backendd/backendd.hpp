@@ -90,7 +90,7 @@ class Backendd {
 
   void let_in_recovered(std::vector<StoredRecord> recovered);
   void receive_loop();
-  // `sender`: the verified sender (auth_t; on an open bus the claimed one, 0 when unsigned), for
+  // `sender`: the verified sender (auth_t; 0 on an open bus), for
   // what is said of a refusal and for per-sender bounds.
   void receive(RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender);
   // The verified sender of an authentic, new buffer (cvo-receive); nullopt, counted by kind, when not.

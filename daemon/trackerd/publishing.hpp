@@ -31,7 +31,7 @@ class Publishing {
 
  private:
   void receive();
-  /// The verified sender of an authentic, new buffer (on an open bus the claimed one, 0 unsigned);
+  /// The verified sender of an authentic, new buffer (0 on an open bus);
   /// nullopt, counted by kind, when not.
   std::optional<std::int64_t> authentic(const std::string& channel, const void* data, std::size_t size);
   void publish(const Event& event);

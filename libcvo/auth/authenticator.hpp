@@ -75,7 +75,7 @@ enum class Verdict { kOk, kAuth, kReplay };
 
 struct Verification {
   Verdict verdict = Verdict::kAuth;
-  std::int64_t sender = 0;  // kOk, kReplay: the authenticated sender; on an open bus the claimed one
+  std::int64_t sender = 0;  // kOk, kReplay: the authenticated sender; 0 on an open bus (one sender: anyone)
   bool authenticated = false;
   const char* why = "";  // why not (a static text)
 };
