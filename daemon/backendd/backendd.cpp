@@ -24,6 +24,7 @@
 #include "daemon/common/signals.hpp"
 #include "daemon/common/status.hpp"
 #include "daemon/common/supervise.hpp"
+#include "libcvo/auth/authenticator.hpp"
 #include "libcvo/auth/lcm_publish.hpp"
 #include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
@@ -142,6 +143,12 @@ std::string join_text(const slam::Map& map, core::SessionId session, std::option
          " s after its first keyframe arrived)";
 }
 
+// The sender a stored record was received from: its auth_t trailer's (verified when it came;
+// zero on an open bus), for the bounds per sender across restarts.
+std::int64_t stored_sender(const std::vector<std::uint8_t>& payload) {
+  return payload.size() >= auth::kTrailerBytes ? auth::read_trailer(payload.data(), payload.size()).sender : 0;
+}
+
 }  // namespace
 
 // Everything the cvo-backend thread owns.
@@ -237,12 +244,14 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     std::string why;
     // A record of an older schema (another fingerprint or version), or a repeat, is skipped, said here.
     auto message = let_in_stored(door_, record.kind, record.payload.data(), record.payload.size(), &why);
+    const std::int64_t sender = stored_sender(record.payload);
     record.payload = {};  // decoded: the message holds what the bytes did
     if (!message) {
       notes_.note_limited("stored skipped", why);
       continue;
     }
     const MessageKey key = message->key;
+    quota_.count(key.session, sender);
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());  // a gap in the store is asked for too
     ++replayed_pending_;
@@ -333,6 +342,8 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
                           (sender != 0 ? " (sender " + auth::key_name(sender) + ")" : "") + ": refused");
       case Admission::kNew: break;
     }
+    if (const std::string over = quota_.refusal(key.session, sender); !over.empty())
+      return refuse(cvo_lcm::status_t::BAD_QUOTA, describe(key) + " refused: " + over);
     auto value = usable(*message, &error, &bad);
     if (!value) return refuse(bad, "skipped " + channel + ": " + error);
     // A graph is applied to its keyframe: one that never came is asked for again (a gap), and the
@@ -362,6 +373,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
                                             describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
     door_.admit(key, crc);
+    quota_.count(key.session, sender);
     gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());
     // Had the store failed just now, the record is queued whole, past the bound by this one.

@@ -43,6 +43,7 @@
 #include "daemon/backendd/keyframe_gaps.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
+#include "daemon/backendd/record_quota.hpp"
 #include "daemon/backendd/replay.hpp"
 #include "daemon/backendd/work_queue.hpp"
 #include "daemon/common/bus_auth.hpp"
@@ -126,7 +127,8 @@ class Backendd {
   // last retried.
   bool store_failing_ = false;
   std::chrono::steady_clock::time_point store_retried_{};
-  MessageDoor door_;                        // cvo-receive only (filled from the store before it starts)
+  MessageDoor door_;  // cvo-receive only (filled from the store before it starts)
+  RecordQuota quota_{config_.backendd.max_records_per_session, config_.backendd.max_records_per_sender};  // the same
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
   std::unique_ptr<Work> work_;              // the mapper and what the daemon reports of it; cvo-backend only
 

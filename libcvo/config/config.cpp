@@ -292,6 +292,13 @@ const std::vector<Field>& table() {
       row("backendd.unsaved_records_max", &Config::backendd, &BackenddParameters::unsaved_records_max, kNonNegative,
           "records held in memory while the store cannot be written (disk full), saved in order when it can; "
           "beyond it a record is used but lost on restart"),
+      row("backendd.max_records_per_session", &Config::backendd, &BackenddParameters::max_records_per_session,
+          kAtLeastOne,
+          "keyframes and local graphs one tracker session may store; past it its records are refused (BAD_QUOTA)"),
+      row("backendd.max_records_per_sender", &Config::backendd, &BackenddParameters::max_records_per_sender,
+          kAtLeastOne,
+          "keyframes and local graphs one sender (a tracker daemon, all its sessions; on an open bus everyone) may "
+          "store; past it its records are refused (BAD_QUOTA)"),
       row("backendd.mode", &Config::backendd, &BackenddParameters::mode, kAny,
           "mapping (every session grows the stored map) or localization (the stored map is read only; sessions "
           "are localized in it, never stored)"),

@@ -77,6 +77,10 @@ struct BackenddParameters {
   // size limit), written in order when it works again; beyond this they are used but not stored.
   // A 640x480 keyframe with JPEG colour is about 300 kB.
   std::size_t unsaved_records_max = 512;
+  // Records (keyframes and local graphs) one session, and one sender, may store; past either a
+  // record is refused (daemon/backendd/record_quota.hpp).
+  std::size_t max_records_per_session = 200000;
+  std::size_t max_records_per_sender = 1000000;
   // mapping: every session grows the stored map; localization: the stored map is read only and
   // every session is localized in it (keyframes kept in memory, never stored).
   std::string mode = "mapping";

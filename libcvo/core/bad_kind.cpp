@@ -20,6 +20,7 @@ const char* to_string(BadKind kind) {
     case BadKind::kImplausible: return "implausible";
     case BadKind::kAuth: return "auth";
     case BadKind::kReplay: return "replay";
+    case BadKind::kQuota: return "quota";
   }
   return "?";
 }

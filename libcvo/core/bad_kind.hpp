@@ -26,8 +26,9 @@ enum class BadKind : std::int32_t {
   kImplausible = 13,     // a CVO_MAP correction that jumps further than allowed
   kAuth = 14,            // no valid authenticator under a key the receiver holds (libcvo/auth)
   kReplay = 15,          // authentic, but its counter was seen already or is too old (libcvo/auth)
+  kQuota = 16,           // past the bound of what its session or sender may store (cvo-backendd)
 };
-inline constexpr int kNumBadKinds = 16;
+inline constexpr int kNumBadKinds = 17;
 
 /// "too short", "fingerprint", ..., as cvo-log and the daemons' notes name them.
 const char* to_string(BadKind kind);

@@ -19,7 +19,7 @@ static_assert(same(BadKind::kTooShort, S::BAD_TOO_SHORT) && same(BadKind::kFinge
               same(BadKind::kImageFormat, S::BAD_IMAGE_FORMAT) && same(BadKind::kImageSize, S::BAD_IMAGE_SIZE) &&
               same(BadKind::kStale, S::BAD_STALE) && same(BadKind::kForeign, S::BAD_FOREIGN) &&
               same(BadKind::kImplausible, S::BAD_IMPLAUSIBLE) && same(BadKind::kAuth, S::BAD_AUTH) &&
-              same(BadKind::kReplay, S::BAD_REPLAY));
+              same(BadKind::kReplay, S::BAD_REPLAY) && same(BadKind::kQuota, S::BAD_QUOTA));
 static_assert(core::kNumBadKinds == S::NUM_BAD_KINDS &&
               sizeof(S{}.bad_messages) / sizeof(std::int64_t) == core::kNumBadKinds);
 

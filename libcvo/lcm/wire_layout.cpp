@@ -52,9 +52,9 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
   if (type_name == "grid_t") return {129, kGridCounts, kStringsAfterArrays, 1};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
-  // (93), rss_bytes (101), bad_messages[16] (229), 5 int64 (269), bus (270), sender (278), then the
+  // (93), rss_bytes (101), bad_messages[17] (237), 5 int64 (277), bus (278), sender (286), then the
   // strings process and detail (then auth, as in every type).
-  if (type_name == "status_t") return {278, {}, 278, 2};
+  if (type_name == "status_t") return {286, {}, 286, 2};
   return {};
 }
 

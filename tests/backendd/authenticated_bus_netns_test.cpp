@@ -65,6 +65,7 @@ struct Heard {
   std::map<std::string, cvo_lcm::status_t> last_status;  // by process
   std::set<std::pair<std::int64_t, std::int64_t>> keyframes;
   std::optional<cvo_lcm::map_t> map;
+  std::vector<std::uint8_t> newest_keyframe;  // the bytes of the newest CVO_KEYFRAME heard
 
   [[nodiscard]] bool map_holds_every_keyframe() const {
     if (!map || keyframes.empty()) return false;
@@ -112,7 +113,12 @@ class Listener {
       } else if (channel == "CVO_STATUS") {
         if (auto s = lcm::decode<cvo_lcm::status_t>(data, size, nullptr)) heard_.last_status[s->process] = *s;
       } else if (channel == "CVO_KEYFRAME") {
-        if (auto k = lcm::decode<cvo_lcm::keyframe_t>(data, size, nullptr)) heard_.keyframes.emplace(k->session, k->id);
+        // Signed ones only (a forgery below is not): what the tracker really made.
+        auto k = lcm::decode<cvo_lcm::keyframe_t>(data, size, nullptr);
+        if (k && k->auth.sender != 0) {
+          heard_.keyframes.emplace(k->session, k->id);
+          heard_.newest_keyframe.assign(data, data + size);
+        }
       }
     }
     changed_.notify_all();
@@ -257,6 +263,19 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
       attacker.publish("CVO_MAP", bytes->data(), static_cast<unsigned>(bytes->size()));
       std::this_thread::sleep_for(100ms);
     }
+    // Keyframes of the live session with its next ids, unsigned: stored, they would have made the
+    // genuine ones conflicts (BAD_CONFLICT) that never reach the map.
+    auto next = lcm::decode<cvo_lcm::keyframe_t>(listener.snapshot().newest_keyframe.data(),
+                                                 static_cast<int>(listener.snapshot().newest_keyframe.size()), nullptr);
+    ASSERT_TRUE(next) << "no keyframe heard before the forgeries";
+    const std::int64_t newest = next->id;
+    next->auth = {};  // unsigned, as an attacker without the key sends it
+    for (std::int64_t id = newest + 1; id <= newest + 3; ++id) {
+      next->id = id;
+      next->pose.position[0] += 0.3;
+      const auto bytes = lcm::encode(*next);
+      attacker.publish("CVO_KEYFRAME", bytes.data(), static_cast<unsigned>(bytes.size()));
+    }
     cvo_lcm::keyframe_request_t request{};  // the amplifier: each would re-send a keyframe of ~100 kB
     request.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
     request.session = session;
@@ -286,8 +305,9 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
   EXPECT_EQ(status.keyframes_requested, 0) << "no keyframe sent again (the genuine back end lost none)";
   EXPECT_EQ(status.bad_messages[S::BAD_REPLAY], 1) << "the real map, sent again";
   const auto& backend = heard.last_status.at("cvo-backendd");
-  EXPECT_EQ(backend.bad_messages[S::BAD_AUTH] + backend.bad_messages[S::BAD_REPLAY], 0)
-      << "the genuine tracker and frames are all accepted";
+  EXPECT_EQ(backend.bad_messages[S::BAD_AUTH], 3) << "the keyframes forged for the live session's next ids";
+  EXPECT_EQ(backend.bad_messages[S::BAD_REPLAY] + backend.bad_messages[S::BAD_CONFLICT], 0)
+      << "the genuine tracker's messages are all accepted";
   std::int64_t genuine_after = 0;  // genuine maps still applied after the forgeries
   for (std::size_t i = poses_at_forgery; i < heard.poses.size(); ++i) genuine_after = heard.poses[i].map_revision;
   EXPECT_GE(genuine_after, 0);
@@ -295,6 +315,8 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
   EXPECT_NE(log.find("bus authenticated"), std::string::npos) << log;
   backendd->signal(SIGTERM);
   EXPECT_EQ(backendd->wait_for(scaled(60s)).value_or(-9), 0);
+  // The final map holds every genuine keyframe, those with the forged ones' ids too.
+  EXPECT_TRUE(listener.wait_until([](const Heard& h) { return h.map_holds_every_keyframe(); }, scaled(10s)));
 }
 
 // A tracker of another deployment, and one on an open bus, next to a back end that holds the key.

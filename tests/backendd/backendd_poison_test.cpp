@@ -114,13 +114,16 @@ struct Outcome {
   std::uint64_t records = 0;
 };
 
-Outcome run_backendd(const fs::path& dir, const std::string& name, const fs::path& input) {
+Outcome run_backendd(const fs::path& dir, const std::string& name, const fs::path& input,
+                     const std::vector<std::string>& settings = {}) {
   const auto out = dir / (name + ".out.lcmlog");
   const auto store = dir / (name + ".store");
-  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
-                         {"--lcm-url", "file://" + input.string() + "?speed=0", "--publish-url",
-                          "file://" + out.string() + "?mode=w", "--store", store.string(), "--exit-on-eof"},
-                         dir / (name + ".txt"));
+  std::vector<std::string> arguments{"--lcm-url",     "file://" + input.string() + "?speed=0",
+                                     "--publish-url", "file://" + out.string() + "?mode=w",
+                                     "--store",       store.string(),
+                                     "--exit-on-eof"};
+  for (const auto& s : settings) arguments.insert(arguments.end(), {"--set", s});
+  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd", arguments, dir / (name + ".txt"));
   Outcome o;
   o.exit_code = backendd.wait_for(300s).value_or(-9);
   o.log = cvo::testing::slurp(dir / (name + ".txt"));
@@ -168,6 +171,52 @@ TEST(BackenddPoison, EveryRefusalIsCountedByKindAndEveryGoodMessageIsUsed) {
       EXPECT_NEAR(a.keyframes[i].pose.position[c], b.keyframes[i].pose.position[c], 1e-9) << "keyframe " << i;
   }
   EXPECT_EQ(a.num_loops, b.num_loops);
+}
+
+// Issue 26: every new (session, id) was stored, so made-up sessions could grow the store without
+// end. Now a session stores at most backendd.max_records_per_session records and a sender (on an
+// open bus: everyone) at most backendd.max_records_per_sender; past either a record is refused as
+// BAD_QUOTA, named in the notes, and not stored. Here the real session fits its bound exactly; a
+// made-up session (copies of a real keyframe) passes it by two, a second one finds the sender's
+// bound after one.
+TEST(BackenddPoison, RecordsPastASessionsOrASendersBoundAreRefusedAsQuota) {
+  const cvo::test::TempDir dir("backendd_quota");
+  const auto good = cvo::testing::tracker_recording(dir.path());
+  const std::size_t P = good.size();
+  ASSERT_GE(P, 8u);
+  auto copy = decoded<cvo_lcm::keyframe_t>(
+      *std::find_if(good.begin(), good.end(), [](const Event& e) { return e.channel == "CVO_KEYFRAME"; }));
+  std::vector<std::pair<Event, int>> forged;
+  for (std::size_t id = 0; id < P + 2; ++id) {
+    copy.session = 0x0bad'0000'0001;
+    copy.id = static_cast<std::int64_t>(id);
+    forged.emplace_back(event("CVO_KEYFRAME", copy), id < P ? -1 : +cvo_lcm::status_t::BAD_QUOTA);
+  }
+  for (std::size_t id = 0; id < 3; ++id) {
+    copy.session = 0x0bad'0000'0002;
+    copy.id = static_cast<std::int64_t>(id);
+    forged.emplace_back(event("CVO_KEYFRAME", copy), id < 1 ? -1 : +cvo_lcm::status_t::BAD_QUOTA);
+  }
+  {
+    ::lcm::LogFile log((dir.path() / "quota.lcmlog").string(), "w");
+    std::int64_t t = 0;
+    for (const auto& e : good) cvo::testing::write_event(log, e.channel, e.bytes, t += 1000);
+    for (const auto& [e, kind] : forged) cvo::testing::write_event(log, e.channel, e.bytes, t += 1000);
+  }
+  const Outcome o = run_backendd(dir.path(), "quota", dir.path() / "quota.lcmlog",
+                                 {"backendd.max_records_per_session=" + std::to_string(P),
+                                  "backendd.max_records_per_sender=" + std::to_string(2 * P + 1)});
+  ASSERT_EQ(o.exit_code, 0) << o.log;
+  ASSERT_FALSE(o.published.statuses.empty()) << o.log;
+  EXPECT_EQ(o.published.statuses.back().bad_messages[cvo_lcm::status_t::BAD_QUOTA], 4) << o.log;
+  EXPECT_EQ(o.records, 2 * P + 1) << "the refused ones are not stored";
+  EXPECT_NE(o.log.find("(backendd.max_records_per_session)"), std::string::npos) << o.log;
+  // (The sender's refusals are counted above; notes of one kind are rate-limited, the first said.)
+  ASSERT_FALSE(o.published.maps.empty());
+  std::size_t genuine = 0;
+  for (const auto& k : o.published.maps.back().keyframes)
+    genuine += k.session == decoded<cvo_lcm::keyframe_t>(good.front()).session ? 1 : 0;
+  EXPECT_EQ(genuine * 2, P) << "every genuine keyframe reached the map";
 }
 
 // SIGHUP is a stop like SIGTERM: the queue is drained, the final optimisation runs and the final
