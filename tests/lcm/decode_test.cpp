@@ -93,8 +93,8 @@ TEST(Decode, HugeOrNegativeCountsAreRefusedBeforeAllocating) {
 
 TEST(Decode, CorruptStringLengthIsRefused) {
   auto bytes = encode(test::sample_status());
-  // The first string length follows the fixed fields: 8 + 4+8+8+4+1+3*8+5*8+4+8+16*8+5*8+1+8 = 286.
-  const std::size_t process_length = 286;
+  // The first string length follows the fixed fields: 8 + 4+8+8+4+1+3*8+5*8+4+8+17*8+5*8+1+8 = 294.
+  const std::size_t process_length = 294;
   ASSERT_EQ(bytes[process_length + 3], std::string("cvo-trackerd").size() + 1);
   std::string error;
   for (std::uint32_t bad : {0u, 0xffffffffu, 0x80000000u, 1000000u}) {
@@ -107,7 +107,7 @@ TEST(Decode, CorruptStringLengthIsRefused) {
 // the message would not survive a round trip (found by fuzzing, fuzz/regressions/status).
 TEST(Decode, AStringWithAnInnerNulIsRefused) {
   auto bytes = encode(test::sample_status());
-  const std::size_t process_text = 286 + 4;  // "cvo-trackerd" after its length (see above)
+  const std::size_t process_text = 294 + 4;  // "cvo-trackerd" after its length (see above)
   ASSERT_EQ(bytes[process_text], 'c');
   bytes[process_text + 3] = 0;  // "cvo\0trackerd"
   std::string error;
