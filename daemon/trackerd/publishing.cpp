@@ -220,9 +220,7 @@ void Publishing::answer_request(const void* data, int size, std::int64_t request
     auth::publish_bytes(lcm_, shared_.bus.signer(), channel, resend_);
   };
   const double now_s = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-  const auto afford = [&](std::size_t bytes) {
-    return resend_budget_.take(static_cast<std::uint64_t>(requester), request->session, bytes, now_s);
-  };
+  const auto afford = [&](std::size_t bytes) { return resend_budget_.take(requester, request->session, bytes, now_s); };
   const auto answer = history().answer(request->session, request->ids, send, afford);
   if (!answer.ours) return;
   if (!answer.over.empty())
@@ -292,7 +290,7 @@ void Publishing::apply_map(const void* data, int size, std::int64_t sender) {
   const std::int64_t session = shared_.session.load();
   const auto& t = shared_.config.trackerd;
   const lcm::CorrectionLimits limits{t.max_map_jump_m, t.max_map_jump_deg, t.map_epoch_slack_s, t.map_revisions_per_s};
-  const lcm::MapContext context{core::wall_utime(), static_cast<std::uint64_t>(sender), own_keyframes_};
+  const lcm::MapContext context{core::wall_utime(), sender, own_keyframes_};
   const lcm::CorrectionDecision d = lcm::decide_map_correction(data, size, session, applied_, limits, context);
   if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
   const bool was_placed = applied_.session == session && applied_.placed;

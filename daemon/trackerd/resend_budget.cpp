@@ -4,7 +4,7 @@
 
 namespace cvo::daemon::trackerd {
 
-ResendBudget::Bucket& ResendBudget::bucket(Table& table, std::uint64_t key, double now_s) const {
+ResendBudget::Bucket& ResendBudget::bucket(Table& table, std::int64_t key, double now_s) const {
   Bucket* oldest = table.data();
   for (Bucket& b : table) {
     if (b.used && b.key == key) {
@@ -18,9 +18,9 @@ ResendBudget::Bucket& ResendBudget::bucket(Table& table, std::uint64_t key, doub
   return *oldest;
 }
 
-bool ResendBudget::take(std::uint64_t requester, std::int64_t session, std::size_t bytes, double now_s) {
+bool ResendBudget::take(std::int64_t requester, std::int64_t session, std::size_t bytes, double now_s) {
   Bucket& r = bucket(requesters_, requester, now_s);
-  Bucket& s = bucket(sessions_, static_cast<std::uint64_t>(session), now_s);
+  Bucket& s = bucket(sessions_, session, now_s);
   const auto cost = static_cast<double>(bytes);
   // A full bucket pays for any one message, going into debt (a keyframe larger than a second's
   // worth still goes out, once its buckets have refilled).

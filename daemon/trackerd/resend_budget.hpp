@@ -25,19 +25,19 @@ class ResendBudget {
 
   /// May `bytes` be sent again now (`now_s`, a steady clock in seconds) for `requester`, of
   /// `session`? When yes, both buckets pay them.
-  bool take(std::uint64_t requester, std::int64_t session, std::size_t bytes, double now_s);
+  bool take(std::int64_t requester, std::int64_t session, std::size_t bytes, double now_s);
 
   [[nodiscard]] std::int64_t refused() const { return refused_; }  // re-sends refused so far
 
  private:
   static constexpr std::size_t kTracked = 16;
   struct Bucket {
-    std::uint64_t key = 0;
+    std::int64_t key = 0;
     bool used = false;
     double tokens = 0, at_s = 0;  // bytes held at at_s (also when last seen)
   };
   using Table = std::array<Bucket, kTracked>;
-  Bucket& bucket(Table& table, std::uint64_t key, double now_s) const;
+  Bucket& bucket(Table& table, std::int64_t key, double now_s) const;
 
   double rate_;
   Table requesters_{}, sessions_{};

@@ -49,7 +49,7 @@ struct AppliedCorrection {
   // The back end's covariance of keyframe covariance_keyframe's map pose, when it gives one.
   std::optional<core::Matrix6d> keyframe_covariance = std::nullopt;
   std::int64_t covariance_keyframe = -1;
-  std::uint64_t sender = 0;        // the verified sender of the map it came from (0: an open bus)
+  std::int64_t sender = 0;         // the verified sender of the map it came from (0: an open bus)
   std::int64_t applied_utime = 0;  // the receiver's clock when it was applied
 };
 
@@ -69,7 +69,7 @@ struct OwnKeyframe {
 /// What the receiver knows besides the bytes.
 struct MapContext {
   std::int64_t now_utime = 0;              // the receiver's wall clock (µs since 1970)
-  std::uint64_t sender = 0;                // the map's verified sender (0: an open bus)
+  std::int64_t sender = 0;                 // the map's verified sender (0: an open bus)
   std::span<const OwnKeyframe> keyframes;  // of the running session, any order
 };
 

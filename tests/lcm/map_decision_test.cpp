@@ -182,7 +182,7 @@ TEST(MapDecision, WithinAnEpochOnlyTheSenderOfTheAppliedMapMovesTheSession) {
   EXPECT_NE(other.why.find("another sender"), std::string::npos) << other.why;
   const auto same = decide(map_bytes(8, {placed(kSession, kOneMetre)}), last, {kNow, 5, {}});
   ASSERT_TRUE(same.apply) << same.why;
-  EXPECT_EQ(same.correction.sender, 5u);
+  EXPECT_EQ(same.correction.sender, 5);
   EXPECT_EQ(same.correction.applied_utime, kNow);
   // A restarted back end (a newer epoch) is taken from whoever sends it.
   EXPECT_TRUE(decide(map_bytes(1, {placed(kSession, kOneMetre)}, 1000), last, {kNow, 6, {}}).apply);
