@@ -1,6 +1,7 @@
 #include "libcvo/loop_closure/loop_verification.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "libcvo/loop_closure/feature_matching.hpp"
@@ -17,6 +18,16 @@ registration::PointCloud copy_cloud(const registration::PointCloud& cloud, std::
   return copy;
 }
 
+// χ²₆ at 0.95: the 95 % confidence region of a 6-dof Gaussian estimate.
+constexpr double kChi2_6_95 = 12.592;
+
+// Whether `t` lies in the confidence region of `estimate` whose information (left perturbation,
+// [translation; rotation]) is Ω: ξᵀ Ω ξ < χ²₆(0.95), ξ = log(t estimate⁻¹).
+bool within_confidence(const core::Matrix6d& information, const core::SE3& t, const core::SE3& estimate) {
+  const core::Vector6d xi = (t * estimate.inverse()).log();
+  return xi.dot(information * xi) < kChi2_6_95;
+}
+
 bool converged(const registration::RegistrationResult& r) {
   return r.converged && (r.status == registration::RegistrationStatus::kOk ||
                          r.status == registration::RegistrationStatus::kCapacityExceeded);
@@ -31,7 +42,18 @@ LoopKeyframe make_loop_keyframe(std::int64_t id, const OrbFeatures& features, co
           copy_cloud(cloud, p.odometry.max_points), pose};
 }
 
-double AlphaInnerProducts::alpha() const { return cvo - std::max({identity, initial, estimate}); }
+double AlphaInnerProducts::alpha() const {
+  constexpr double kNone = -std::numeric_limits<double>::infinity();
+  if (rivals() == 0) return cvo - std::max({identity, initial, estimate});
+  return cvo - std::max({identity_rival ? identity : kNone, initial_rival ? initial : kNone,
+                         estimate_rival ? estimate : kNone});
+}
+
+int AlphaInnerProducts::rivals() const {
+  return int{identity_rival} + int{initial_rival} + int{estimate_rival && std::isfinite(estimate)};
+}
+
+bool AlphaInnerProducts::accepts() const { return rivals() == 0 || alpha() > 0; }
 
 LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const LoopDetectorParameters& p,
                              registration::Registration& registration) {
@@ -91,18 +113,23 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
   // drops out of the max.
   ip.estimate = i.piece == j.piece ? registration.inner_product(i.cloud, j.cloud, i.pose.inverse() * j.pose, ip.ell)
                                    : -std::numeric_limits<double>::infinity();
+  // Ω = Σ⁻¹ of the solver's result, calibrated as every CVO edge (registration/edge_covariance.hpp);
+  // see the header for why no adjoint is needed. It also tells which of α's rivals are the CVO pose.
+  const auto information =
+      registration::information_of(registration::edge_covariance(v.refinement), v.refinement.hessian);
+  const auto rival = [&](const core::SE3& t) { return !within_confidence(information, t, v.refinement.transform); };
+  ip.identity_rival = rival(core::SE3());
+  ip.initial_rival = rival(v.initial.inverse());
+  ip.estimate_rival = i.piece == j.piece && rival(i.pose.inverse() * j.pose);
   v.attempt.alpha = ip.alpha();
-  if (!(v.attempt.alpha > 0)) {
+  v.attempt.rivals = ip.rivals();
+  if (!ip.accepts()) {
     v.attempt.verdict = "alpha <= 0";
     return v;
   }
 
   v.attempt.accepted = true;
   v.attempt.verdict = "accepted";
-  // Ω = Σ⁻¹ of the solver's result, calibrated as every CVO edge (registration/edge_covariance.hpp);
-  // see the header for why no adjoint is needed.
-  const auto information =
-      registration::information_of(registration::edge_covariance(v.refinement), v.refinement.hessian);
   v.closure =
       LoopClosure{j.id, i.id, v.refinement.transform.inverse(), information, 0.0, v.attempt.alpha, v.attempt.inliers};
   return v;

@@ -24,10 +24,20 @@
 //      T_rel = T_i^-1 T_j from the current global estimates of the two keyframes (a term only
 //      when both are in the same piece of map: two sessions not joined yet have no T_rel). α <= 0:
 //      "alpha <= 0" (the CVO pose aligns no better than identity, the RANSAC pose, or what the
-//      trajectory already says: such a loop would add nothing or harm). When RANSAC's pose is
-//      already at the optimum (exact rendered depth), CVO can only tie with it: α is then at the
-//      noise level of the sparsified kernel (bench/odometry-tuning.md, "α at the optimum"), and
-//      such a loop may be refused although it is right.
+//      trajectory already says: such a loop would add nothing or harm).
+//      A rival that IS the CVO pose, within the CVO pose's own uncertainty, is no rival: with
+//      ξ = log(T_rival T_ij⁻¹) (the left perturbation of the edge's information Ω below),
+//      ξᵀ Ω ξ < χ²₆(0.95) = 12.59 puts it inside the 95 % confidence region of T_ij, and it drops
+//      out of the max. Without that, α cannot accept the commonest revisit: a robot started again
+//      at its dock sees what it saw, RANSAC's pose and the identity are already the optimum, CVO
+//      can only tie with them, and α sits at the noise level of the sparsified kernel
+//      (bench/odometry-tuning.md, "α at the optimum"), refused although right; the one-session
+//      trajectory term has the same blind spot when the trajectory already agrees. A rival the
+//      CVO pose cannot be told from supports the loop rather than contradicting it; when every
+//      rival is the CVO pose, the loop is accepted (α then compares with no rival: +∞ is not
+//      reported, α is that of the nearest rival, flagged by `rivals` = 0). An over-confident Ω
+//      (real sequences: bench/odometry-tuning.md, "Covariance") only keeps rivals in: the test
+//      stays as strict as the paper's.
 //
 // Information of the loop edge. The solver's calibrated information H = Σ⁻¹
 // (registration/edge_covariance.hpp, the sandwich of its Hessian; order [translation, rotation])
@@ -79,6 +89,7 @@ struct LoopAttempt {
   int matches = 0, inliers = 0;
   int inliers_kept = 0;  // RANSAC inliers still within ransac_inlier_m under the CVO pose
   double alpha = 0;
+  int rivals = 3;  // of α's three comparisons, those with a pose other than the CVO pose's
   bool accepted = false;
   const char* verdict = "";  // "accepted", "too few matches", "RANSAC failed", "CVO failed",
                              // "CVO left the matches", "alpha <= 0"
@@ -105,7 +116,14 @@ LoopKeyframe make_loop_keyframe(std::int64_t id, const OrbFeatures& features, co
 struct AlphaInnerProducts {
   double cvo = 0, identity = 0, initial = 0, estimate = 0;
   double ell = 0;
-  [[nodiscard]] double alpha() const;  // cvo - max(identity, initial, estimate)
+  // Whether each rival is a pose other than the CVO pose (step 4: outside its confidence region).
+  bool identity_rival = true, initial_rival = true, estimate_rival = true;
+  /// cvo - max over the rivals (identity, initial, estimate); with none, cvo - max over all three.
+  [[nodiscard]] double alpha() const;
+  /// How many of the three are rivals.
+  [[nodiscard]] int rivals() const;
+  /// Step 4's verdict: α over the rivals > 0, or no rival at all.
+  [[nodiscard]] bool accepts() const;
 };
 
 struct LoopVerification {

@@ -82,15 +82,17 @@ TEST_F(LoopDetectorTest, FindsARevisitedRealViewAmongEarlierKeyframes) {
   EXPECT_LT(e.rotation_deg, 2.0);
 
   // update_poses reaches the α test: with keyframe 0's estimate moved so that the trajectory
-  // already holds the loop's pose, the same loop has α = 0 (ids not stored are ignored).
+  // already holds the loop's pose, the estimate is that pose and no rival of it; the loop stands
+  // on the identity and RANSAC's pose (ids not stored are ignored).
   LoopDetector again = detector();
   add(again, 0, k[0], pose(0));
   add(again, 1, k[1], pose(1));
   again.update_poses({{0, pose(2) * loop.measurement.inverse()}, {99, core::SE3()}});
-  const auto none = add(again, 2, k[2], pose(2));
+  const auto same = add(again, 2, k[2], pose(2));
   ASSERT_EQ(again.last_attempts().size(), 1u);
-  EXPECT_NEAR(again.last_attempts().front().alpha, 0.0, 1e-9);
-  EXPECT_EQ(none.size(), again.last_attempts().front().accepted ? 1u : 0u);
+  EXPECT_EQ(d.last_attempts().front().rivals, 3);
+  EXPECT_EQ(again.last_attempts().front().rivals, 2);
+  EXPECT_EQ(same.size(), 1u);
 
   EXPECT_THROW(d.add_keyframe(2, k[0].frame, k[0].cloud, pose(0)), std::invalid_argument);  // ids must increase
 }
@@ -98,8 +100,8 @@ TEST_F(LoopDetectorTest, FindsARevisitedRealViewAmongEarlierKeyframes) {
 // Two sessions (slam/mapper.hpp): frames 20 and 44 are session A's keyframes; session B's first
 // keyframe (frame 28) has no predecessor in its session, so no η and no candidates; its second
 // (frame 27, previous = B's first) finds A's frame 20. B is a piece of its own: its estimate says
-// nothing about A's, and the α test leaves the trajectory term out (an estimate that would tie
-// with CVO, as above, cannot refuse the loop).
+// nothing about A's, and the α test leaves the trajectory term out (an estimate of another piece
+// is no rival, however far off).
 TEST_F(LoopDetectorTest, ASessionsFirstKeyframeHasNoCandidatesAndPiecesAreNotCompared) {
   std::vector<testing::TestKeyframe> k;
   for (const std::size_t f : {20, 44, 28, 27}) k.push_back(testing::real_keyframe(f));
@@ -114,22 +116,23 @@ TEST_F(LoopDetectorTest, ASessionsFirstKeyframeHasNoCandidatesAndPiecesAreNotCom
   EXPECT_EQ(loops.front().from, 0);
   EXPECT_EQ(loops.front().to, 101);
 
-  // An estimate that already holds the loop's pose: inside one piece α is 0 (as above); in another
-  // piece the same numbers are not comparable and the loop keeps the α of CVO against identity and
-  // RANSAC.
-  const core::SE3 b_pose = k[0].truth * loops.front().measurement;
-  const auto alpha_in_piece = [&](std::int64_t piece) {
+  // An estimate 5 cm off the loop's pose: inside one piece it is a rival of the CVO pose; in
+  // another piece the two poses are not comparable, the estimate is no term of α, and the loop
+  // keeps the α of CVO against identity and RANSAC.
+  const core::SE3 b_pose = k[0].truth * loops.front().measurement * core::SE3::from_translation({0.05, 0, 0});
+  const auto attempt_in_piece = [&](std::int64_t piece) {
     LoopDetector e = detector();
     e.add_keyframe({0, std::nullopt, k[0].truth, 0}, k[0].frame, k[0].cloud);
     e.add_keyframe({1, 0, k[1].truth, 0}, k[1].frame, k[1].cloud);
     e.add_keyframe({100, std::nullopt, b_pose, piece}, k[2].frame, k[2].cloud);
     e.add_keyframe({101, 100, b_pose, piece}, k[3].frame, k[3].cloud);
     for (const auto& a : e.last_attempts())
-      if (a.candidate == 0) return a.alpha;
-    return -1.0;
+      if (a.candidate == 0) return a;
+    return LoopAttempt{};
   };
-  EXPECT_NEAR(alpha_in_piece(0), 0.0, 1e-9);
-  EXPECT_NEAR(alpha_in_piece(1), loops.front().alpha, 1e-9);
+  EXPECT_EQ(attempt_in_piece(0).rivals, 3);
+  EXPECT_EQ(attempt_in_piece(1).rivals, 2);
+  EXPECT_NEAR(attempt_in_piece(1).alpha, loops.front().alpha, 1e-9);
   EXPECT_GT(loops.front().alpha, 1e-3);
   EXPECT_THROW(d.add_keyframe({101, 100, b_pose, 1}, k[3].frame, k[3].cloud), std::invalid_argument);  // stored already
 }

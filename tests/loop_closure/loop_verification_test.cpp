@@ -130,16 +130,40 @@ TEST(LoopVerification, AlphaComparesInnerProductsAtOneLengthScaleIncludingTheCur
   EXPECT_EQ(v.attempt.alpha, ip.cvo - std::max({ip.identity, ip.initial, ip.estimate}));
   EXPECT_GT(ip.cvo, ip.initial);  // CVO improved on RANSAC's pose
 
-  // When the trajectory already holds the CVO pose, the loop adds nothing: α = 0, refused.
+  EXPECT_EQ(v.attempt.rivals, 3);  // the drifted estimate is 5 cm / 3° off: a rival
+
+  // When the trajectory already holds the CVO pose, the estimate is that pose, not a rival: α
+  // compares with the identity and RANSAC's pose only (CVO improved on both), and the loop stands.
   p.j.pose = core::SE3();
   p.i.pose = v.closure->measurement;
   const auto again = verify_loop(p.i, p.j, parameters, registration);
   print("estimate = CVO pose", again);
-  EXPECT_NEAR(again.attempt.alpha, 0.0, 1e-9 * ip.cvo);
-  EXPECT_EQ(again.attempt.accepted, again.attempt.alpha > 0);
-  if (!again.attempt.accepted) {
-    EXPECT_STREQ(again.attempt.verdict, "alpha <= 0");
-  }
+  EXPECT_NEAR(again.inner_products.estimate, again.inner_products.cvo, 1e-9 * ip.cvo);
+  EXPECT_FALSE(again.inner_products.estimate_rival);
+  EXPECT_EQ(again.attempt.rivals, 2);
+  EXPECT_EQ(again.attempt.alpha,
+            again.inner_products.cvo - std::max(again.inner_products.identity, again.inner_products.initial));
+  EXPECT_TRUE(again.attempt.accepted) << again.attempt.verdict;
+}
+
+// A robot started again at its dock sees what it saw: RANSAC's pose and the identity are the
+// optimum already, CVO can only tie with them, and α over them is noise. They are the CVO pose
+// within its uncertainty, so none is a rival and the loop is accepted, at the identity.
+TEST(LoopVerification, AKeyframeSeenAgainFromTheSamePoseIsALoopAlthoughAlphaTies) {
+  const LoopDetectorParameters parameters;
+  auto registration = make_registration(parameters);
+  const auto k = testing::real_keyframe(20);
+  const auto j = testing::loop_keyframe(0, k, k.truth);
+  auto i = testing::loop_keyframe(1, k, k.truth);
+  i.piece = 1;  // another session, not joined yet: no trajectory term
+  const auto v = verify_loop(i, j, parameters, registration);
+  print("the same keyframe again", v);
+  EXPECT_EQ(v.attempt.rivals, 0);
+  EXPECT_LE(std::abs(v.attempt.alpha), 1e-2 * v.inner_products.cvo);  // a tie, whichever sign
+  ASSERT_TRUE(v.closure.has_value()) << v.attempt.verdict;
+  EXPECT_STREQ(v.attempt.verdict, "accepted");
+  EXPECT_LT(v.closure->measurement.translation().norm(), 1e-3);
+  EXPECT_LT(deg(v.closure->measurement.angle()), 0.05);
 }
 
 // The clouds and the keypoints of a pair disagree by S (j's cloud moved by S, its keypoints not):

@@ -4,8 +4,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <regex>
+#include <sstream>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include <gtest/gtest.h>
 
@@ -111,6 +116,48 @@ TEST(CvoRunSlam, TwoHalvesOfASequenceAreTwoSessionsOfOneMap) {
               ate_two, ate_one, second[2].str().c_str(), loops_across_sessions(r.out));
   EXPECT_LT(ate_two, 1.5 * ate_one);
   EXPECT_EQ(json_value(r.out, "ate_rmse_m_odometry"), "null");  // two odometry frames: no one ATE
+}
+
+// A robot restarted at its dock eight times, each run the same clip: every session sees what the
+// first saw, from the same poses. Each joins the map (α's rivals that are the CVO pose are none,
+// loop_verification.hpp), and one frame's map pose is the same in every session.
+TEST(CvoRunSlam, EightRestartsAtTheDockAllJoinTheMap) {
+  const test::TempDir dir("cvo_run_dock");
+  std::string sessions;
+  for (int k = 0; k < 8; ++k) sessions += quoted(test::kSample) + " ";
+  const fs::path traj = dir.path() / "traj.txt";
+  const ToolRun r = run_tool("cvo-run", sessions + "--out " + quoted(traj) + " --mode slam --json", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::regex joined("\"session\": (\\d+), \"frames\": 50, \"keyframes\": \\d+, \"joined\": (\\w+)");
+  int sessions_seen = 0, sessions_joined = 0;
+  for (auto it = std::sregex_iterator(r.out.begin(), r.out.end(), joined); it != std::sregex_iterator(); ++it) {
+    ++sessions_seen;
+    sessions_joined += (*it)[2] == "true";
+    EXPECT_EQ((*it)[2], "true") << "session " << (*it)[1];
+  }
+  EXPECT_EQ(sessions_seen, 8) << r.out.substr(0, 3000);
+  EXPECT_EQ(sessions_joined, 8);
+  EXPECT_EQ(json_value(r.out, "poses"), "400");
+
+  // Every frame's map pose, session by session (the trajectory lists sessions in order).
+  std::map<std::string, std::vector<Eigen::Vector3d>> by_time;
+  std::ifstream in(traj);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string t;
+    Eigen::Vector3d p;
+    fields >> t >> p.x() >> p.y() >> p.z();
+    by_time[t].push_back(p);
+  }
+  ASSERT_EQ(by_time.size(), 50u);
+  double worst = 0;
+  for (const auto& [t, poses] : by_time) {
+    ASSERT_EQ(poses.size(), 8u) << t;
+    for (const auto& p : poses) worst = std::max(worst, (p - poses.front()).norm());
+  }
+  std::printf("eight dock restarts: all joined; one frame's map poses at most %.2f mm apart\n", 1e3 * worst);
+  EXPECT_LT(worst, 0.01);
 }
 
 // A session of another place (a rendered room) has no loop to the map: it stays unplaced, is left
