@@ -183,11 +183,12 @@ struct Backendd::Work {
                   std::chrono::duration<double>(config.backendd.status_period_s), kLiveFor}) {}
 
   slam::Mapper mapper;
-  mapping::Mapping mapping;       // the occupancy grid of the mapper's map (CVO_GRID)
-  ::lcm::LCM lcm;                 // CVO_MAP_CORRECTION, CVO_MAP, CVO_GRID and CVO_STATUS
-  MapSchedule schedule;           // when which of the map goes out
-  std::size_t optimisations = 0;  // the mapper's when corrections last went out
-  Sent corrections, maps;         // CVO_MAP_CORRECTION, CVO_MAP
+  mapping::Mapping mapping;                 // the occupancy grid of the mapper's map (CVO_GRID)
+  ::lcm::LCM lcm;                           // CVO_MAP_CORRECTION, CVO_MAP, CVO_GRID and CVO_STATUS
+  MapSchedule schedule;                     // when which of the map goes out
+  std::size_t optimisations = 0;            // the mapper's when corrections last went out
+  Sent corrections, maps;                   // CVO_MAP_CORRECTION, CVO_MAP
+  std::vector<std::int64_t> replay_joined;  // sessions the store's records joined, noted with its map
   // CVO_MAP's epoch: revisions count from the start of this process, and a tracker takes a newer
   // epoch's maps after a restart of the back end instead of refusing them as stale.
   const std::int64_t epoch = core::wall_utime();
@@ -536,7 +537,12 @@ void Backendd::process(QueuedRecord& queued) {
   };
   if (queued.arrived) localize_when_stored();
   process_record(queued);
-  if (!queued.arrived && --replayed_pending_ == 0) localize_when_stored();
+  if (!queued.arrived && --replayed_pending_ == 0) {
+    if (localization())
+      localize_when_stored();
+    else  // the store's map at once, and each session's correction
+      publish_changes(std::nullopt, std::exchange(work_->replay_joined, {}), true);
+  }
   ++work_->processed;
 }
 
@@ -629,10 +635,14 @@ void Backendd::apply_local_graph(const LocalGraphRecord& record) {
 void Backendd::publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,
                                bool after_loop) {
   Work& w = *work_;
+  w.schedule.changed();
+  if (replayed_pending_ > 0) {  // a record of the store: what they make goes out once all are in (process())
+    w.replay_joined.insert(w.replay_joined.end(), joined.begin(), joined.end());
+    return;
+  }
   const bool every = !touched || w.mapper.optimisations() != w.optimisations;
   w.optimisations = w.mapper.optimisations();
   publish_corrections(every ? w.mapper.sessions() : std::vector<core::SessionId>{*touched}, false);
-  w.schedule.changed();
   if (w.schedule.map_due(Clock::now(), after_loop || !joined.empty())) publish_map(joined, after_loop);
 }
 
@@ -659,6 +669,7 @@ void Backendd::publish_due() {
     for (const auto& [session, at] : posed_) w.schedule.seen(session, at);
     posed_.clear();
   }
+  if (replayed_pending_ > 0) return;  // the store's map goes once it is in
   if (w.schedule.map_due(now, false)) publish_map({}, false);
   if (const auto due = w.schedule.resends_due(now); !due.empty()) publish_corrections(due, true);
 }

@@ -20,7 +20,9 @@
 //                 at once after a loop closure that moved keyframes; CVO_STATUS once a period
 //
 // At start-up the store is read back and every record goes through the same door and path, so a
-// restart resumes every session received before.
+// restart resumes every session received before; what they make goes out once every one is in
+// (the full CVO_MAP and each session's CVO_MAP_CORRECTION), not after each: a tracker sees the
+// restarted back end's revisions leap once, in its new epoch.
 //
 // Localization (backendd.mode localization): the store is only read (read_store, as cvo-map reads
 // it: never written, renamed or cut back), its records are the map; once they are applied the
