@@ -69,8 +69,8 @@ std::string fixed(double value, int digits) {
   return text;
 }
 
-// Where CVO_MAP_CORRECTION, CVO_MAP and CVO_STATUS go: the input's provider unless told otherwise (a file:// log that
-// is read cannot take them).
+// Where CVO_MAP_CORRECTION, CVO_MAP and CVO_STATUS go: the input's provider unless told otherwise
+// (a file:// log that is read cannot take them).
 std::string publish_url(const config::BackenddParameters& b) {
   return b.publish_url == "lcm_url" ? b.lcm_url : b.publish_url;
 }
@@ -432,9 +432,15 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
     return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
   }
   gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
-  if (pose->state == cvo_lcm::pose_t::STATE_LOST) return queue_.push({LostSession{pose->session}, Clock::now()});
-  const std::lock_guard lock(posed_mutex_);
-  posed_[pose->session] = Clock::now();
+  const bool lost = pose->state == cvo_lcm::pose_t::STATE_LOST;
+  {
+    const std::lock_guard lock(posed_mutex_);
+    if (lost)
+      posed_.erase(pose->session);  // its tracker has moved on to a new session
+    else
+      posed_[pose->session] = Clock::now();  // live: its correction goes again once a status period
+  }
+  if (lost) queue_.push({LostSession{pose->session}, Clock::now()});
 }
 
 // A log cannot answer: what it lacks is lost as soon as it is noticed.
