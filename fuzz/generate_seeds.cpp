@@ -101,6 +101,7 @@ int main(int argc, char** argv) try {
   const auto graph = encode(cvo::test::sample_local_graph());
   write(out / "local_graph/sample", graph);
   write(out / "map/sample", encode(cvo::test::sample_map()));
+  write(out / "map_correction/sample", encode(cvo::test::sample_map_correction()));
   write(out / "status/sample", encode(cvo::test::sample_status()));
   write(out / "grid/sample", encode(cvo::test::sample_grid()));
 

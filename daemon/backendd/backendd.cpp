@@ -18,8 +18,10 @@
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
+#include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
+#include "daemon/backendd/map_schedule.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "daemon/common/status.hpp"
@@ -36,6 +38,7 @@
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/map_correction_conversion.hpp"
 #include "libcvo/lcm/tracker_messages.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "libcvo/mapping/mapping.hpp"
@@ -56,6 +59,9 @@ constexpr std::int64_t kMaxWaitingInStore = 16384;
 // CVO_GRID at most this often while the grid changes (a loop closure's goes out at once): a grid
 // is tens of kilobytes, and a planner replans on each.
 constexpr auto kGridPeriod = 1s;
+// A session whose tracker said nothing (no record, no CVO_POSE) for this long is no longer live: its
+// correction is not sent again.
+constexpr auto kLiveFor = 10s;
 
 std::string fixed(double value, int digits) {
   char text[64];
@@ -63,8 +69,8 @@ std::string fixed(double value, int digits) {
   return text;
 }
 
-// Where CVO_MAP and CVO_STATUS go: the input's provider unless told otherwise (a file:// log that
-// is read cannot take them).
+// Where CVO_MAP_CORRECTION, CVO_MAP and CVO_STATUS go: the input's provider unless told otherwise
+// (a file:// log that is read cannot take them).
 std::string publish_url(const config::BackenddParameters& b) {
   return b.publish_url == "lcm_url" ? b.lcm_url : b.publish_url;
 }
@@ -98,6 +104,22 @@ std::string text(const MapSummary& s) {
   return std::to_string(s.sessions) + " sessions (" + std::to_string(s.placed) + " placed), " +
          std::to_string(s.keyframes) + " keyframes, " + std::to_string(s.loops) + " loops (" +
          std::to_string(s.loops_across) + " across sessions), map revision " + std::to_string(s.revision);
+}
+
+// What a channel of the map has sent: messages and their encoded bytes (the last, the largest), for
+// systemd's STATUS and the closing note.
+struct Sent {
+  std::size_t messages = 0, bytes_last = 0, bytes_max = 0;
+  void add(std::size_t bytes) {
+    ++messages;
+    bytes_last = bytes;
+    bytes_max = std::max(bytes_max, bytes);
+  }
+};
+
+std::string text(const char* channel, const Sent& s) {
+  return std::to_string(s.messages) + " " + channel + " sent (" + std::to_string(s.bytes_last) + " bytes the last, " +
+         std::to_string(s.bytes_max) + " at most)";
 }
 
 // What CVO_GRID has sent, and what the mapping costs, for CVO_STATUS, systemd and the closing note.
@@ -156,11 +178,17 @@ struct Backendd::Work {
   Work(loop_closure::Vocabulary vocabulary, const config::Config& config)
       : mapper(std::move(vocabulary), config::mapper_parameters(config)),
         mapping(config.mapping),
-        lcm(publish_url(config.backendd)) {}
+        lcm(publish_url(config.backendd)),
+        schedule({std::chrono::duration<double>(config.backendd.map_period_s),
+                  std::chrono::duration<double>(config.backendd.status_period_s), kLiveFor}) {}
 
   slam::Mapper mapper;
-  mapping::Mapping mapping;  // the occupancy grid of the mapper's map (CVO_GRID)
-  ::lcm::LCM lcm;            // CVO_MAP, CVO_GRID and CVO_STATUS
+  mapping::Mapping mapping;                 // the occupancy grid of the mapper's map (CVO_GRID)
+  ::lcm::LCM lcm;                           // CVO_MAP_CORRECTION, CVO_MAP, CVO_GRID and CVO_STATUS
+  MapSchedule schedule;                     // when which of the map goes out
+  std::size_t optimisations = 0;            // the mapper's when corrections last went out
+  Sent corrections, maps;                   // CVO_MAP_CORRECTION, CVO_MAP
+  std::vector<std::int64_t> replay_joined;  // sessions the store's records joined, noted with its map
   // CVO_MAP's epoch: revisions count from the start of this process, and a tracker takes a newer
   // epoch's maps after a restart of the back end instead of refusing them as stale.
   const std::int64_t epoch = core::wall_utime();
@@ -404,7 +432,15 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
     return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
   }
   gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
-  if (pose->state == cvo_lcm::pose_t::STATE_LOST) queue_.push({LostSession{pose->session}, Clock::now()});
+  const bool lost = pose->state == cvo_lcm::pose_t::STATE_LOST;
+  {
+    const std::lock_guard lock(posed_mutex_);
+    if (lost)
+      posed_.erase(pose->session);  // its tracker has moved on to a new session
+    else
+      posed_[pose->session] = Clock::now();  // live: its correction goes again once a status period
+  }
+  if (lost) queue_.push({LostSession{pose->session}, Clock::now()});
 }
 
 // A log cannot answer: what it lacks is lost as soon as it is noticed.
@@ -489,6 +525,7 @@ void Backendd::work_loop() {
       process(*queued);
     else if (receiver_done && queue_.size() == 0)
       break;
+    publish_due();
     if (work_->grid_due && (!work_->grid.last || Clock::now() - *work_->grid.last >= kGridPeriod)) publish_grid(false);
     if (Clock::now() - work_->last_status >= status_period)
       publish_status(work_->summary.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT
@@ -506,7 +543,12 @@ void Backendd::process(QueuedRecord& queued) {
   };
   if (queued.arrived) localize_when_stored();
   process_record(queued);
-  if (!queued.arrived && --replayed_pending_ == 0) localize_when_stored();
+  if (!queued.arrived && --replayed_pending_ == 0) {
+    if (localization())
+      localize_when_stored();
+    else  // the store's map at once, and each session's correction
+      publish_changes(std::nullopt, std::exchange(work_->replay_joined, {}), true);
+  }
   ++work_->processed;
 }
 
@@ -515,11 +557,14 @@ void Backendd::process_record(QueuedRecord& queued) {
     if (const auto* lost = std::get_if<LostSession>(&queued.content)) {
       work_->mapper.mark_lost(lost->session);
       notes_.note("session " + core::session_name(lost->session) + " lost: its tracker's odometry failed");
-      return publish_map({}, false);
+      publish_changes(lost->session, {}, false);
+      return work_->schedule.lost(lost->session);
     }
     std::string error;
     const auto value = value_of(queued, &error);
     if (!value) return notes_.note_limited("unreadable", error);
+    if (queued.arrived)  // live input: its session is live
+      work_->schedule.seen(std::visit([](const auto& v) { return v.session; }, *value), *queued.arrived);
     if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
       apply_keyframe(*keyframe, queued.arrived);
     else
@@ -540,6 +585,9 @@ void Backendd::start_localizing() {
   notes_.note("localizing new sessions in the stored map: " + std::to_string(map.keyframes.size()) + " keyframes of " +
               std::to_string(map.sessions.size()) + " sessions, " + std::to_string(map.loops.size()) + " loops" +
               (map.keyframes.empty() ? " (an empty map: nothing can be localized)" : ""));
+  publish_corrections(w.mapper.sessions(), false);
+  w.optimisations = w.mapper.optimisations();
+  w.schedule.changed();
   publish_map({}, false);
 }
 
@@ -580,13 +628,56 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_
     ++w.grid.not_mapped;
     notes_.note_limited("not mapped", keyframe_name(k.session, k.id) + " left out of the grid: " + e.what());
   }
-  publish_map(outcome.joined, !outcome.loops.empty() || !outcome.joined.empty());
+  publish_changes(k.session, outcome.joined, !outcome.loops.empty() || !outcome.joined.empty());
 }
 
 void Backendd::apply_local_graph(const LocalGraphRecord& record) {
   const auto joined = apply(work_->mapper, record);
   ++work_->local_graphs;
-  publish_map(joined, !joined.empty());
+  publish_changes(record.session, joined, !joined.empty());
+}
+
+// A change that optimised the keyframe graph may have moved every session; any other, only its own.
+void Backendd::publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,
+                               bool after_loop) {
+  Work& w = *work_;
+  w.schedule.changed();
+  if (replayed_pending_ > 0) {  // a record of the store: what they make goes out once all are in (process())
+    w.replay_joined.insert(w.replay_joined.end(), joined.begin(), joined.end());
+    return;
+  }
+  const bool every = !touched || w.mapper.optimisations() != w.optimisations;
+  w.optimisations = w.mapper.optimisations();
+  publish_corrections(every ? w.mapper.sessions() : std::vector<core::SessionId>{*touched}, false);
+  if (w.schedule.map_due(Clock::now(), after_loop || !joined.empty())) publish_map(joined, after_loop);
+}
+
+void Backendd::publish_corrections(const std::vector<core::SessionId>& sessions, bool again) {
+  Work& w = *work_;
+  for (const core::SessionId session : sessions) {
+    const auto message = lcm::to_message(w.mapper.correction(session, cvo_lcm::map_correction_t::MAX_LOOPS),
+                                         core::wall_utime(), w.epoch);
+    auto entry = lcm::encode(message.session);
+    if (!again && !w.schedule.differs(session, entry)) continue;
+    auth::publish(w.lcm, bus_.signer(), "CVO_MAP_CORRECTION", message);
+    w.corrections.add(static_cast<std::size_t>(message.getEncodedSize()));
+    w.schedule.sent(session, std::move(entry), Clock::now());
+  }
+}
+
+// From cvo-backend's loop: the full map once its period has passed while a change waited, and
+// the corrections of live sessions (a CVO_POSE or a record of theirs came lately) again.
+void Backendd::publish_due() {
+  Work& w = *work_;
+  const auto now = Clock::now();
+  {
+    const std::lock_guard lock(posed_mutex_);
+    for (const auto& [session, at] : posed_) w.schedule.seen(session, at);
+    posed_.clear();
+  }
+  if (replayed_pending_ > 0) return;  // the store's map goes once it is in
+  if (w.schedule.map_due(now, false)) publish_map({}, false);
+  if (const auto due = w.schedule.resends_due(now); !due.empty()) publish_corrections(due, true);
 }
 
 void Backendd::publish_map(const std::vector<std::int64_t>& joined, bool after_loop) {
@@ -594,6 +685,8 @@ void Backendd::publish_map(const std::vector<std::int64_t>& joined, bool after_l
   const slam::Map map = w.mapper.map();
   const auto message = lcm::to_message(map, core::wall_utime(), w.epoch);
   auth::publish(w.lcm, bus_.signer(), "CVO_MAP", message);
+  w.maps.add(static_cast<std::size_t>(message.getEncodedSize()));
+  w.schedule.map_sent(Clock::now());
   w.summary = summarise(map);
   for (const auto session : joined) {
     const auto arrived = w.first_arrival.find(session);
@@ -665,7 +758,8 @@ void Backendd::publish_status(std::int8_t state) {
   s.sender = bus_.sender();
   const cvo_lcm::status_t message = status_message(std::move(s), notes_);
   auth::publish(w.lcm, bus_.signer(), "CVO_STATUS", message);
-  const std::string summary = text(w.summary) + "; " + text(w.grid, w.mapping.statistics());
+  const std::string summary = text(w.summary) + "; " + text(w.grid, w.mapping.statistics()) + "; " +
+                              text("CVO_MAP_CORRECTION", w.corrections) + ", " + text("CVO_MAP", w.maps);
   systemd_.status(store.degraded() ? "degraded: " + describe(store) + "; " + summary : summary);
   w.processed_at_last_status = w.processed;
   w.last_status = now;
@@ -681,6 +775,8 @@ void Backendd::finish() {
       notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
                   std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
     }
+    publish_corrections(w.mapper.sessions(), false);
+    w.schedule.changed();
     publish_map({}, false);
   } catch (const std::exception& e) {
     notes_.note(std::string("final optimisation failed, the last map stands: ") + e.what());
@@ -689,6 +785,7 @@ void Backendd::finish() {
   notes_.note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
               std::to_string(w.mapper.loops_accepted()) + " loops accepted of " +
               std::to_string(w.mapper.loops_tried()) + " tried");
+  notes_.note(text("CVO_MAP_CORRECTION", w.corrections) + "; " + text("CVO_MAP", w.maps));
   const auto& g = w.grid;
   notes_.note(text(g, w.mapping.statistics()) + "; " + std::to_string(g.published) + " CVO_GRIDs sent; place " +
               std::to_string(g.places) + " times, " +

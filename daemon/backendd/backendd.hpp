@@ -11,22 +11,28 @@
 //                 a local graph or CVO_POSE naming an unknown keyframe) is asked for again on
 //                 CVO_KEYFRAME_REQUEST (keyframe_gaps.hpp)
 //   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
-//                 keyframe-graph optimisation) -> CVO_MAP after each change; beside it
-//                 mapping::Mapping, each keyframe's local map placed at the map's poses -> CVO_GRID
-//                 at most once a second while it changes, at once after a loop closure that moved
-//                 keyframes; CVO_STATUS once a period
+//                 keyframe-graph optimisation) -> after each change CVO_MAP_CORRECTION for each
+//                 session whose entry changed (O(1) bytes each), each live session's again once a
+//                 status period, and the full CVO_MAP at most once backendd.map_period_s while it
+//                 changes, at once after a loop closure or a join (map_schedule.hpp); beside it
+//                 mapping::Mapping, each keyframe's local map placed at the poses of each full map
+//                 -> CVO_GRID (the poses of a CVO_MAP sent) at most once a second while it changes,
+//                 at once after a loop closure that moved keyframes; CVO_STATUS once a period
 //
 // At start-up the store is read back and every record goes through the same door and path, so a
-// restart resumes every session received before.
+// restart resumes every session received before; what they make goes out once every one is in
+// (the full CVO_MAP and each session's CVO_MAP_CORRECTION), not after each: a tracker sees the
+// restarted back end's revisions leap once, in its new epoch.
 //
 // Localization (backendd.mode localization): the store is only read (read_store, as cvo-map reads
 // it: never written, renamed or cut back), its records are the map; once they are applied the
 // final global optimisation runs and the mapper becomes read only (slam::Mapper::localize_only).
 // Every new session is localized in it; its keyframes are never stored and make no grid, and the
-// grid published is the stored map's. A CVO_POSE whose state is LOST marks its session lost. On SIGTERM/SIGINT/SIGHUP:
-// what is already in the socket is taken in, the queue is drained, a final global optimisation runs, the final CVO_MAP
-// is published, then the final CVO_GRID, exit 0. No record can stop the daemon: what the mapper cannot apply is noted
-// and skipped.
+// grid published is the stored map's. A CVO_POSE whose state is LOST marks its session lost (and any
+// CVO_POSE keeps its session live for the re-sent corrections). On SIGTERM/SIGINT/SIGHUP: what is
+// already in the socket is taken in, the queue is drained, a final global optimisation runs, the
+// changed corrections and the final CVO_MAP are published, then the final CVO_GRID, exit 0. No
+// record can stop the daemon: what the mapper cannot apply is noted and skipped.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -109,6 +115,13 @@ class Backendd {
   std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
   void apply_keyframe(const lcm::Keyframe& keyframe, std::optional<std::chrono::steady_clock::time_point> arrived);
   void apply_local_graph(const LocalGraphRecord& record);
+  // After a change that may have touched `touched` only (nullopt: every session): the corrections
+  // that changed, the full map when due (map_schedule.hpp).
+  void publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,
+                       bool after_loop);
+  // Those of `sessions` whose entry changed (`again`: each, changed or not).
+  void publish_corrections(const std::vector<core::SessionId>& sessions, bool again);
+  void publish_due();  // the full map once its period has passed, live sessions' corrections again
   void publish_map(const std::vector<std::int64_t>& joined, bool after_loop);
   void place_in_grid(const slam::Map& map, bool after_loop);
   void publish_grid(bool after_loop);
@@ -143,6 +156,9 @@ class Backendd {
   std::atomic<std::int64_t> bad_messages_[cvo_lcm::status_t::NUM_BAD_KINDS]{};
   // Keyframes lost in transport (gaps_'s counts, for CVO_STATUS): asked for, recovered, given up.
   std::atomic<std::int64_t> keyframes_requested_{0}, keyframes_recovered_{0}, keyframes_lost_{0};
+  // Sessions whose CVO_POSE came since cvo-backend last looked (cvo-receive -> cvo-backend): live.
+  std::mutex posed_mutex_;
+  std::map<core::SessionId, std::chrono::steady_clock::time_point> posed_;
   Heartbeat receive_heartbeat_, work_heartbeat_;
 };
 

@@ -22,9 +22,9 @@ constexpr const char* kDescription =
 CVO_POSE (every frame), CVO_KEYFRAME, CVO_LOCAL_GRAPH (when a keyframe closes one, and the open
 one at the end) and CVO_STATUS (once a second). Every start, and every camera that comes back
 after a disconnection, is a new session with a random id carried by every message. The map pose
-follows the newest CVO_MAP from cvo-backendd once it places this session. Stops cleanly on
-SIGTERM, SIGINT or SIGHUP, even in the first instant; under systemd it sends READY, STATUS and
-WATCHDOG notifications.)";
+follows the newest CVO_MAP_CORRECTION (or CVO_MAP) from cvo-backendd once it places this
+session. Stops cleanly on SIGTERM, SIGINT or SIGHUP, even in the first instant; under systemd it
+sends READY, STATUS and WATCHDOG notifications.)";
 
 constexpr const char* kSources = R"(sources (--source, trackerd.source):
   tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)

@@ -87,7 +87,7 @@ void Publishing::run() {
     Publishing* self;
     void map(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
       if (const auto sender = self->authentic(channel, b->data, b->data_size))
-        self->apply_map(b->data, static_cast<int>(b->data_size), *sender);
+        self->apply_map(channel, b->data, static_cast<int>(b->data_size), *sender);
     }
     void request(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
       if (const auto requester = self->authentic(channel, b->data, b->data_size))
@@ -95,7 +95,8 @@ void Publishing::run() {
     }
   } handler{this};
   if (receives_) {
-    lcm_.subscribe("CVO_MAP", &Handler::map, &handler);
+    lcm_.subscribe("CVO_MAP_CORRECTION", &Handler::map, &handler);
+    lcm_.subscribe("CVO_MAP", &Handler::map, &handler);  // a back end of before CVO_MAP_CORRECTION, lcm-spy users
     lcm_.subscribe("CVO_KEYFRAME_REQUEST", &Handler::request, &handler);
   }
   const auto period = std::chrono::duration<double>(shared_.config.trackerd.status_period_s);
@@ -119,7 +120,7 @@ void Publishing::run() {
   shared_.publisher_done = true;
 }
 
-// CVO_MAP and CVO_KEYFRAME_REQUEST, without blocking the poses.
+// CVO_MAP_CORRECTION, CVO_MAP and CVO_KEYFRAME_REQUEST, without blocking the poses.
 void Publishing::receive() {
   if (!receives_) return;
   pollfd pfd{lcm_.getFileno(), POLLIN, 0};
@@ -284,20 +285,24 @@ void Publishing::publish_status(std::int8_t state_override) {
   last_status_ = now;
 }
 
-// CVO_MAP: what lcm::decide_map_correction trusts moves the running session's map poses (placed:
-// its correction; not placed: map pose = odometry pose); anything else is counted by kind.
-void Publishing::apply_map(const void* data, int size, std::int64_t sender) {
+// CVO_MAP_CORRECTION or CVO_MAP: what the one decision trusts (lcm::decide_session_correction,
+// lcm::decide_map_correction) moves the running session's map poses (placed: its correction; not
+// placed: map pose = odometry pose); what it ignores (another session's correction, the applied one
+// again) is no fault; anything else is counted by kind.
+void Publishing::apply_map(const std::string& channel, const void* data, int size, std::int64_t sender) {
   const std::int64_t session = shared_.session.load();
   const auto& t = shared_.config.trackerd;
   const lcm::CorrectionLimits limits{t.max_map_jump_m, t.max_map_jump_deg, t.map_epoch_slack_s, t.map_revisions_per_s};
   const lcm::MapContext context{core::wall_utime(), sender, own_keyframes_};
-  const lcm::CorrectionDecision d = lcm::decide_map_correction(data, size, session, applied_, limits, context);
-  if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped CVO_MAP", d.why);
+  const auto decide = channel == "CVO_MAP" ? lcm::decide_map_correction : lcm::decide_session_correction;
+  const lcm::CorrectionDecision d = decide(data, size, session, applied_, limits, context);
+  if (d.ignored) return;
+  if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped " + channel, d.why);
   const bool was_placed = applied_.session == session && applied_.placed;
   if (d.correction.placed != was_placed)
     shared_.notes.note("session " + core::session_name(session) +
                        (d.correction.placed ? " placed in the map" : " no longer placed in the map") +
-                       " (map revision " + std::to_string(d.correction.revision) + ")");
+                       " (map revision " + std::to_string(d.correction.revision) + ", " + channel + ")");
   applied_ = d.correction;
   const auto& c = d.correction;
   shared_.correction.set(session, {c.T_map_odom, c.placed, c.epoch, c.revision, c.last_match_time,

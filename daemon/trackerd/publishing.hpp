@@ -2,7 +2,8 @@
 // cvo-publish: Outbox -> LCM. Every event's CVO_POSE, CVO_KEYFRAME and CVO_LOCAL_GRAPH (encoded
 // here, and kept as sent in the KeyframeHistory, so the back end's CVO_KEYFRAME_REQUEST is answered
 // with the very bytes it missed), CVO_STATUS once a period and systemd's STATUS. In from LCM:
-// CVO_MAP (what lcm::decide_map_correction trusts sets the running session's MapCorrection) and
+// CVO_MAP_CORRECTION and CVO_MAP (what the one decision of libcvo/lcm/map_decision.hpp trusts sets
+// the running session's MapCorrection: a correction of another session is left at its decoding) and
 // CVO_KEYFRAME_REQUEST. Runs until the tracker is done and the outbox is empty. With a key
 // (auth.key_file) every message out is signed (a re-sent keyframe afresh: its counter is new), and
 // every one in verified on its raw bytes first; a refusal counts BAD_AUTH or BAD_REPLAY.
@@ -39,19 +40,20 @@ class Publishing {
   void remember_keyframe(std::int64_t id, const core::SE3& odometry_pose);
   void answer_request(const void* data, int size, std::int64_t requester);
   void publish_status(std::int8_t state_override);
-  /// `sender`: the map's verified sender (auth_t; 0 on an open bus, unsigned).
-  void apply_map(const void* data, int size, std::int64_t sender);
+  /// `channel`: CVO_MAP_CORRECTION or CVO_MAP; `sender`: its verified sender (auth_t; 0 on an open
+  /// bus, unsigned).
+  void apply_map(const std::string& channel, const void* data, int size, std::int64_t sender);
   KeyframeHistory& history();
 
   Shared& shared_;
   ::lcm::LCM lcm_;
-  auth::Verifier verifier_;           // CVO_MAP and CVO_KEYFRAME_REQUEST, before decoding
+  auth::Verifier verifier_;           // CVO_MAP_CORRECTION, CVO_MAP, CVO_KEYFRAME_REQUEST, before decoding
   std::vector<std::uint8_t> resend_;  // a kept message, signed afresh for its re-send
   const bool receives_;               // a file:// output is a log being written: nothing comes back on it
   const lcm::RgbdEncoding encoding_;
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again
-  lcm::AppliedCorrection applied_;            // the last CVO_MAP correction applied
+  lcm::AppliedCorrection applied_;            // the last correction applied (either channel)
   // The running session's newest keyframes' odometry poses, for the check of a placement against
   // the session's loops (lcm::decide_map_correction); a ring of kOwnKeyframes.
   std::vector<lcm::OwnKeyframe> own_keyframes_;

@@ -7,7 +7,7 @@
 //   bus                       the key ring and signer (thread-safe), read from auth.key_file at start
 //   counters                  each counter written by one thread, read by the publisher
 //   session                   cvo-track (a new session when the camera comes back or changes)
-//   correction                cvo-publish (each CVO_MAP), read by cvo-track for the map pose
+//   correction                cvo-publish (each CVO_MAP_CORRECTION, CVO_MAP), read by cvo-track for the map pose
 //   outbox                    made by cvo-track for its first camera, then thread-safe
 //   notes, count_bad()        any thread but cvo-track (noting allocates: it only counts)
 //   systemd                   READY/STOPPING/WATCHDOG from the supervisor, STATUS from cvo-publish
@@ -37,7 +37,7 @@ struct Counters {
   std::atomic<std::int64_t> source_gaps{0};
   std::atomic<std::int64_t> source_lost_frames{0};  // frames the source saw missing (FrameSource::lost_frames)
   std::atomic<std::int64_t> allocations_after_warmup{0};
-  std::atomic<std::int64_t> bad_messages[cvo_lcm::status_t::NUM_BAD_KINDS]{};  // by BAD_* (frames, CVO_MAP, requests)
+  std::atomic<std::int64_t> bad_messages[cvo_lcm::status_t::NUM_BAD_KINDS]{};  // by BAD_* (frames, maps, requests)
   std::atomic<bool> source_connected{false};
 };
 

@@ -5,7 +5,7 @@
 //   cvo-acquire   Acquisition: frame source (drivers/) -> FrameRing; re-opens a lost device
 //   cvo-track     Tracking: FrameRing -> KeyframeOdometry -> Outbox; SCHED_FIFO, no allocation
 //   cvo-publish   Publishing: Outbox -> LCM CVO_POSE / CVO_KEYFRAME / CVO_LOCAL_GRAPH, CVO_STATUS;
-//                 CVO_MAP in -> MapCorrection; CVO_KEYFRAME_REQUEST in -> the KeyframeHistory
+//                 CVO_MAP_CORRECTION, CVO_MAP in -> MapCorrection; CVO_KEYFRAME_REQUEST in -> the KeyframeHistory
 //
 // Trackerd supervises them from the caller's thread (daemon::supervise): it waits for SIGTERM,
 // SIGINT or SIGHUP, or the end of a finite source, pets the systemd watchdog while the workers

@@ -1,6 +1,6 @@
 #pragma once
 // cvo-track: FrameRing -> KF-CVO (odometry::KeyframeOdometry) -> Outbox, one event per frame: its
-// pose (the map pose once CVO_MAP places the session), and the local graph it closed and the
+// pose (the map pose once the back end places the session), and the local graph it closed and the
 // keyframe it made, copied into the outbox's preallocated slots. SCHED_FIFO and pinned when
 // configured; after warm-up it does not allocate (counted: allocations_after_warmup).
 //

@@ -281,7 +281,11 @@ const std::vector<Field>& table() {
       row("backendd.vocabulary", &Config::backendd, &BackenddParameters::vocabulary, kAny,
           "ORB vocabulary file, or default (the one installed with cvo-slam)"),
       row("backendd.status_period_s", &Config::backendd, &BackenddParameters::status_period_s, kPositive,
-          "CVO_STATUS period"),
+          "CVO_STATUS period; each live session's CVO_MAP_CORRECTION goes out again at least this often"),
+      row("backendd.map_period_s", &Config::backendd, &BackenddParameters::map_period_s, kNonNegative,
+          "the full CVO_MAP goes out at most this often (s) while the map changes, at once after a loop closure or "
+          "a join, and at the stop (changed sessions' CVO_MAP_CORRECTIONs after every change); 0: after every "
+          "change"),
       row("backendd.publish_url", &Config::backendd, &BackenddParameters::publish_url, kAny,
           "LCM provider CVO_MAP and CVO_STATUS go to; lcm_url: the same one (set it when lcm_url is a file:// log)"),
       row("backendd.exit_on_eof", &Config::backendd, &BackenddParameters::exit_on_eof, kAny,

@@ -70,6 +70,10 @@ struct BackenddParameters {
   std::string store = "/var/lib/cvo-slam/keyframes.store";
   std::string vocabulary = "default";  // the installed default (share/cvo-slam/orb_k10_l4.voc), or a file
   double status_period_s = 1.0;
+  // The full CVO_MAP (O(N) bytes) goes out at most this often while the map changes, at once after a
+  // loop closure or a join, and at the stop; each changed session's CVO_MAP_CORRECTION after every
+  // change. 0: the full map after every change too.
+  double map_period_s = 5.0;
   std::string publish_url = "lcm_url";  // where CVO_MAP and CVO_STATUS go; "lcm_url": the same provider
   bool exit_on_eof = false;             // a file:// lcm_url that ends: final optimisation, final map, exit 0
   std::size_t queue_max = 64;           // records waiting for the back end's thread in memory; more wait in the store

@@ -7,26 +7,47 @@
 
 namespace cvo::lcm {
 
+cvo_lcm::map_session_t to_message(const slam::MapSession& s) {
+  cvo_lcm::map_session_t e{};
+  e.session = s.session;
+  e.placed = s.placed;
+  e.piece = s.piece;
+  e.keyframes = static_cast<std::int32_t>(s.keyframes);
+  e.joined_at_keyframe = s.joined_at_keyframe;
+  e.correction = to_message(s.correction);
+  e.state = static_cast<std::int8_t>(s.state);
+  e.visitor = s.visitor;
+  e.last_match_utime = s.last_match_time >= 0 ? to_utime(s.last_match_time) : 0;
+  e.covariance_keyframe = s.keyframe_covariance ? s.covariance_keyframe : -1;
+  matrix6_to_message(s.keyframe_covariance.value_or(core::Matrix6d::Zero()), e.keyframe_covariance);
+  return e;
+}
+
+slam::MapSession from_checked_message(const cvo_lcm::map_session_t& s) {
+  slam::MapSession e;
+  e.session = s.session;
+  e.placed = s.placed != 0;
+  e.piece = s.piece;
+  e.keyframes = static_cast<std::size_t>(std::max(0, s.keyframes));
+  e.joined_at_keyframe = s.joined_at_keyframe;
+  e.correction = *from_message(s.correction, nullptr);
+  e.state = static_cast<core::LocalizationState>(s.state);
+  e.visitor = s.visitor != 0;
+  e.last_match_time = s.last_match_utime > 0 ? from_utime(s.last_match_utime) : -1;
+  if (s.covariance_keyframe >= 0) {
+    e.covariance_keyframe = s.covariance_keyframe;
+    e.keyframe_covariance = matrix6_from_message(s.keyframe_covariance);
+  }
+  return e;
+}
+
 cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t epoch) {
   cvo_lcm::map_t m{};
   m.version = cvo_lcm::map_t::SCHEMA_VERSION;
   m.utime = utime;
   m.epoch = epoch;
   m.revision = static_cast<std::int64_t>(map.revision);
-  for (const auto& s : map.sessions) {
-    cvo_lcm::map_session_t& e = m.sessions.emplace_back();
-    e.session = s.session;
-    e.placed = s.placed;
-    e.piece = s.piece;
-    e.keyframes = static_cast<std::int32_t>(s.keyframes);
-    e.joined_at_keyframe = s.joined_at_keyframe;
-    e.correction = to_message(s.correction);
-    e.state = static_cast<std::int8_t>(s.state);
-    e.visitor = s.visitor;
-    e.last_match_utime = s.last_match_time >= 0 ? to_utime(s.last_match_time) : 0;
-    e.covariance_keyframe = s.keyframe_covariance ? s.covariance_keyframe : -1;
-    matrix6_to_message(s.keyframe_covariance.value_or(core::Matrix6d::Zero()), e.keyframe_covariance);
-  }
+  for (const auto& s : map.sessions) m.sessions.push_back(to_message(s));
   for (const auto& k : map.keyframes)
     m.keyframes.push_back({k.session, k.id, to_utime(k.timestamp), to_message(k.pose)});
   for (const auto& l : map.loops) {
@@ -53,22 +74,7 @@ std::optional<slam::Map> from_message(const cvo_lcm::map_t& m, std::string* erro
   // Every pose below converts: map_error checked each.
   slam::Map map;
   map.revision = static_cast<std::uint64_t>(m.revision);
-  for (const auto& s : m.sessions) {
-    slam::MapSession& e = map.sessions.emplace_back();
-    e.session = s.session;
-    e.placed = s.placed != 0;
-    e.piece = s.piece;
-    e.keyframes = static_cast<std::size_t>(std::max(0, s.keyframes));
-    e.joined_at_keyframe = s.joined_at_keyframe;
-    e.correction = *from_message(s.correction, nullptr);
-    e.state = static_cast<core::LocalizationState>(s.state);
-    e.visitor = s.visitor != 0;
-    e.last_match_time = s.last_match_utime > 0 ? from_utime(s.last_match_utime) : -1;
-    if (s.covariance_keyframe >= 0) {
-      e.covariance_keyframe = s.covariance_keyframe;
-      e.keyframe_covariance = matrix6_from_message(s.keyframe_covariance);
-    }
-  }
+  for (const auto& s : m.sessions) map.sessions.push_back(from_checked_message(s));
   for (const auto& k : m.keyframes)
     map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *from_message(k.pose, nullptr)});
   for (const auto& l : m.loops) {

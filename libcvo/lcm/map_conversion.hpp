@@ -14,6 +14,11 @@ namespace cvo::lcm {
 /// `epoch`: when the publishing back end started (map_t.epoch).
 cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t epoch = 0);
 
+/// One session's entry, as map_t and map_correction_t carry it.
+cvo_lcm::map_session_t to_message(const slam::MapSession& session);
+/// Back from an entry that map_check.hpp accepted (its correction a rigid transform).
+slam::MapSession from_checked_message(const cvo_lcm::map_session_t& session);
+
 /// Fails on another schema version or a pose that is not a rigid transform. Loops come back with
 /// their keyframe ids in LoopClosure::from/to (node ids are the mapper's own, not on the wire).
 std::optional<slam::Map> from_message(const cvo_lcm::map_t& message, std::string* error);

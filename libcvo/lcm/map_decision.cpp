@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
+#include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -15,6 +17,24 @@ namespace {
 
 using core::BadKind;
 
+// The back end's word on one session, from either channel: its map's order, the entry (none: the
+// message has no entry for the session), whether the message is usable (map_check.hpp), and the
+// message, for the session's loops.
+struct SessionWord {
+  std::int64_t epoch = 0, revision = 0;
+  const cvo_lcm::map_session_t* entry = nullptr;
+  std::string content_error;
+  const cvo_lcm::map_t* map = nullptr;                    // a CVO_MAP
+  const cvo_lcm::map_correction_t* correction = nullptr;  // or a CVO_MAP_CORRECTION
+};
+
+// One of the session's loops to another session's keyframe: by_loop is the map pose of the
+// session's keyframe the loop implies, other_pose · measurement⁻¹.
+struct PlacementLoop {
+  std::int64_t keyframe = -1;
+  core::SE3 by_loop;
+};
+
 CorrectionDecision refuse(BadKind kind, std::string why) {
   CorrectionDecision d;
   d.refusal = kind;
@@ -22,9 +42,20 @@ CorrectionDecision refuse(BadKind kind, std::string why) {
   return d;
 }
 
+CorrectionDecision ignore(std::string why) {
+  CorrectionDecision d;
+  d.ignored = true;
+  d.why = std::move(why);
+  return d;
+}
+
 std::string rounded(double v) {
   const auto r = std::lround(v * 100);  // two decimals, without iostreams
   return std::to_string(r / 100) + "." + (std::abs(r % 100) < 10 ? "0" : "") + std::to_string(std::abs(r % 100));
+}
+
+std::string name(const SessionWord& w) {
+  return "revision " + std::to_string(w.revision) + " of epoch " + std::to_string(w.epoch);
 }
 
 // "" when going from `from` to `to` moves the map frame within the limits; otherwise by how much.
@@ -38,58 +69,126 @@ std::string implausible_jump(const core::SE3& from, const core::SE3& to, const C
          " deg)";
 }
 
-// The order of maps: "" when `m` may follow `last` (newer, from a present epoch, a plausible
+// The order of words: "" when `w` may follow `last` (newer, from a present epoch, a plausible
 // revision, the same sender within an epoch); otherwise why not, and the kind.
-std::string out_of_order(const cvo_lcm::map_t& m, const AppliedCorrection& last, const CorrectionLimits& limits,
+std::string out_of_order(const SessionWord& w, const AppliedCorrection& last, const CorrectionLimits& limits,
                          const MapContext& context, BadKind& kind) {
-  const std::string revision = "revision " + std::to_string(m.revision) + " of epoch " + std::to_string(m.epoch);
   kind = BadKind::kStale;
-  if (m.epoch < last.epoch || (m.epoch == last.epoch && m.revision <= last.revision))
-    return revision + ", not newer than the applied revision " + std::to_string(last.revision) + " of epoch " +
+  if (w.epoch < last.epoch || (w.epoch == last.epoch && w.revision <= last.revision))
+    return name(w) + ", not newer than the applied revision " + std::to_string(last.revision) + " of epoch " +
            std::to_string(last.epoch);
   kind = BadKind::kImplausible;
-  const double ahead_s = static_cast<double>(m.epoch - context.now_utime) * 1e-6;
+  const double ahead_s = static_cast<double>(w.epoch - context.now_utime) * 1e-6;
   if (ahead_s > limits.epoch_slack_s)
-    return revision + ": its epoch lies " + rounded(ahead_s) + " s in the future of this clock (at most " +
+    return name(w) + ": its epoch lies " + rounded(ahead_s) + " s in the future of this clock (at most " +
            rounded(limits.epoch_slack_s) + " s)";
-  if (m.epoch != last.epoch) return {};  // a newer back end: its revisions count afresh
+  if (w.epoch != last.epoch) return {};  // a newer back end: its revisions count afresh
   const double since_s = static_cast<double>(context.now_utime - last.applied_utime) * 1e-6;
   const double leap = limits.revisions_per_s * std::max(1.0, since_s);
-  if (static_cast<double>(m.revision - last.revision) > leap)
-    return revision + ": it leaps " + std::to_string(m.revision - last.revision) + " revisions from the applied " +
+  if (static_cast<double>(w.revision - last.revision) > leap)
+    return name(w) + ": it leaps " + std::to_string(w.revision - last.revision) + " revisions from the applied " +
            std::to_string(last.revision) + " (at most " + std::to_string(std::lround(leap)) + " since then)";
   kind = BadKind::kConflict;
-  if (context.sender != last.sender) return revision + ": another sender than the applied map of its epoch";
+  if (context.sender != last.sender) return name(w) + ": another sender than the applied word of its epoch";
   return {};
 }
 
-// "" when placing the session by `C` agrees with each of its loops in `m` whose own keyframe the
-// tracker holds; otherwise the first disagreement.
-std::string loop_disagreement(const cvo_lcm::map_t& m, std::int64_t session, const core::SE3& C,
-                              const CorrectionLimits& limits, const MapContext& context) {
-  const auto own = [&](std::int64_t id) -> const OwnKeyframe* {
-    for (const auto& k : context.keyframes)
-      if (k.id == id) return &k;
+// The session's loops to keyframes of other sessions that the word carries (poses that do not
+// convert are left out: content_error refuses such a word before its loops are looked at).
+std::vector<PlacementLoop> placement_loops(const SessionWord& w, std::int64_t session) {
+  std::vector<PlacementLoop> out;
+  const auto add = [&](std::int64_t keyframe, const cvo_lcm::pose3d_t& measurement, const cvo_lcm::pose3d_t& other) {
+    const auto T = from_message(measurement, nullptr);  // T_keyframe^other
+    const auto M = from_message(other, nullptr);
+    if (T && M) out.push_back({keyframe, *M * T->inverse()});
+  };
+  if (w.correction != nullptr)
+    for (const auto& l : w.correction->loops)
+      if (l.other_session != session) add(l.keyframe, l.measurement, l.other_pose);
+  if (w.map == nullptr) return out;
+  const auto map_pose = [&](std::int64_t s, std::int64_t id) -> const cvo_lcm::pose3d_t* {
+    for (const auto& k : w.map->keyframes)
+      if (k.session == s && k.id == id) return &k.pose;
     return nullptr;
   };
-  const auto map_pose = [&](std::int64_t s, std::int64_t id) -> std::optional<core::SE3> {
-    for (const auto& k : m.keyframes)
-      if (k.session == s && k.id == id) return from_message(k.pose, nullptr);
-    return std::nullopt;
-  };
-  for (const auto& loop : m.loops) {
+  for (const auto& loop : w.map->loops) {
     if (loop.from_session == loop.to_session) continue;  // within one session: says nothing of its placement
     const bool from_own = loop.from_session == session;
     if (!from_own && loop.to_session != session) continue;
-    const OwnKeyframe* a = own(from_own ? loop.edge.from : loop.edge.to);
-    const auto b = from_own ? map_pose(loop.to_session, loop.edge.to) : map_pose(loop.from_session, loop.edge.from);
-    const auto T = from_message(loop.edge.measurement, nullptr);
-    if (a == nullptr || !b || !T) continue;
-    const core::SE3 by_loop = from_own ? *b * T->inverse() : *b * *T;
-    if (std::string bad = implausible_jump(C * a->odometry_pose, by_loop, limits); !bad.empty())
-      return "its placement disagrees with the loop of keyframe " + std::to_string(a->id) + ": " + bad;
+    const auto* other =
+        from_own ? map_pose(loop.to_session, loop.edge.to) : map_pose(loop.from_session, loop.edge.from);
+    if (other == nullptr) continue;
+    cvo_lcm::pose3d_t measurement = loop.edge.measurement;  // T_from^to, made T_own^other
+    if (!from_own)
+      if (const auto T = from_message(measurement, nullptr)) measurement = to_message(T->inverse());
+    add(from_own ? loop.edge.from : loop.edge.to, measurement, *other);
+  }
+  return out;
+}
+
+// "" when placing the session by `C` agrees with each of its loops whose own keyframe the tracker
+// holds; otherwise the first disagreement.
+std::string loop_disagreement(const std::vector<PlacementLoop>& loops, const core::SE3& C,
+                              const CorrectionLimits& limits, const MapContext& context) {
+  for (const auto& loop : loops) {
+    const auto own = std::find_if(context.keyframes.begin(), context.keyframes.end(),
+                                  [&](const OwnKeyframe& k) { return k.id == loop.keyframe; });
+    if (own == context.keyframes.end()) continue;
+    if (std::string bad = implausible_jump(C * own->odometry_pose, loop.by_loop, limits); !bad.empty())
+      return "its placement disagrees with the loop of keyframe " + std::to_string(loop.keyframe) + ": " + bad;
   }
   return {};
+}
+
+// The correction the entry gives (a usable entry: content_error checked it).
+AppliedCorrection correction_of(const SessionWord& w, std::int64_t session, const MapContext& context) {
+  const cvo_lcm::map_session_t& e = *w.entry;
+  AppliedCorrection c{w.epoch, w.revision,   session, e.placed != 0,  core::SE3{},
+                      -1,      std::nullopt, -1,      context.sender, context.now_utime};
+  if (e.last_match_utime > 0) c.last_match_time = from_utime(e.last_match_utime);
+  if (e.covariance_keyframe >= 0) {
+    c.keyframe_covariance = matrix6_from_message(e.keyframe_covariance);
+    c.covariance_keyframe = e.covariance_keyframe;
+  }
+  if (c.placed) c.T_map_odom = *from_message(e.correction, nullptr);
+  return c;
+}
+
+// The word applied last again, from its sender: the same order and the same correction.
+bool repeats(const SessionWord& w, std::int64_t session, const AppliedCorrection& last, const MapContext& context) {
+  if (w.entry == nullptr || !w.content_error.empty() || last.session != session || w.epoch != last.epoch ||
+      w.revision != last.revision || context.sender != last.sender)
+    return false;
+  const AppliedCorrection c = correction_of(w, session, context);
+  return c.placed == last.placed && c.T_map_odom.translation() == last.T_map_odom.translation() &&
+         c.T_map_odom.rotation() == last.T_map_odom.rotation() && c.last_match_time == last.last_match_time &&
+         c.covariance_keyframe == last.covariance_keyframe && c.keyframe_covariance == last.keyframe_covariance;
+}
+
+// The one decision, whichever channel the word came on.
+CorrectionDecision decide(const SessionWord& w, std::int64_t session, const AppliedCorrection& last,
+                          const CorrectionLimits& limits, const MapContext& context) {
+  if (repeats(w, session, last, context)) return ignore(name(w) + ": the correction applied already");
+  auto kind = BadKind::kStale;
+  if (std::string bad = out_of_order(w, last, limits, context, kind); !bad.empty()) return refuse(kind, std::move(bad));
+  if (w.entry == nullptr) return refuse(BadKind::kForeign, name(w) + " has no entry for this session");
+  if (!is_finite(w.entry->correction))
+    return refuse(BadKind::kNotFinite, name(w) + ": the session's correction is not finite");
+  if (!w.content_error.empty()) return refuse(BadKind::kContent, w.content_error);
+
+  const bool was_placed = last.placed && last.session == session;
+  if (was_placed && w.entry->placed == 0 && w.epoch == last.epoch)
+    return refuse(BadKind::kConflict, name(w) + ": the session, placed in this epoch, is not placed in it");
+  CorrectionDecision d;
+  d.correction = correction_of(w, session, context);
+  if (d.correction.placed) {
+    const core::SE3& C = d.correction.T_map_odom;
+    const std::string bad = was_placed ? implausible_jump(last.T_map_odom, C, limits)
+                                       : loop_disagreement(placement_loops(w, session), C, limits, context);
+    if (!bad.empty()) return refuse(BadKind::kImplausible, name(w) + ": " + bad);
+  }
+  d.apply = true;
+  return d;
 }
 
 }  // namespace
@@ -101,38 +200,24 @@ CorrectionDecision decide_map_correction(const void* data, int size, std::int64_
   auto failure = BadKind::kBody;
   const auto message = decode<cvo_lcm::map_t>(data, size, &error, &failure);
   if (!message) return refuse(failure, error);
-  const std::string revision =
-      "revision " + std::to_string(message->revision) + " of epoch " + std::to_string(message->epoch);
-  auto kind = BadKind::kStale;
-  if (std::string bad = out_of_order(*message, last, limits, context, kind); !bad.empty())
-    return refuse(kind, std::move(bad));
   const auto entry = std::find_if(message->sessions.begin(), message->sessions.end(),
                                   [&](const cvo_lcm::map_session_t& s) { return s.session == session; });
-  if (entry == message->sessions.end()) return refuse(BadKind::kForeign, revision + " has no entry for this session");
-  if (!is_finite(entry->correction))
-    return refuse(BadKind::kNotFinite, revision + ": the session's correction is not finite");
-  if (std::string bad = map_error(*message); !bad.empty()) return refuse(BadKind::kContent, bad);
+  const SessionWord word{message->epoch,      message->revision, entry == message->sessions.end() ? nullptr : &*entry,
+                         map_error(*message), &*message,         nullptr};
+  return decide(word, session, last, limits, context);
+}
 
-  const bool was_placed = last.placed && last.session == session;
-  if (was_placed && entry->placed == 0 && message->epoch == last.epoch)
-    return refuse(BadKind::kConflict, revision + ": the session, placed in this epoch, is not placed in it");
-  CorrectionDecision d;
-  d.correction = {message->epoch, message->revision, session, entry->placed != 0, core::SE3{}, -1, std::nullopt, -1,
-                  context.sender, context.now_utime};
-  if (entry->last_match_utime > 0) d.correction.last_match_time = from_utime(entry->last_match_utime);
-  if (entry->covariance_keyframe >= 0) {  // map_error checked it
-    d.correction.keyframe_covariance = matrix6_from_message(entry->keyframe_covariance);
-    d.correction.covariance_keyframe = entry->covariance_keyframe;
-  }
-  if (d.correction.placed) {
-    const core::SE3 C = *from_message(entry->correction, nullptr);  // a rigid transform: map_error checked it
-    d.correction.T_map_odom = C;
-    const std::string bad = was_placed ? implausible_jump(last.T_map_odom, C, limits)
-                                       : loop_disagreement(*message, session, C, limits, context);
-    if (!bad.empty()) return refuse(BadKind::kImplausible, revision + ": " + bad);
-  }
-  d.apply = true;
-  return d;
+CorrectionDecision decide_session_correction(const void* data, int size, std::int64_t session,
+                                             const AppliedCorrection& last, const CorrectionLimits& limits,
+                                             const MapContext& context) {
+  std::string error;
+  auto failure = BadKind::kBody;
+  const auto message = decode<cvo_lcm::map_correction_t>(data, size, &error, &failure);
+  if (!message) return refuse(failure, error);
+  if (message->session.session != session) return ignore("another session's correction");
+  const SessionWord word{message->epoch, message->revision, &message->session, correction_error(*message),
+                         nullptr,        &*message};
+  return decide(word, session, last, limits, context);
 }
 
 }  // namespace cvo::lcm

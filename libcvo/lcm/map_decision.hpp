@@ -1,10 +1,14 @@
 #pragma once
-// What a tracker makes of a received CVO_MAP, without LCM or threads: whether it may move the map
-// poses of the tracker's running session, and to what. A map is trusted only when
+// What a tracker makes of the back end's word on its session, without LCM or threads: whether it
+// may move the map poses of the tracker's running session, and to what. The word comes two ways,
+// and both go through one decision: a CVO_MAP (the whole map: the session's entry among all, its
+// loops among all loops, the other keyframes' poses among all keyframes) and a CVO_MAP_CORRECTION
+// (that entry alone, with the session's newest loops and the other keyframes' poses: small, O(1)
+// per update). A word is trusted only when
 //   - it decodes and every pose in it is a rigid transform (decode.hpp, map_check.hpp),
-//   - it is newer than the last map applied: a newer epoch (a restarted back end, whose revisions
-//     count afresh), or the same epoch and a higher revision (a replayed or reordered map, or one
-//     of an older epoch, is stale: kStale),
+//   - it is newer than the last word applied: a newer epoch (a restarted back end, whose revisions
+//     count afresh), or the same epoch and a higher revision (a replayed or reordered one, or one
+//     of an older epoch, is stale: kStale); the revision is the map's on both channels,
 //   - it has an entry for the session (a map of other trackers only: kForeign),
 //   - that entry's correction is finite (kNotFinite),
 //   - and, while the session is placed, the new correction moves the map frame by at most
@@ -15,19 +19,23 @@
 //   - the epoch (its back end's start) lies at most epoch_slack_s in the future of the receiver's
 //     clock (kImplausible): a newer epoch always wins over an older one, so one from the future
 //     would lock out every real back end until it had been running that long;
-//   - within an epoch the revision leaps at most revisions_per_s times the seconds since the map
+//   - within an epoch the revision leaps at most revisions_per_s times the seconds since the word
 //     applied last (at least one second's worth) (kImplausible): a back end makes revisions at a
 //     bounded rate, and one leap to a huge revision would make every real map stale;
-//   - within an epoch, maps come from the one sender whose map was applied (kConflict): a back end
-//     has one identity (the verified sender id; 0 on an open bus, where all senders are one);
+//   - within an epoch, words come from the one sender whose word was applied (kConflict): a back
+//     end has one identity (the verified sender id; 0 on an open bus, where all senders are one);
 //   - within an epoch a placed session stays placed (kConflict): a back end's sessions join the
 //     map for good, so "unplaced, then placed elsewhere" cannot sidestep the jump bound;
-//   - a placement (the session not placed by this epoch's maps yet) agrees with the session's own
-//     loops that the map carries (kImplausible): for a loop edge T_a^b between keyframe a of this
-//     session, whose odometry pose O_a the tracker holds, and keyframe b of the map, C · O_a and
-//     M_b · (T_a^b)⁻¹ are the same map pose of a up to the jump bound.
+//   - a placement (the session not placed by this epoch's words yet) agrees with the session's own
+//     loops that the word carries (kImplausible): for a loop edge T_a^b between keyframe a of this
+//     session, whose odometry pose O_a the tracker holds, and keyframe b of another session, C · O_a
+//     and M_b · (T_a^b)⁻¹ are the same map pose of a up to the jump bound.
 // An entry that is not placed is applied (map pose = odometry pose again) while the session has
 // not been placed in this epoch.
+// Neither applied nor refused (ignored: nothing is wrong with it): the word applied last again, from
+// its sender (the back end re-sends corrections, and a CVO_MAP repeats the CVO_MAP_CORRECTION of its
+// revision), and another session's CVO_MAP_CORRECTION (every tracker hears every session's; that
+// check comes first, before any other).
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -40,8 +48,8 @@ namespace cvo::lcm {
 
 /// The correction a tracker applies; the state the next decision compares with.
 struct AppliedCorrection {
-  std::int64_t epoch = -1;      // of the map it came from (map_t.epoch); -1: none applied yet
-  std::int64_t revision = -1;   // of the map it came from
+  std::int64_t epoch = -1;      // of the word it came from (the map's: map_t.epoch); -1: none yet
+  std::int64_t revision = -1;   // of the word it came from (the map's revision)
   std::int64_t session = 0;     // the session it is for (0: none)
   bool placed = false;          // the map places the session: T_map_odom applies
   core::SE3 T_map_odom;         // identity when not placed
@@ -49,7 +57,7 @@ struct AppliedCorrection {
   // The back end's covariance of keyframe covariance_keyframe's map pose, when it gives one.
   std::optional<core::Matrix6d> keyframe_covariance = std::nullopt;
   std::int64_t covariance_keyframe = -1;
-  std::int64_t sender = 0;         // the verified sender of the map it came from (0: an open bus)
+  std::int64_t sender = 0;         // the verified sender of the word it came from (0: an open bus)
   std::int64_t applied_utime = 0;  // the receiver's clock when it was applied
 };
 
@@ -69,15 +77,16 @@ struct OwnKeyframe {
 /// What the receiver knows besides the bytes.
 struct MapContext {
   std::int64_t now_utime = 0;              // the receiver's wall clock (µs since 1970)
-  std::int64_t sender = 0;                 // the map's verified sender (0: an open bus)
+  std::int64_t sender = 0;                 // the word's verified sender (0: an open bus)
   std::span<const OwnKeyframe> keyframes;  // of the running session, any order
 };
 
 struct CorrectionDecision {
   bool apply = false;
+  bool ignored = false;                             // neither applied nor a fault (see the header)
   AppliedCorrection correction;                     // when apply: the new state
   core::BadKind refusal = core::BadKind::kContent;  // when refused: CVO_STATUS's bad_messages index
-  std::string why;                                  // when refused: for the daemon's note
+  std::string why;                                  // when refused or ignored: for the daemon's note
 };
 
 /// The decision for the CVO_MAP bytes `data` (as received) for `session`, given the correction
@@ -85,5 +94,11 @@ struct CorrectionDecision {
 CorrectionDecision decide_map_correction(const void* data, int size, std::int64_t session,
                                          const AppliedCorrection& last, const CorrectionLimits& limits,
                                          const MapContext& context);
+
+/// The same decision for the CVO_MAP_CORRECTION bytes `data`: ignored when it is another
+/// session's.
+CorrectionDecision decide_session_correction(const void* data, int size, std::int64_t session,
+                                             const AppliedCorrection& last, const CorrectionLimits& limits,
+                                             const MapContext& context);
 
 }  // namespace cvo::lcm

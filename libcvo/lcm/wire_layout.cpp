@@ -31,6 +31,10 @@ constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
 constexpr int kMapLoop = 8 + 8 + kGraphEdge;
 constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession},
                                 CountField{"num_keyframes", 32, kMapKeyframe}, CountField{"num_loops", 36, kMapLoop}};
+// map_correction_t: version, utime, epoch, revision (28), the session's map_session_t (419), then the
+// count of map_correction_loop_t (keyframe, other_session, other_keyframe, measurement, other_pose).
+constexpr int kCorrectionLoop = 8 + 8 + 8 + kPose3d + kPose3d;
+constexpr std::array kMapCorrectionCounts{CountField{"num_loops", 28 + kMapSession, kCorrectionLoop}};
 // keyframe_request_t: version, utime, session (20), then the count of int64 ids.
 constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}};
 // grid_t: version, utime, revision, epoch (28), map_T_grid (84), up (85), resolution (93),
@@ -49,6 +53,7 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "keyframe_t") return {202, kKeyframeCounts};
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
   if (type_name == "map_t") return {40, kMapCounts};
+  if (type_name == "map_correction_t") return {28 + kMapSession + 4, kMapCorrectionCounts};
   if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
   if (type_name == "grid_t") return {129, kGridCounts, kStringsAfterArrays, 1};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth

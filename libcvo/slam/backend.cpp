@@ -227,6 +227,11 @@ core::SE3 Backend::odometry_correction(core::SessionId session) const {
   return keyframes_.node(*it->second.last_node).pose * it->second.last_odometry.inverse();
 }
 
+std::optional<NodeId> Backend::last_node(core::SessionId session) const {
+  const auto it = sessions_.find(session);
+  return it == sessions_.end() ? std::nullopt : it->second.last_node;
+}
+
 core::SE3 Backend::odometry_correction() const {
   return order_.empty() ? core::SE3() : odometry_correction(order_.front());
 }

@@ -122,6 +122,9 @@ class Backend {
   [[nodiscard]] core::SE3 odometry_correction(core::SessionId session) const;
   /// The first session's correction (one-session callers).
   [[nodiscard]] core::SE3 odometry_correction() const;
+  /// The last frame of the session's latest local graph, a keyframe-graph node (none before any
+  /// graph of it): where its next graph joins the graph.
+  [[nodiscard]] std::optional<posegraph::NodeId> last_node(core::SessionId session) const;
 
   /// The piece of map a session is in, named by the piece's first session (itself until joined).
   [[nodiscard]] core::SessionId piece(core::SessionId session) const;

@@ -1,7 +1,5 @@
 #include "libcvo/slam/mapper.hpp"
 
-#include "libcvo/posegraph/marginals.hpp"
-
 #include <algorithm>
 #include <tuple>
 #include <utility>
@@ -116,6 +114,9 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
     backend_.add_loop(loop);
     loops_.push_back(loop);
     outcome.loops.push_back(describe(loop));
+    if (const MapLoop& m = outcome.loops.back(); m.from_session != m.to_session)
+      for (const core::SessionId end : {m.from_session, m.to_session})
+        sessions_.at(end).loops.push_back(loops_.size() - 1);
     s.last_match_time = k.frame.timestamp;
   }
   outcome.joined = after_change();
@@ -156,11 +157,16 @@ std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id,
 std::vector<core::SessionId> Mapper::after_change() {
   if (backend_.unoptimised_loops() > 0) {  // new loops, or waiting ones that just found their keyframe
     backend_.optimise_keyframes();
+    ++optimisations_;
+    marginals_.invalidate();
     std::map<std::int64_t, loop_closure::PlacedPose> poses;
     for (const auto& [id, pose] : backend_.keyframe_poses())
       poses.emplace(id, loop_closure::PlacedPose{pose, backend_.piece(backend_.session_of(id))});
     detector_.update_poses(poses);
+  } else {
+    marginals_.follow(backend_.keyframe_graph());  // new leaves carry the covariances along
   }
+  marginals_.keep(covariance_nodes());
   std::vector<core::SessionId> joined;
   for (const core::SessionId id : order_) {
     Session& s = sessions_.at(id);
@@ -174,6 +180,8 @@ std::vector<core::SessionId> Mapper::after_change() {
 posegraph::OptimizationReport Mapper::finish() {
   auto report = backend_.optimise_all();
   ++revision_;
+  ++optimisations_;
+  marginals_.invalidate();
   return report;
 }
 
@@ -187,58 +195,68 @@ MapLoop Mapper::describe(const loop_closure::LoopClosure& loop) const {
   return m;
 }
 
-// The marginal covariance of each session's newest keyframe in the keyframe graph (the map's
-// uncertainty of where it is, posegraph/marginals.hpp), keyed by session: one factorisation for all.
-std::map<core::SessionId, std::pair<std::int64_t, core::Matrix6d>> Mapper::keyframe_covariances() const {
-  std::map<core::SessionId, std::pair<std::int64_t, core::Matrix6d>> out;
+std::optional<std::pair<std::int64_t, posegraph::NodeId>> Mapper::newest_in_graph(const Session& s) const {
   const auto& graph = backend_.keyframe_graph();
-  std::map<posegraph::NodeId, std::pair<core::SessionId, std::int64_t>> newest;
-  for (const auto& [id, s] : sessions_)
-    for (auto k = s.keyframes.rbegin(); k != s.keyframes.rend(); ++k)
-      if (const auto n = node(s, k->second.frame); graph.contains(n)) {
-        newest.emplace(n, std::pair{id, k->first});
-        break;
-      }
-  if (newest.empty()) return out;
+  for (auto k = s.keyframes.rbegin(); k != s.keyframes.rend(); ++k)
+    if (const auto n = node(s, k->second.frame); graph.contains(n)) return std::pair{k->first, n};
+  return std::nullopt;
+}
+
+// What keyframe covariances need: each session's newest keyframe in the graph, and the last node of
+// its latest local graph, which its next graph's leaf hangs from.
+std::vector<posegraph::NodeId> Mapper::covariance_nodes() const {
   std::vector<posegraph::NodeId> nodes;
-  for (const auto& [n, key] : newest) nodes.push_back(n);
+  for (const auto& [id, s] : sessions_) {
+    if (const auto newest = newest_in_graph(s)) nodes.push_back(newest->second);
+    if (const auto last = backend_.last_node(id); last && (nodes.empty() || nodes.back() != *last))
+      nodes.push_back(*last);
+  }
+  return nodes;
+}
+
+// The marginal covariance of a keyframe-graph node, the map's uncertainty of where it is
+// (keyframe_marginals.hpp): held, or one factorisation for every session's.
+std::optional<core::Matrix6d> Mapper::keyframe_covariance(posegraph::NodeId n) const {
+  if (auto held = marginals_.find(n)) return held;
+  if (!marginals_.worth_computing()) return std::nullopt;
   posegraph::OptimizerOptions options;
   options.pose_graph = backend_.parameters();
-  try {
-    for (const auto& [n, covariance] : posegraph::marginal_covariances(graph, nodes, options))
-      out.emplace(newest.at(n).first, std::pair{newest.at(n).second, covariance});
-  } catch (const std::runtime_error&) {  // a piece no edge holds yet: no covariances this time
-  }
-  return out;
+  marginals_.compute(backend_.keyframe_graph(), covariance_nodes(), options);
+  return marginals_.find(n);
+}
+
+MapSession Mapper::describe(core::SessionId id, const Session& s) const {
+  MapSession entry;
+  entry.session = id;
+  entry.placed = backend_.placed(id);
+  entry.piece = backend_.piece(id);
+  entry.keyframes = s.keyframes.size();
+  entry.joined_at_keyframe = s.joined_at_keyframe;
+  entry.correction = backend_.odometry_correction(id);
+  entry.state = s.lost         ? core::LocalizationState::kLost
+                : entry.placed ? core::LocalizationState::kLocalized
+                               : core::LocalizationState::kLocalizing;
+  // The first session is the map: each of its keyframes is in it.
+  entry.last_match_time =
+      id == order_.front() && !s.keyframes.empty() ? s.keyframes.rbegin()->second.timestamp : s.last_match_time;
+  if (const auto newest = newest_in_graph(s))
+    if (auto covariance = keyframe_covariance(newest->second)) {
+      entry.covariance_keyframe = newest->first;
+      entry.keyframe_covariance = *covariance;
+    }
+  if (entry.last_match_time >= 0 && !s.keyframes.empty())
+    entry.since_match_s = s.keyframes.rbegin()->second.timestamp - entry.last_match_time;
+  return entry;
 }
 
 Map Mapper::map() const {
   Map map;
-  map.revision = revision_ + backend_.revision();
+  map.revision = revision();
   const auto poses = backend_.keyframe_poses();
-  const auto covariances = keyframe_covariances();
   for (const core::SessionId id : order_) {
     const Session& s = sessions_.at(id);
-    const core::SE3 correction = backend_.odometry_correction(id);
-    MapSession& entry = map.sessions.emplace_back();
-    entry.session = id;
-    entry.placed = backend_.placed(id);
-    entry.piece = backend_.piece(id);
-    entry.keyframes = s.keyframes.size();
-    entry.joined_at_keyframe = s.joined_at_keyframe;
-    entry.correction = correction;
-    entry.state = s.lost                ? core::LocalizationState::kLost
-                  : backend_.placed(id) ? core::LocalizationState::kLocalized
-                                        : core::LocalizationState::kLocalizing;
-    // The first session is the map: each of its keyframes is in it.
-    entry.last_match_time =
-        id == order_.front() && !s.keyframes.empty() ? s.keyframes.rbegin()->second.timestamp : s.last_match_time;
-    if (const auto c = covariances.find(id); c != covariances.end()) {
-      entry.covariance_keyframe = c->second.first;
-      entry.keyframe_covariance = c->second.second;
-    }
-    if (entry.last_match_time >= 0 && !s.keyframes.empty())
-      entry.since_match_s = s.keyframes.rbegin()->second.timestamp - entry.last_match_time;
+    map.sessions.push_back(describe(id, s));
+    const core::SE3& correction = map.sessions.back().correction;
     for (const auto& [keyframe, record] : s.keyframes) {
       // A keyframe whose local graph has not closed yet follows its session's newest correction.
       const auto it = poses.find(node(s, record.frame));
@@ -255,6 +273,29 @@ Map Mapper::map() const {
     map.loops.push_back(m);
   }
   return map;
+}
+
+std::vector<core::SessionId> Mapper::sessions() const {
+  std::vector<core::SessionId> out = order_;
+  for (const auto& [id, v] : visitors_) out.push_back(id);
+  return out;
+}
+
+SessionCorrection Mapper::correction(core::SessionId id, std::size_t max_loops) const {
+  SessionCorrection c{revision(), session(id), {}};
+  const auto it = sessions_.find(id);
+  if (it == sessions_.end()) return c;
+  const auto& graph = backend_.keyframe_graph();
+  for (auto i = it->second.loops.rbegin(); i != it->second.loops.rend() && c.loops.size() < max_loops; ++i) {
+    const loop_closure::LoopClosure& loop = loops_[*i];
+    if (!graph.contains(loop.from) || !graph.contains(loop.to)) continue;  // waiting: not in the map yet
+    const MapLoop m = describe(loop);
+    const bool from_own = m.from_session == id;
+    c.loops.push_back({from_own ? m.from_id : m.to_id, from_own ? m.to_session : m.from_session,
+                       from_own ? m.to_id : m.from_id, from_own ? loop.measurement : loop.measurement.inverse(),
+                       graph.node(from_own ? loop.to : loop.from).pose});
+  }
+  return c;
 }
 
 core::Trajectory Mapper::frame_trajectory(core::SessionId session) const { return backend_.frame_trajectory(session); }

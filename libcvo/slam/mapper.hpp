@@ -12,7 +12,16 @@
 //                     waited for its keyframe enter now, and are optimised as above).
 //   finish            the global optimisation (Backend::optimise_all).
 //   map               every session (placed or not, its correction), every keyframe's pose, every
-//                     loop: what CVO_MAP carries.
+//                     loop: what CVO_MAP carries. O(N) in the keyframes.
+//   session,          one session's entry, and with its newest loops to other sessions (the other
+//   correction        keyframe's pose with each): what CVO_MAP_CORRECTION carries, without building
+//                     the map: O(1) in the keyframes while the keyframe graph grows by leaves.
+//
+// Covariances: each mapped session's entry has the marginal covariance of its newest keyframe's
+// pose in the keyframe graph (posegraph/marginals.hpp). One factorisation of the whole graph gives
+// every session's; between them, a graph that only grew by leaves (a local graph's last frame on one
+// edge) extends them exactly, O(1) per leaf (keyframe_marginals.hpp states the maths); a loop, a join
+// or an optimisation makes the next entry asked for factorise again.
 //
 // Sessions (ORB-SLAM3's atlas, maplab's multi-mission maps; the paper has one run): the first
 // session seen defines the map frame. A later one starts unplaced, a piece of map in its own
@@ -64,6 +73,7 @@
 #include "libcvo/odometry/local_graph.hpp"
 #include "libcvo/registration/point_cloud.hpp"
 #include "libcvo/slam/backend.hpp"
+#include "libcvo/slam/keyframe_marginals.hpp"
 #include "libcvo/slam/localization_window.hpp"
 
 namespace cvo::slam {
@@ -120,6 +130,23 @@ struct MapLoop {
   double chi2 = 0, weight = 1;                // at the current poses (Backend::loops)
 };
 
+/// One of a session's loops to a keyframe of another session, seen from the session's keyframe.
+struct SessionLoop {
+  std::int64_t keyframe = 0;  // the session's
+  core::SessionId other_session = 0;
+  std::int64_t other_keyframe = 0;
+  core::SE3 measurement;  // T_keyframe^other
+  core::SE3 other_pose;   // the other keyframe's pose (T_piece_camera, as MapKeyframe::pose)
+};
+
+/// One session's word, on its own (CVO_MAP_CORRECTION): its entry as map() has it, at the map's
+/// revision, with its newest loops to other sessions.
+struct SessionCorrection {
+  std::uint64_t revision = 0;
+  MapSession session;
+  std::vector<SessionLoop> loops;  // newest first
+};
+
 struct Map {
   std::uint64_t revision = 0;
   std::vector<MapSession> sessions;    // in the order first seen
@@ -160,8 +187,20 @@ class Mapper {
   [[nodiscard]] bool localizing_only() const { return map_below_.has_value(); }
   /// The tracker's odometry of `session` failed (a new session follows): its state is kLost.
   void mark_lost(core::SessionId session);
-  /// What map() says of one session: a default entry (kLocalizing, unplaced) for one not seen.
+  /// What map() says of one session, without building the map: a default entry (kLocalizing,
+  /// unplaced) for one not seen.
   [[nodiscard]] MapSession session(core::SessionId session) const;
+  /// session(), at the map's revision, with the session's newest loops (at most max_loops) between
+  /// its keyframes and keyframes of other sessions that are in the keyframe graph (map()'s loops).
+  [[nodiscard]] SessionCorrection correction(core::SessionId session, std::size_t max_loops) const;
+  /// Every session map() has an entry for, in its order.
+  [[nodiscard]] std::vector<core::SessionId> sessions() const;
+  /// map()'s revision.
+  [[nodiscard]] std::uint64_t revision() const { return revision_ + backend_.revision(); }
+  /// Optimisations of the keyframe graph so far (each may move every session's correction).
+  [[nodiscard]] std::size_t optimisations() const { return optimisations_; }
+  /// Factorisations of the keyframe graph for its marginal covariances so far.
+  [[nodiscard]] std::size_t covariance_factorisations() const { return marginals_.factorisations(); }
 
   [[nodiscard]] Map map() const;
   /// The frames of one session (placed or not) in its piece's frame, stamped with their colour time.
@@ -190,6 +229,7 @@ class Mapper {
     std::int64_t joined_at_keyframe = -1;
     bool lost = false;
     double last_match_time = -1;
+    std::vector<std::size_t> loops;  // indices in loops_ of its loops to other sessions, in order accepted
   };
   // A session localized in the read-only map.
   struct Visitor {
@@ -214,7 +254,12 @@ class Mapper {
   void solve(Visitor& v, std::int64_t newest_id);
   void forget_idle_visitors();
   [[nodiscard]] MapSession describe(core::SessionId id, const Visitor& v) const;
-  [[nodiscard]] std::map<core::SessionId, std::pair<std::int64_t, core::Matrix6d>> keyframe_covariances() const;
+  [[nodiscard]] MapSession describe(core::SessionId id, const Session& s) const;
+  // The session's newest keyframe in the keyframe graph: its id and node.
+  [[nodiscard]] std::optional<std::pair<std::int64_t, posegraph::NodeId>> newest_in_graph(const Session& s) const;
+  // Its marginal covariance, and the nodes every session's needs (newest keyframes, last nodes).
+  [[nodiscard]] std::optional<core::Matrix6d> keyframe_covariance(posegraph::NodeId node) const;
+  [[nodiscard]] std::vector<posegraph::NodeId> covariance_nodes() const;
   [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
   [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
   std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
@@ -231,6 +276,9 @@ class Mapper {
   std::optional<posegraph::NodeId> map_below_;  // localize_only(): nodes below it are the map's
   std::map<core::SessionId, Visitor> visitors_;
   std::int64_t next_ordinal_ = 0;
+  std::size_t optimisations_ = 0;
+  // A cache: what map() and session() report does not depend on it, only what they cost.
+  mutable KeyframeMarginals marginals_;
 };
 
 }  // namespace cvo::slam

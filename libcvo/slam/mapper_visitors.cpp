@@ -185,9 +185,7 @@ MapSession Mapper::describe(core::SessionId id, const Visitor& v) const {
 
 MapSession Mapper::session(core::SessionId id) const {
   if (const auto v = visitors_.find(id); v != visitors_.end()) return describe(id, v->second);
-  if (sessions_.contains(id))
-    for (const auto& s : map().sessions)  // a mapped session: as map() has it
-      if (s.session == id) return s;
+  if (const auto s = sessions_.find(id); s != sessions_.end()) return describe(id, s->second);
   MapSession unknown;
   unknown.session = id;
   unknown.piece = id;

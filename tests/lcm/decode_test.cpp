@@ -27,6 +27,7 @@ TEST(Decode, EveryTruncationOfEveryTypeFails) {
   expect_every_truncation_fails(test::sample_keyframe());
   expect_every_truncation_fails(test::sample_local_graph());
   expect_every_truncation_fails(test::sample_map());
+  expect_every_truncation_fails(test::sample_map_correction());
   expect_every_truncation_fails(test::sample_status());
   expect_every_truncation_fails(test::sample_keyframe_request());
   expect_every_truncation_fails(test::sample_grid());
@@ -72,6 +73,30 @@ TEST(Decode, AnotherSchemaVersionIsRejected) {
   std::string error;
   EXPECT_FALSE(decode<cvo_lcm::pose_t>(bytes.data(), static_cast<int>(bytes.size()), &error));
   EXPECT_NE(error.find("schema version 1"), std::string::npos) << error;
+}
+
+// CVO_MAP_CORRECTION as a tracker receives it: cut short, of another schema version, or counting
+// more loops than it holds, it is refused by its kind before anything reads it.
+TEST(Decode, AMapCorrectionCutShortOrOfAnotherVersionIsRefusedByKind) {
+  const auto bytes = encode(test::sample_map_correction());
+  auto failure = DecodeFailure::kContent;
+  std::string error;
+  EXPECT_FALSE(decode<cvo_lcm::map_correction_t>(bytes.data(), static_cast<int>(bytes.size()) - 1, &error, &failure));
+  EXPECT_EQ(failure, DecodeFailure::kBody) << error;
+  auto other = test::sample_map_correction();
+  other.version = 2;
+  const auto newer = encode(other);
+  EXPECT_FALSE(decode<cvo_lcm::map_correction_t>(newer.data(), static_cast<int>(newer.size()), &error, &failure));
+  EXPECT_EQ(failure, DecodeFailure::kVersion);
+  EXPECT_NE(error.find("cvo_lcm.map_correction_t: schema version 2"), std::string::npos) << error;
+  auto counted = bytes;  // num_loops follows the fixed header (wire_layout.cpp)
+  const auto at = 8 + static_cast<std::size_t>(wire_layout("map_correction_t").counts.front().offset);
+  ASSERT_EQ(counted[at + 3], 2) << "the sample's two loops";
+  counted[at + 3] = 3;
+  EXPECT_FALSE(decode<cvo_lcm::map_correction_t>(counted.data(), static_cast<int>(counted.size()), &error, &failure));
+  EXPECT_EQ(failure, DecodeFailure::kBody);
+  EXPECT_NE(error.find("truncated body"), std::string::npos) << error;
+  EXPECT_TRUE(decode<cvo_lcm::map_correction_t>(bytes.data(), static_cast<int>(bytes.size()), &error)) << error;
 }
 
 void set_be32(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t v) {
@@ -171,6 +196,7 @@ TEST(Decode, RandomGarbageNeverCrashes) {
     expect_garbage_fails<cvo_lcm::keyframe_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::local_graph_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::map_t>(rng, keep);
+    expect_garbage_fails<cvo_lcm::map_correction_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::status_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::keyframe_request_t>(rng, keep);
     expect_garbage_fails<cvo_lcm::grid_t>(rng, keep);

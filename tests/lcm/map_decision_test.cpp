@@ -1,6 +1,7 @@
-// What a tracker makes of a received CVO_MAP (lcm::decide_map_correction), without LCM: only a
-// newer map with a finite, plausible entry for its own session moves its map poses; a stale, a
-// foreign, an implausible or a non-finite one is refused by its own kind and changes nothing.
+// What a tracker makes of a received CVO_MAP (lcm::decide_map_correction) or CVO_MAP_CORRECTION
+// (lcm::decide_session_correction), without LCM: only a newer word with a finite, plausible entry
+// for its own session moves its map poses; a stale, a foreign, an implausible or a non-finite one is
+// refused by its own kind and changes nothing; both channels are one decision.
 #include <cmath>
 #include <limits>
 
@@ -9,6 +10,7 @@
 #include "cvo_lcm/map_t.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/map_correction_conversion.hpp"
 #include "libcvo/lcm/map_decision.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "tests/support/map_session.hpp"
@@ -233,6 +235,132 @@ TEST(MapDecision, AFirstPlacementAgreesWithTheSessionsOwnLoops) {
   EXPECT_NE(off.why.find("disagrees with the loop of keyframe 2"), std::string::npos) << off.why;
   // Without the keyframe's odometry pose (older than the tracker holds) there is nothing to check.
   EXPECT_TRUE(decide(with_loop(core::SE3::from_translation({5, 0, 0}) * C), AppliedCorrection{}, {kNow, 0, {}}).apply);
+}
+
+// The same entry on CVO_MAP_CORRECTION, of `revision` (of a back end started at `epoch`).
+std::vector<std::uint8_t> correction_bytes(std::int64_t revision, const slam::MapSession& session,
+                                           std::int64_t epoch = 0, std::vector<slam::SessionLoop> loops = {}) {
+  return encode(
+      to_message(slam::SessionCorrection{static_cast<std::uint64_t>(revision), session, std::move(loops)}, 1, epoch));
+}
+
+CorrectionDecision decide_correction(const std::vector<std::uint8_t>& bytes, const AppliedCorrection& last,
+                                     const MapContext& context = {kNow, 0, {}}) {
+  return decide_session_correction(bytes.data(), static_cast<int>(bytes.size()), kSession, last, kLimits, context);
+}
+
+// One decision: whatever a CVO_MAP with the session's entry is made to, the CVO_MAP_CORRECTION with
+// that entry alone is made to as well (applied, or refused by the same kind).
+TEST(MapDecision, ACorrectionAloneIsDecidedAsTheMapWithItsEntryIs) {
+  AppliedCorrection placed_at_7{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  placed_at_7.applied_utime = kNow - 1'000'000;
+  struct Case {
+    const char* what;
+    std::int64_t revision, epoch;
+    slam::MapSession entry;
+    AppliedCorrection last;
+    std::int64_t sender;
+  };
+  const auto at = [](double x) { return core::SE3::from_translation({x, 0, 0}); };
+  const Case cases[] = {
+      {"a first placement", 3, 0, placed(kSession, kOneMetre), AppliedCorrection{}, 0},
+      {"a small move", 8, 0, placed(kSession, at(1.2)), placed_at_7, 0},
+      {"stale", 6, 0, placed(kSession, at(1.2)), placed_at_7, 0},
+      {"a jump", 8, 0, placed(kSession, at(3)), placed_at_7, 0},
+      {"a revision leap", 7 + 1'000'000, 0, placed(kSession, kOneMetre), placed_at_7, 0},
+      {"an epoch from the future", 1, kNow + 3600'000'000LL, placed(kSession, kOneMetre), placed_at_7, 0},
+      {"another sender", 8, 0, placed(kSession, kOneMetre), placed_at_7, 6},
+      {"unplaced within the epoch", 8, 0, test::map_session(kSession, false, kSession, 1, -1, {}), placed_at_7, 0},
+      {"unplaced by a newer back end", 1, 5, test::map_session(kSession, false, kSession, 1, -1, {}), placed_at_7, 0},
+  };
+  int applied = 0;
+  for (const auto& c : cases) {
+    const MapContext context{kNow, c.sender, {}};
+    const auto by_map = decide(map_bytes(c.revision, {placed(kOther, {}), c.entry}, c.epoch), c.last, context);
+    const auto by_correction = decide_correction(correction_bytes(c.revision, c.entry, c.epoch), c.last, context);
+    EXPECT_EQ(by_correction.apply, by_map.apply) << c.what << ": " << by_map.why << " / " << by_correction.why;
+    EXPECT_FALSE(by_correction.ignored) << c.what;
+    if (!by_map.apply) {
+      EXPECT_EQ(by_correction.refusal, by_map.refusal) << c.what << ": " << by_correction.why;
+      continue;
+    }
+    ++applied;
+    EXPECT_EQ(by_correction.correction.revision, c.revision) << c.what;
+    EXPECT_EQ(by_correction.correction.placed, by_map.correction.placed) << c.what;
+    EXPECT_EQ(by_correction.correction.T_map_odom.translation(), by_map.correction.T_map_odom.translation()) << c.what;
+  }
+  EXPECT_EQ(applied, 3) << "a first placement, a small move, a newer back end's unplaced entry";
+}
+
+// Every tracker hears every session's corrections: another session's is no fault (not counted),
+// whatever its order; and the word applied last, sent again (the back end re-sends corrections, a
+// CVO_MAP repeats them), is ignored too, while another entry of the same revision is stale.
+TEST(MapDecision, AnotherSessionsCorrectionAndTheAppliedOneAgainAreIgnored) {
+  const auto others = decide_correction(correction_bytes(1, placed(kOther, kOneMetre)), AppliedCorrection{});
+  EXPECT_FALSE(others.apply);
+  EXPECT_TRUE(others.ignored) << others.why;
+  const AppliedCorrection late{0, 9, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  EXPECT_TRUE(decide_correction(correction_bytes(2, placed(kOther, kOneMetre)), late).ignored) << "not stale: not ours";
+
+  const auto first = decide_correction(correction_bytes(3, placed(kSession, kOneMetre)), AppliedCorrection{});
+  ASSERT_TRUE(first.apply) << first.why;
+  const auto again = decide_correction(correction_bytes(3, placed(kSession, kOneMetre)), first.correction);
+  EXPECT_TRUE(again.ignored) << again.why;
+  const auto as_map = decide(map_bytes(3, {placed(kOther, {}), placed(kSession, kOneMetre)}), first.correction);
+  EXPECT_TRUE(as_map.ignored) << "the CVO_MAP of the applied revision: " << as_map.why;
+  const auto other_entry =
+      decide(map_bytes(3, {placed(kSession, core::SE3::from_translation({1.1, 0, 0}))}), first.correction);
+  EXPECT_FALSE(other_entry.ignored);
+  EXPECT_EQ(other_entry.refusal, BadKind::kStale) << other_entry.why;
+  const auto from_another_sender =
+      decide_correction(correction_bytes(3, placed(kSession, kOneMetre)), first.correction, {kNow, 6, {}});
+  EXPECT_FALSE(from_another_sender.ignored) << "a repeat only from the sender applied";
+}
+
+// A first placement by a correction is checked against the loops it carries, each with the other
+// keyframe's map pose: C · O_a = M_b · (T_a^b)⁻¹ up to the jump bound.
+TEST(MapDecision, AFirstPlacementByACorrectionAgreesWithItsLoops) {
+  const core::SE3 O_a = core::SE3::from_translation({0.3, 0, 0});
+  const core::SE3 M_b = core::SE3::from_translation({5, 1, 0});
+  const core::SE3 T_ab = core::SE3::from_translation({0.2, 0, 0.1});
+  const core::SE3 C = M_b * T_ab.inverse() * O_a.inverse();
+  const std::vector<slam::SessionLoop> loops{{2, kOther, 4, T_ab, M_b}};
+  const OwnKeyframe own[] = {{1, {}}, {2, O_a}};
+  EXPECT_TRUE(decide_correction(correction_bytes(3, placed(kSession, C), 0, loops), {}, {kNow, 0, own}).apply);
+  const auto off = decide_correction(
+      correction_bytes(3, placed(kSession, core::SE3::from_translation({5, 0, 0}) * C), 0, loops), {}, {kNow, 0, own});
+  EXPECT_FALSE(off.apply);
+  EXPECT_EQ(off.refusal, BadKind::kImplausible);
+  EXPECT_NE(off.why.find("disagrees with the loop of keyframe 2"), std::string::npos) << off.why;
+}
+
+// What the tracker cannot use of a correction is refused whole by its kind: more loops than
+// MAX_LOOPS, a loop's pose that is no rigid transform, a correction that is not finite.
+TEST(MapDecision, AnUnusableCorrectionIsRefusedByKind) {
+  auto many = to_message(slam::SessionCorrection{3, placed(kSession, kOneMetre), {}}, 1, 0);
+  const cvo_lcm::map_correction_loop_t loop{1, kOther, 2, to_message(kOneMetre), to_message(core::SE3())};
+  many.loops.assign(cvo_lcm::map_correction_t::MAX_LOOPS + 1, loop);
+  many.num_loops = static_cast<std::int32_t>(many.loops.size());
+  const auto too_many = decide_correction(encode(many), {});
+  EXPECT_EQ(too_many.refusal, BadKind::kContent) << too_many.why;
+  EXPECT_NE(too_many.why.find("more than 8"), std::string::npos) << too_many.why;
+  auto bent = to_message(slam::SessionCorrection{3, placed(kSession, kOneMetre), {{2, kOther, 4, {}, {}}}}, 1, 0);
+  bent.loops[0].other_pose.orientation[0] = 3;  // not a unit quaternion
+  EXPECT_EQ(decide_correction(encode(bent), {}).refusal, BadKind::kContent);
+  auto nan = to_message(slam::SessionCorrection{3, placed(kSession, kOneMetre), {}}, 1, 0);
+  nan.session.correction.position[2] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(decide_correction(encode(nan), {}).refusal, BadKind::kNotFinite);
+  // Converted back, a usable one is what was sent; at most MAX_LOOPS loops go.
+  std::vector<slam::SessionLoop> ten(10, {2, kOther, 4, kOneMetre, {}});
+  const auto sent = to_message(slam::SessionCorrection{3, placed(kSession, kOneMetre), ten}, 1, 0);
+  EXPECT_EQ(sent.num_loops, cvo_lcm::map_correction_t::MAX_LOOPS);
+  std::string error;
+  const auto back = from_message(sent, &error);
+  ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->revision, 3u);
+  EXPECT_EQ(back->session.session, kSession);
+  EXPECT_EQ(back->loops.size(), 8u);
+  EXPECT_EQ(back->loops[0].measurement.translation(), kOneMetre.translation());
 }
 
 }  // namespace

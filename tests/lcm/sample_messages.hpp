@@ -8,6 +8,7 @@
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
+#include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/rgbd_frame_t.hpp"
@@ -166,6 +167,23 @@ inline cvo_lcm::map_t sample_map() {
   m.loops = {{kFirst, kFirst, sample_edge(0, 2)}, {kFirst, kSecond, sample_edge(1, 5)}};
   m.num_sessions = static_cast<std::int32_t>(m.sessions.size());
   m.num_keyframes = static_cast<std::int32_t>(m.keyframes.size());
+  m.num_loops = static_cast<std::int32_t>(m.loops.size());
+  return m;
+}
+
+inline cvo_lcm::map_correction_t sample_map_correction() {
+  cvo_lcm::map_correction_t m{};
+  m.version = cvo_lcm::map_correction_t::SCHEMA_VERSION;
+  m.utime = 1305031299100000;
+  m.epoch = 1305031200000000;
+  m.revision = 18;
+  m.session = sample_map().sessions[1];
+  m.session.placed = true;
+  m.session.state = cvo_lcm::pose_t::STATE_LOCALIZED;
+  m.session.covariance_keyframe = 5;
+  for (int i = 0; i < 6; ++i) m.session.keyframe_covariance[i * 7] = 2e-4;
+  m.loops = {{5, 0x5e5510'0000'0001, 1, sample_pose(0.3), sample_pose(1.0)},
+             {4, 0x5e5510'0000'0001, 0, sample_pose(0.4), sample_pose(0.0)}};
   m.num_loops = static_cast<std::int32_t>(m.loops.size());
   return m;
 }

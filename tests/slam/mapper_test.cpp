@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/posegraph/marginals.hpp"
 #include "libcvo/registration/point_selection.hpp"
 
 namespace cvo::slam {
@@ -79,6 +80,58 @@ TEST(Mapper, ALocalGraphThatDoesNotStartAtItsKeyframeIsRefused) {
   EXPECT_EQ(mapper.backend().local_graphs(), 0u);
   EXPECT_NO_THROW(mapper.add_local_graph(7, 3, graph));  // keyframe 3 not here yet: the graph is
   EXPECT_EQ(mapper.backend().local_graphs(), 1u);
+}
+
+// One session's entry without the map (what CVO_MAP_CORRECTION carries): the same as map()'s, its
+// covariance the marginal a factorisation of the keyframe graph gives, and, while local graphs
+// only add leaves, no factorisation after the first.
+TEST(Mapper, ASessionsEntryIsMapsWithoutAFactorisationPerLocalGraph) {
+  MapperParameters parameters;
+  parameters.detector.loop.similarity_threshold = 2;  // above any score: no loop, only leaves
+  Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), parameters);
+  constexpr core::SessionId kSession = 0x5e55;
+  constexpr std::int64_t kStride = 4;  // frames between keyframes
+  const auto odometry = [](std::int64_t frame) {
+    return core::SE3(core::so3_exp({0, 0.01 * static_cast<double>(frame), 0}),
+                     Eigen::Vector3d(0.02 * static_cast<double>(frame), 0, 0));
+  };
+  const auto add_keyframe = [&](std::int64_t id) {
+    const RealKeyframe k = real_keyframe(static_cast<std::size_t>(id * kStride));
+    mapper.add_keyframe({kSession, id, k.frame, odometry(id * kStride), k.cloud});
+  };
+  add_keyframe(0);
+  for (std::int64_t id = 1; id < 10; ++id) {
+    const std::int64_t from = (id - 1) * kStride, to = id * kStride;  // the graph of keyframe id - 1
+    odometry::LocalGraph graph(2);
+    graph.add_node({static_cast<std::uint64_t>(from), 0.1 * static_cast<double>(from), odometry(from)});
+    graph.add_node({static_cast<std::uint64_t>(to), 0.1 * static_cast<double>(to), odometry(to)});
+    core::Matrix6d information = 1e4 * core::Matrix6d::Identity();
+    information(0, 5) = information(5, 0) = 50.0 * static_cast<double>(id);
+    graph.add_edge({static_cast<std::uint64_t>(from), static_cast<std::uint64_t>(to),
+                    odometry(from).inverse() * odometry(to), information});
+    mapper.add_local_graph(kSession, id - 1, graph);
+    add_keyframe(id);
+
+    const MapSession entry = mapper.session(kSession);
+    ASSERT_TRUE(entry.keyframe_covariance) << "keyframe " << id;
+    EXPECT_EQ(entry.covariance_keyframe, id) << "the newest keyframe's";
+    const core::Matrix6d factorised =
+        posegraph::marginal_covariances(mapper.backend().keyframe_graph(), {to}, {}).at(to);
+    EXPECT_LT((*entry.keyframe_covariance - factorised).norm(), 1e-9 * factorised.norm()) << "keyframe " << id;
+  }
+  EXPECT_EQ(mapper.loops_accepted(), 0u);
+  EXPECT_EQ(mapper.covariance_factorisations(), 1u) << "the first entry's only";
+  const Map map = mapper.map();
+  const SessionCorrection correction = mapper.correction(kSession, 8);
+  EXPECT_EQ(correction.revision, map.revision);
+  EXPECT_EQ(correction.session.keyframes, map.sessions.front().keyframes);
+  EXPECT_EQ(correction.session.correction.translation(), map.sessions.front().correction.translation());
+  EXPECT_EQ(*correction.session.keyframe_covariance, *map.sessions.front().keyframe_covariance);
+  EXPECT_TRUE(correction.loops.empty());
+  EXPECT_EQ(mapper.covariance_factorisations(), 1u) << "map() too takes the held covariances";
+  mapper.finish();  // the global optimisation moves every pose: the next entry factorises again
+  EXPECT_TRUE(mapper.session(kSession).keyframe_covariance);
+  EXPECT_EQ(mapper.covariance_factorisations(), 2u);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "cvo_lcm/grid_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
+#include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
@@ -25,6 +26,7 @@ struct PublishedLog {
   std::vector<cvo_lcm::local_graph_t> local_graphs;
   std::vector<cvo_lcm::status_t> statuses;
   std::vector<cvo_lcm::map_t> maps;
+  std::vector<cvo_lcm::map_correction_t> map_corrections;
   std::vector<cvo_lcm::grid_t> grids;
   int undecodable = 0;
 };
@@ -70,6 +72,8 @@ inline PublishedLog read_published(const std::filesystem::path& file) {
       add_decoded(*e, log.statuses, log.undecodable);
     else if (e->channel == "CVO_MAP")
       add_decoded(*e, log.maps, log.undecodable);
+    else if (e->channel == "CVO_MAP_CORRECTION")
+      add_decoded(*e, log.map_corrections, log.undecodable);
     else if (e->channel == "CVO_GRID")
       add_decoded(*e, log.grids, log.undecodable);
   }

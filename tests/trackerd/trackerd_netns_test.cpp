@@ -3,7 +3,7 @@
 // recording is decoded and evaluated against ground truth. CVO_MAPs sent mid-replay must correct
 // the map poses that follow only when they place the tracker's own session, are newer than the
 // map applied last and move it plausibly (stale, foreign and implausible maps are counted and
-// change nothing). The open local graph
+// change nothing); so must CVO_MAP_CORRECTIONs alone, another session's ignored. The open local graph
 // goes out at SIGTERM. Two replays in deterministic mode give identical poses, in two sessions.
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): a private network
@@ -30,6 +30,7 @@
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/map_correction_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
@@ -58,7 +59,8 @@ struct Replay {
   double shutdown_ms = 0;
 };
 
-// CVO_MAP messages (encoded: a test may send what the daemon must refuse) for the tracker's session.
+// CVO_MAP (or CVO_MAP_CORRECTION) messages (encoded: a test may send what the daemon must refuse)
+// for the tracker's session.
 using MapsFor = std::function<std::vector<std::vector<std::uint8_t>>(std::int64_t session)>;
 
 // The session cvo-trackerd names at start ("session 0x..."), or 0.
@@ -70,10 +72,10 @@ std::int64_t logged_session(const fs::path& stderr_file) {
 }
 
 // One replay: logger and daemon up, the recording played (at 0.3 times its speed: the daemon tracks
-// every frame, nothing queues up in the socket, and every map comes mid-clip), maps sent from 0.75 s
-// on, a quarter of a second apart, SIGTERM,
-// logger stopped.
-Replay replay(const fs::path& dir, const fs::path& recording, const std::string& name, const MapsFor& maps) {
+// every frame, nothing queues up in the socket, and every map comes mid-clip), maps sent on
+// `channel` from 0.75 s on, a quarter of a second apart, SIGTERM, logger stopped.
+Replay replay(const fs::path& dir, const fs::path& recording, const std::string& name, const MapsFor& maps,
+              const std::string& channel = "CVO_MAP") {
   Replay r;
   const auto out = dir / (name + ".lcmlog");
   DaemonProcess logger(
@@ -93,7 +95,7 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
   ::lcm::LCM lcm(kUrl);
   for (const auto& map : maps(r.session)) {
     std::this_thread::sleep_for(scaled(250ms));
-    lcm.publish("CVO_MAP", map.data(), static_cast<unsigned>(map.size()));
+    lcm.publish(channel, map.data(), static_cast<unsigned>(map.size()));
   }
   EXPECT_TRUE(player.wait_for(scaled(30s))) << "lcm-logplayer did not finish";
   std::this_thread::sleep_for(scaled(1500ms));  // the last frames tracked and published
@@ -118,6 +120,11 @@ std::vector<std::uint8_t> map_message(std::uint64_t revision, const std::vector<
   auto message = lcm::to_message(map, 1, epoch);
   message.version = version;
   return lcm::encode(message);
+}
+
+// A CVO_MAP_CORRECTION of the back end (epoch 0), of `revision`, for one session's entry.
+std::vector<std::uint8_t> correction_message(std::uint64_t revision, const slam::MapSession& session) {
+  return lcm::encode(lcm::to_message(slam::SessionCorrection{revision, session, {}}, 1, 0));
 }
 
 // Every message of a replay is of its session, and the open local graph went out at SIGTERM.
@@ -227,6 +234,62 @@ TEST(TrackerdNetns, ReplayOverUdpMulticastIsTrackedCorrectedAndRepeatable) {
   for (std::size_t i = 0; i < poses.size(); ++i)
     for (int k = 0; k < 3; ++k)
       EXPECT_EQ(second.published.poses[i].odom_pose.position[k], poses[i].odom_pose.position[k]) << "frame " << i;
+}
+
+// The back end's word on CVO_MAP_CORRECTION alone, no CVO_MAP at all (issue 27): another session's
+// correction is ignored (every tracker hears every session's: no fault counted); the tracker's own,
+// placing it 1 m along x, is applied, and the same sent again (the back end re-sends) is ignored;
+// an older one is stale, one 9 m further implausible; the back end's next (revision 5) is applied.
+TEST(TrackerdNetns, ACorrectionAloneMovesTheMapPosesAndTheGuardsHold) {
+  if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+  cvo::test::TempDir dir;
+  const auto recording = dir.path() / "clip.lcmlog";
+  const auto conversion = cvo::testing::run_tool(
+      "tum2lcm", cvo::testing::quoted(kClip) + " " + cvo::testing::quoted(recording) + " --colour jpeg", dir.path());
+  ASSERT_EQ(conversion.exit_code, 0) << conversion.err;
+  const auto placed = core::SE3::from_translation({1, 0, 0});
+  const auto r = replay(
+      dir.path(), recording, "corrections",
+      [&](std::int64_t session) {
+        const std::int64_t other = session ^ 0x5a5a;
+        const auto at = [&](const core::SE3& correction) {
+          return slam::MapSession{session, true, other, 1, 0, correction};
+        };
+        return std::vector<std::vector<std::uint8_t>>{
+            correction_message(2, {other, true, other, 1, 0, core::SE3::from_translation({0, 5, 0})}),
+            correction_message(3, at(placed)),
+            correction_message(3, at(placed)),
+            correction_message(2, at(core::SE3::from_translation({1.2, 0, 0}))),
+            correction_message(4, at(core::SE3::from_translation({10, 0, 0}))),
+            correction_message(5, at(placed))};
+      },
+      "CVO_MAP_CORRECTION");
+  EXPECT_EQ(r.trackerd_exit, 0) << cvo::testing::slurp(dir.path() / "corrections.trackerd.txt");
+  expect_one_complete_session(r);
+  const auto& poses = r.published.poses;
+  ASSERT_EQ(poses.size(), 50u) << cvo::testing::slurp(dir.path() / "corrections.trackerd.txt");
+  ASSERT_FALSE(r.published.statuses.empty());
+  const auto& status = r.published.statuses.back();
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_FOREIGN], 0) << "another session's correction is no fault";
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_STALE], 1) << "revision 2 after 3; the repeat is no fault";
+  EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_IMPLAUSIBLE], 1) << "9 m";
+  EXPECT_EQ(poses.back().map_revision, 5);
+  int corrected = 0;
+  for (const auto& p : poses) {
+    const auto odom = *lcm::from_message(p.odom_pose, nullptr);
+    const auto mapped = *lcm::from_message(p.map_pose, nullptr);
+    if (!p.map_placed) {
+      EXPECT_LT((mapped.translation() - odom.translation()).norm(), 1e-12) << "frame " << p.frame_index;
+      continue;
+    }
+    ++corrected;
+    EXPECT_LT((mapped.translation() - (placed * odom).translation()).norm(), 1e-9) << "frame " << p.frame_index;
+    EXPECT_GE(p.map_revision, 3) << "frame " << p.frame_index;
+  }
+  EXPECT_GT(corrected, 10) << "poses after the correction that places the session carry it";
+  EXPECT_LT(corrected, 50) << "poses before it do not";
+  const std::string log = cvo::testing::slurp(dir.path() / "corrections.trackerd.txt");
+  EXPECT_NE(log.find("placed in the map (map revision 3, CVO_MAP_CORRECTION)"), std::string::npos) << log;
 }
 
 // The amplification of issue 26: 50 requests (each for 16 keyframes, under 10 kB in all) made the

@@ -1,0 +1,40 @@
+#include "daemon/backendd/map_schedule.hpp"
+
+#include <utility>
+
+namespace cvo::daemon::backendd {
+
+bool MapSchedule::differs(std::int64_t session, const std::vector<std::uint8_t>& entry) const {
+  const auto it = sent_.find(session);
+  return it == sent_.end() || it->second.entry != entry;
+}
+
+void MapSchedule::sent(std::int64_t session, std::vector<std::uint8_t> entry, Clock::time_point now) {
+  sent_[session] = {std::move(entry), now};
+}
+
+void MapSchedule::seen(std::int64_t session, Clock::time_point now) { live_[session] = now; }
+
+void MapSchedule::lost(std::int64_t session) { live_.erase(session); }
+
+std::vector<std::int64_t> MapSchedule::resends_due(Clock::time_point now) {
+  std::erase_if(live_, [&](const auto& entry) { return now - entry.second > periods_.live; });
+  std::vector<std::int64_t> due;
+  for (const auto& [session, seen] : live_)
+    if (const auto it = sent_.find(session); it != sent_.end() && now - it->second.at >= periods_.resend)
+      due.push_back(session);
+  return due;
+}
+
+bool MapSchedule::map_due(Clock::time_point now, bool at_once) const {
+  if (!map_changed_) return false;
+  if (at_once || !map_sent_ || periods_.map.count() <= 0) return true;
+  return now - *map_sent_ >= periods_.map;
+}
+
+void MapSchedule::map_sent(Clock::time_point now) {
+  map_sent_ = now;
+  map_changed_ = false;
+}
+
+}  // namespace cvo::daemon::backendd

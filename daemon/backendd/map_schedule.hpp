@@ -1,0 +1,66 @@
+#pragma once
+// When cvo-backendd's map goes out, and which of it: the policy, without LCM (Backendd wires it).
+// A tracker needs only its own session's entry, which goes on CVO_MAP_CORRECTION (O(1) bytes); the
+// full CVO_MAP (O(N) bytes in the keyframes) goes rarely:
+//   - a session's correction after a change when its entry (map_session_t as encoded: correction,
+//     state, placement, covariance and its keyframe, last match, ...) differs from the one sent
+//     last for it, or none was; the daemon offers only the sessions a change may have touched
+//     (its record's; every session after an optimisation), so a keyframe costs O(1);
+//   - a live session's correction again once `resend` has passed since its last, so that one lost
+//     on UDP, or missed by a tracker that started listening late, comes again; live: a CVO_POSE or a
+//     record of it within `live`, and not lost;
+//   - the full map at once when the caller says so (a loop closure, a join), the first one at
+//     once, with a `map` period of 0 after every change, else once `map` has passed since the last
+//     while a change waits (the caller asks again from its loop). The final one at the stop is the
+//     caller's.
+// Time is the caller's (the steady clock), so the policy is tested without waiting. cvo-backend
+// only.
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <vector>
+
+namespace cvo::daemon::backendd {
+
+class MapSchedule {
+ public:
+  using Clock = std::chrono::steady_clock;
+  struct Periods {
+    std::chrono::duration<double> map{5.0};     // backendd.map_period_s
+    std::chrono::duration<double> resend{1.0};  // backendd.status_period_s
+    std::chrono::duration<double> live{10.0};
+  };
+  explicit MapSchedule(const Periods& periods) : periods_(periods) {}
+
+  /// Whether `entry` (the session's, encoded) is other than the last one sent for it.
+  [[nodiscard]] bool differs(std::int64_t session, const std::vector<std::uint8_t>& entry) const;
+  /// The session's correction with `entry` went out.
+  void sent(std::int64_t session, std::vector<std::uint8_t> entry, Clock::time_point now);
+  /// A record or a CVO_POSE of the session came: it is live.
+  void seen(std::int64_t session, Clock::time_point now);
+  /// Its tracker said it is lost: no longer live.
+  void lost(std::int64_t session);
+  /// The live sessions whose correction went out `resend` ago or longer; forgets those no longer live.
+  std::vector<std::int64_t> resends_due(Clock::time_point now);
+
+  /// The map changed.
+  void changed() { map_changed_ = true; }
+  /// Whether the full map is to go now.
+  [[nodiscard]] bool map_due(Clock::time_point now, bool at_once) const;
+  /// It went.
+  void map_sent(Clock::time_point now);
+
+ private:
+  struct Sent {
+    std::vector<std::uint8_t> entry;
+    Clock::time_point at;
+  };
+  Periods periods_;
+  std::map<std::int64_t, Sent> sent_;
+  std::map<std::int64_t, Clock::time_point> live_;  // when last seen
+  std::optional<Clock::time_point> map_sent_;
+  bool map_changed_ = false;
+};
+
+}  // namespace cvo::daemon::backendd
