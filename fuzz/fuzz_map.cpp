@@ -17,18 +17,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     (void)cvo::lcm::from_message(message, &error);
   });
   if (size > static_cast<std::size_t>(INT_MAX)) return 0;
-  // Both a tracker that applied nothing yet and one with a placed correction: the plausibility
-  // check (a jump from the last correction) only runs in the second.
-  cvo::lcm::AppliedCorrection placed;
-  placed.epoch = 0;
-  placed.revision = 1;
-  placed.session = kSession;
-  placed.placed = true;
-  // Keyframes of its own, so that a placement's loop check runs too.
   const cvo::lcm::OwnKeyframe own[] = {{0, {}}, {1, cvo::core::SE3::from_translation({0.1, 0, 0})}};
-  for (const cvo::lcm::AppliedCorrection& last : {cvo::lcm::AppliedCorrection{}, placed}) {
-    (void)cvo::lcm::decide_map_correction(data, static_cast<int>(size), kSession, last, cvo::lcm::CorrectionLimits{},
-                                          cvo::lcm::MapContext{0, 0, own});
-  }
+  cvo::fuzz::decide_as_trackers(kSession, own, [&](const auto& last, const auto& limits, const auto& context) {
+    return cvo::lcm::decide_map_correction(data, static_cast<int>(size), kSession, last, limits, context);
+  });
   return 0;
 }

@@ -18,17 +18,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     (void)cvo::lcm::from_message(message, &error);
   });
   if (size > static_cast<std::size_t>(INT_MAX)) return 0;
-  // A tracker that applied nothing yet (a first placement: the loop check) and one placed (the
-  // jump bound), with keyframes of its own that the seed's loops name.
-  cvo::lcm::AppliedCorrection placed;
-  placed.epoch = 0;
-  placed.revision = 1;
-  placed.session = kSession;
-  placed.placed = true;
   const cvo::lcm::OwnKeyframe own[] = {{4, {}}, {5, cvo::core::SE3::from_translation({0.1, 0, 0})}};
-  for (const cvo::lcm::AppliedCorrection& last : {cvo::lcm::AppliedCorrection{}, placed}) {
-    (void)cvo::lcm::decide_session_correction(data, static_cast<int>(size), kSession, last,
-                                              cvo::lcm::CorrectionLimits{}, cvo::lcm::MapContext{0, 0, own});
-  }
+  cvo::fuzz::decide_as_trackers(kSession, own, [&](const auto& last, const auto& limits, const auto& context) {
+    return cvo::lcm::decide_session_correction(data, static_cast<int>(size), kSession, last, limits, context);
+  });
   return 0;
 }

@@ -5,11 +5,13 @@
 #include <climits>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 
 #include "fuzz/auth_harness.hpp"
 #include "fuzz/harness.hpp"
 #include "libcvo/lcm/decode.hpp"
+#include "libcvo/lcm/map_decision.hpp"
 
 namespace cvo::fuzz {
 
@@ -29,6 +31,20 @@ void fuzz_message(const std::uint8_t* data, std::size_t size, Convert&& convert)
     fail(std::string("re-encoded ") + T::getTypeName() + " does not decode: " + error);
   }
   convert(*message);
+}
+
+// A map message as a tracker of `session` decides on it (libcvo/lcm/map_decision.hpp), in both
+// states that reach different checks: one that applied nothing yet (a first placement: the loop
+// check) and one placed (the jump bound); `own` are keyframes of its own that the seed's loops name.
+template <class Decide>
+void decide_as_trackers(std::int64_t session, std::span<const lcm::OwnKeyframe> own, Decide&& decide) {
+  lcm::AppliedCorrection placed;
+  placed.epoch = 0;
+  placed.revision = 1;
+  placed.session = session;
+  placed.placed = true;
+  for (const lcm::AppliedCorrection& last : {lcm::AppliedCorrection{}, placed})
+    (void)decide(last, lcm::CorrectionLimits{}, lcm::MapContext{0, 0, own});
 }
 
 }  // namespace cvo::fuzz
