@@ -62,6 +62,11 @@ constexpr auto kGridPeriod = 1s;
 // A session whose tracker said nothing (no record, no CVO_POSE) for this long is no longer live: its
 // correction is not sent again.
 constexpr auto kLiveFor = 10s;
+// A signal stop's budget (backendd.stop_timeout_s), in shares of it: records are applied while
+// more than kApplyUntil of it is left, the final optimisation runs until kPublishIn is left, which
+// publishes the final corrections, map and grid.
+constexpr double kApplyUntil = 0.5;
+constexpr double kPublishIn = 0.25;
 
 std::string fixed(double value, int digits) {
   char text[64];
@@ -253,8 +258,13 @@ int Backendd::run() {
   // The worker may be inside a long optimisation: allow it the watchdog's full interval.
   const Heartbeat* const beats[] = {&receive_heartbeat_, &work_heartbeat_};
   const auto ended = [&] { return input_ended_ && config_.backendd.exit_on_eof; };
-  if (const auto signal = supervise(systemd_, {beats, 30s}, ended))
-    notes_.note(std::string("stopping on ") + signal_name(*signal));
+  if (const auto signal = supervise(systemd_, {beats, 30s}, ended)) {
+    const auto budget =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.backendd.stop_timeout_s));
+    stop_deadline_ = (Clock::now() + budget).time_since_epoch().count();
+    notes_.note(std::string("stopping on ") + signal_name(*signal) + " within " +
+                fixed(config_.backendd.stop_timeout_s, 1) + " s (backendd.stop_timeout_s)");
+  }
   stop_ = true;
   receive.join();
   work.join();
@@ -520,6 +530,10 @@ void Backendd::work_loop() {
   while (true) {
     work_heartbeat_.beat();
     const bool receiver_done = receiver_done_;  // read first: it pushes nothing after setting it
+    if (stop_time_left() < kApplyUntil * config_.backendd.stop_timeout_s) {
+      leave_waiting_records();
+      break;
+    }
     auto queued = queue_.pop(50ms);
     if (queued)
       process(*queued);
@@ -765,15 +779,39 @@ void Backendd::publish_status(std::int8_t state) {
   w.last_status = now;
 }
 
+double Backendd::stop_time_left() const {
+  const Clock::time_point deadline{Clock::duration{stop_deadline_.load()}};
+  if (deadline == Clock::time_point::max()) return std::numeric_limits<double>::infinity();
+  return std::chrono::duration<double>(deadline - Clock::now()).count();
+}
+
+// A signal stop out of time for records: what waits is in the store (queued only after it was
+// stored), and the next start's replay applies it.
+void Backendd::leave_waiting_records() {
+  const std::size_t waiting = queue_.size();
+  if (waiting == 0) return;
+  notes_.note(std::to_string(waiting) + " records not applied within backendd.stop_timeout_s (" +
+              fixed(config_.backendd.stop_timeout_s, 1) + " s): " +
+              (localization() ? "the map's are read again and live sessions localize again at the next start"
+                              : "they are in the store, and the next start applies them"));
+}
+
 // The final global optimisation, the map it gives, and the closing note.
 void Backendd::finish() {
   Work& w = *work_;
   try {
     // Nothing to optimise before a local graph; a read-only map was optimised when it became one.
-    if (w.mapper.backend().local_graphs() > 0 && !w.mapper.localizing_only()) {
-      const auto report = w.mapper.finish();
+    const bool optimise = w.mapper.backend().local_graphs() > 0 && !w.mapper.localizing_only();
+    const double budget = stop_time_left() - kPublishIn * config_.backendd.stop_timeout_s;
+    if (optimise && budget <= 0) {
+      notes_.note(
+          "final optimisation skipped: no time left of backendd.stop_timeout_s (the keyframe graph's poses "
+          "stand; the next stop runs it)");
+    } else if (optimise) {
+      const auto report = w.mapper.finish(budget);
       notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
-                  std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations");
+                  std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations" +
+                  (report.stop_reason == "time limit" ? ", cut short by backendd.stop_timeout_s" : ""));
     }
     publish_corrections(w.mapper.sessions(), false);
     w.schedule.changed();
@@ -781,7 +819,10 @@ void Backendd::finish() {
   } catch (const std::exception& e) {
     notes_.note(std::string("final optimisation failed, the last map stands: ") + e.what());
   }
-  publish_grid(false);  // the final grid, changed or not: what a recording of the run ends with
+  if (stop_time_left() > 0)
+    publish_grid(false);  // the final grid, changed or not: what a recording of the run ends with
+  else
+    notes_.note("final CVO_GRID skipped: no time left of backendd.stop_timeout_s (the last one sent stands)");
   notes_.note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
               std::to_string(w.mapper.loops_accepted()) + " loops accepted of " +
               std::to_string(w.mapper.loops_tried()) + " tried");

@@ -24,6 +24,14 @@
 // (the full CVO_MAP and each session's CVO_MAP_CORRECTION), not after each: a tracker sees the
 // restarted back end's revisions leap once, in its new epoch.
 //
+// A signal stop ends within backendd.stop_timeout_s (below the unit's TimeoutStopSec), whatever
+// waits: records are applied during its first half; what still waits then is left, since every
+// record is in the store before it is queued, and the next start's replay applies it (in
+// localization mode a live session's records are never stored: they are a visitor's, and it
+// localizes again). The final global optimisation gets the time up to the last quarter, cut short
+// at its last accepted step (or skipped) when that runs out; the last quarter publishes the final
+// corrections, map and grid. A log that ended (exit_on_eof) is worked through whole.
+//
 // Localization (backendd.mode localization): the store is only read (read_store, as cvo-map reads
 // it: never written, renamed or cut back), its records are the map; once they are applied the
 // final global optimisation runs and the mapper becomes read only (slam::Mapper::localize_only).
@@ -127,6 +135,10 @@ class Backendd {
   void publish_grid(bool after_loop);
   void publish_status(std::int8_t state);
   void finish();
+  // Seconds left of a signal stop's budget (backendd.stop_timeout_s from the signal); infinity when
+  // no signal stop is under way (a log that ended is worked through whole).
+  [[nodiscard]] double stop_time_left() const;
+  void leave_waiting_records();
   void start_localizing();
   [[nodiscard]] bool localization() const { return config_.backendd.mode == "localization"; }
 
@@ -148,6 +160,9 @@ class Backendd {
   WorkQueue<QueuedRecord> queue_;  // cvo-receive -> cvo-backend
   std::atomic<bool> stop_{false}, receiver_done_{false};
   std::atomic<bool> input_ended_{false};  // a file:// input log was read to its end
+  // When a signal stop must be over (steady clock ticks); max: no signal stop. Set by run().
+  std::atomic<std::chrono::steady_clock::rep> stop_deadline_{
+      std::chrono::steady_clock::time_point::max().time_since_epoch().count()};
   std::atomic<std::int64_t> queue_drops_{0};
   std::atomic<std::int64_t> replayed_pending_{0};  // records of the store not applied yet
   // Records that found the queue full and wait in the store instead (queued by reference), now

@@ -286,6 +286,9 @@ const std::vector<Field>& table() {
           "the full CVO_MAP goes out at most this often (s) while the map changes, at once after a loop closure or "
           "a join, and at the stop (changed sessions' CVO_MAP_CORRECTIONs after every change); 0: after every "
           "change"),
+      row("backendd.stop_timeout_s", &Config::backendd, &BackenddParameters::stop_timeout_s, kNonNegative,
+          "a SIGTERM/SIGINT stop ends within this (s), below the unit's TimeoutStopSec: records still waiting stay "
+          "in the store for the next start, the final optimisation gets the time left"),
       row("backendd.publish_url", &Config::backendd, &BackenddParameters::publish_url, kAny,
           "LCM provider CVO_MAP and CVO_STATUS go to; lcm_url: the same one (set it when lcm_url is a file:// log)"),
       row("backendd.exit_on_eof", &Config::backendd, &BackenddParameters::exit_on_eof, kAny,

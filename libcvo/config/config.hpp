@@ -74,6 +74,10 @@ struct BackenddParameters {
   // loop closure or a join, and at the stop; each changed session's CVO_MAP_CORRECTION after every
   // change. 0: the full map after every change too.
   double map_period_s = 5.0;
+  // A signal stop (SIGTERM: systemd's stop) ends within this many seconds, below the unit's
+  // TimeoutStopSec (30 s): records still waiting are in the store and the next start applies them,
+  // and the final global optimisation gets what time is left.
+  double stop_timeout_s = 20.0;
   std::string publish_url = "lcm_url";  // where CVO_MAP and CVO_STATUS go; "lcm_url": the same provider
   bool exit_on_eof = false;             // a file:// lcm_url that ends: final optimisation, final map, exit 0
   std::size_t queue_max = 64;           // records waiting for the back end's thread in memory; more wait in the store

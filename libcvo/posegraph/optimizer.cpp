@@ -385,8 +385,8 @@ class LevenbergMarquardt {
         cost_(report.initial_cost),
         factor_usable_(cholmod.factorized) {}
 
-  /// Runs to a stop; returns (stop reason, converged).
-  std::pair<std::string, bool> run();
+  /// Runs to a stop, or until `deadline`; returns (stop reason, converged).
+  std::pair<std::string, bool> run(std::chrono::steady_clock::time_point deadline);
 
  private:
   enum class Outcome { kAccepted, kRejected, kSmallStep };
@@ -491,10 +491,11 @@ LevenbergMarquardt::Outcome LevenbergMarquardt::iterate(IterationRecord& record)
   return outcome;
 }
 
-std::pair<std::string, bool> LevenbergMarquardt::run() {
+std::pair<std::string, bool> LevenbergMarquardt::run(std::chrono::steady_clock::time_point deadline) {
   lambda_ = options_.initial_lambda;
   for (int it = 0; it < options_.pose_graph.max_iterations; ++it) {
     if (cost_ == 0.0) return {"zero cost", true};
+    if (std::chrono::steady_clock::now() >= deadline) return {"time limit", false};
     equations_.assemble(problem_, problem_.poses, kernel_);
     IterationRecord record;
     const Outcome outcome = iterate(record);
@@ -512,6 +513,14 @@ std::pair<std::string, bool> LevenbergMarquardt::run() {
 }
 
 }  // namespace
+
+// optimize()'s deadline: max_seconds after its start, the far future when that is unbounded.
+std::chrono::steady_clock::time_point Optimizer::deadline(std::chrono::steady_clock::time_point start) const {
+  const double budget = options_.max_seconds;
+  if (!(budget < 1e9)) return std::chrono::steady_clock::time_point::max();  // unbounded (or NaN)
+  return start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                     std::chrono::duration<double>(std::max(budget, 0.0)));
+}
 
 OptimizationReport Optimizer::optimize(PoseGraph& graph) {
   const auto start = std::chrono::steady_clock::now();
@@ -531,7 +540,7 @@ OptimizationReport Optimizer::optimize(PoseGraph& graph) {
 
   report.reanalysed = prepare_structure(make_pattern(graph, problem));
   NormalEquations equations(cholmod_->matrix.get(), *pattern_, problem);
-  auto [reason, converged] = LevenbergMarquardt(options_, problem, equations, *cholmod_, report).run();
+  auto [reason, converged] = LevenbergMarquardt(options_, problem, equations, *cholmod_, report).run(deadline(start));
   return finish(std::move(reason), converged);
 }
 

@@ -30,6 +30,8 @@
 // refactorised. The factor survives between calls, so a second optimise of a graph that changed
 // little may need no factorisation at all. OptimizerOptions::reuse_factorization = false turns
 // PCG off: one factorisation per lambda trial, as plain LM.
+#include <chrono>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,6 +55,11 @@ struct OptimizerOptions {
   double step_tolerance = 1e-10;    // stop when |delta| falls below this
   double initial_lambda = 1e-5;
   bool reuse_factorization = true;  // PCG on the factor at hand before refactorising (see above)
+  // A time budget (cvo-backendd's stop within its unit's TimeoutStopSec): no new iteration starts
+  // once this much has passed since optimize() was called, and the poses are those of the last
+  // accepted step (each one lowered the cost, so they are never worse than the start). The
+  // default is no limit.
+  double max_seconds = std::numeric_limits<double>::infinity();
 };
 
 struct IterationRecord {
@@ -94,6 +101,7 @@ class Optimizer {
   // Adopts the pattern; a new matrix and symbolic analysis only when it differs from the last one.
   // Returns whether it analysed.
   bool prepare_structure(std::unique_ptr<detail::BlockPattern> pattern);
+  [[nodiscard]] std::chrono::steady_clock::time_point deadline(std::chrono::steady_clock::time_point start) const;
 
   OptimizerOptions options_;
   std::unique_ptr<detail::Cholmod> cholmod_;

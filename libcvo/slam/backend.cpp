@@ -168,7 +168,7 @@ posegraph::OptimizationReport Backend::optimise_keyframes() {
   return report;
 }
 
-posegraph::OptimizationReport Backend::optimise_all() {
+posegraph::OptimizationReport Backend::optimise_all(double max_seconds) {
   unoptimised_loops_ = 0;
   if (graphs_.empty()) return {};
   posegraph::PoseGraph all;  // each piece held at its anchor, as in the keyframe graph
@@ -180,7 +180,9 @@ posegraph::OptimizationReport Backend::optimise_all() {
   for (const auto& l : loops_) all.add_edge(l.edge);
   if (all.nodes().size() < 2) return {};
 
-  auto report = posegraph::optimize(all, optimizer_options());
+  auto options = optimizer_options();
+  options.max_seconds = max_seconds;
+  auto report = posegraph::optimize(all, options);
   for (const auto& [id, node] : keyframes_.nodes()) keyframes_.set_pose(id, all.node(id).pose);
   for (auto& g : graphs_) {
     const core::SE3 keyframe_inverse = all.node(g.keyframe).pose.inverse();

@@ -53,6 +53,7 @@
 // the run.
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <vector>
@@ -107,8 +108,9 @@ class Backend {
 
   /// Optimises the keyframe graph; does nothing (an empty report) with fewer than two nodes.
   posegraph::OptimizationReport optimise_keyframes();
-  /// The global optimisation of every frame (see above).
-  posegraph::OptimizationReport optimise_all();
+  /// The global optimisation of every frame (see above), its Levenberg-Marquardt given at most
+  /// max_seconds (OptimizerOptions::max_seconds: cut short, it keeps its last accepted step).
+  posegraph::OptimizationReport optimise_all(double max_seconds = std::numeric_limits<double>::infinity());
 
   /// T_world_keyframe of every node of the keyframe graph, by frame index.
   [[nodiscard]] std::map<std::int64_t, core::SE3> keyframe_poses() const;

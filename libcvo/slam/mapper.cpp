@@ -177,8 +177,8 @@ std::vector<core::SessionId> Mapper::after_change() {
   return joined;
 }
 
-posegraph::OptimizationReport Mapper::finish() {
-  auto report = backend_.optimise_all();
+posegraph::OptimizationReport Mapper::finish(double max_seconds) {
+  auto report = backend_.optimise_all(max_seconds);
   ++revision_;
   ++optimisations_;
   marginals_.invalidate();

@@ -58,6 +58,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -179,8 +180,8 @@ class Mapper {
   std::vector<core::SessionId> add_local_graph(core::SessionId session, std::int64_t keyframe_id,
                                                const odometry::LocalGraph& graph);
 
-  /// The global optimisation of every frame.
-  posegraph::OptimizationReport finish();
+  /// The global optimisation of every frame, in at most max_seconds (Backend::optimise_all).
+  posegraph::OptimizationReport finish(double max_seconds = std::numeric_limits<double>::infinity());
 
   /// From now on the map is read only and new sessions are localized in it (see the header).
   void localize_only();

@@ -7,7 +7,9 @@
 //   and the daemon keeps running and using the messages after them; a store that holds a record
 //   twice (written before the door) is replayed once;
 // - its final map's keyframe poses are the ones `cvo-run --mode slam` gives on the same frames:
-//   one back end (slam::Mapper) serves both.
+//   one back end (slam::Mapper) serves both;
+// - a SIGTERM while records wait ends within backendd.stop_timeout_s, and the next start applies
+//   what waited (it was in the store).
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone, no packet can
 // leave the host.
@@ -244,6 +246,42 @@ TEST_F(BackenddNetns, ABackEndSlowerThanItsTrackerLosesNoKeyframe) {
   EXPECT_EQ(status.keyframes_lost, 0) << log;
   // It did have to wait: the queue was full for most of the burst.
   EXPECT_NE(log.find("waited in the store"), std::string::npos) << log;
+}
+
+// A SIGTERM while records wait ends within backendd.stop_timeout_s (here 0: nothing more is applied,
+// the final optimisation is skipped), inside the unit's TimeoutStopSec (30 s) that systemd gives
+// before SIGKILL; what waited is in the store, and the next start applies it all.
+TEST_F(BackenddNetns, AStopEndsInTimeAndTheNextStartAppliesWhatWaited) {
+  cvo::test::TempDir dir;
+  const auto store = dir.path() / "keyframes.store";
+  const auto all = keyframes_in(messages_.begin(), messages_.end());
+  {
+    LcmCapture capture(dir.path() / "first.lcmlog");
+    ASSERT_TRUE(capture.good());
+    const auto err = dir.path() / "first.txt";
+    auto backendd = start(capture, store, err, {"backendd.queue_max=1", "backendd.stop_timeout_s=0"});
+    send(messages_.begin(), messages_.end(), 10ms);
+    const auto code = cvo::testing::stop(*backendd, 30s);  // the unit's TimeoutStopSec
+    ASSERT_TRUE(code) << "cvo-backendd did not stop within TimeoutStopSec\n" << cvo::testing::slurp(err);
+    EXPECT_EQ(*code, 0);
+    const auto log = cvo::testing::slurp(err);
+    EXPECT_TRUE(std::regex_search(log, std::regex("\\d+ records not applied within backendd.stop_timeout_s"))) << log;
+    EXPECT_NE(log.find("final optimisation skipped"), std::string::npos) << log;
+    const Captured captured = capture.snapshot();
+    ASSERT_TRUE(captured.map) << "the final CVO_MAP goes out in any case\n" << log;
+    EXPECT_LT(captured.map->keyframes.size(), all.size()) << log;
+  }
+  LcmCapture capture(dir.path() / "second.lcmlog");
+  ASSERT_TRUE(capture.good());
+  const auto err = dir.path() / "second.txt";
+  auto backendd = start(capture, store, err);
+  stop(*backendd, capture, err);
+  const auto log = cvo::testing::slurp(err);
+  const Captured captured = capture.snapshot();
+  ASSERT_TRUE(captured.map) << log;
+  EXPECT_TRUE(captured.map_holds(all)) << log;
+  EXPECT_EQ(captured.map->keyframes.size(), all.size()) << log;
+  EXPECT_NE(log.find("final optimisation: cost"), std::string::npos) << log;
 }
 
 // cvo-trackerd --deterministic and cvo-run track the same frames with the same KF-CVO; the daemon's

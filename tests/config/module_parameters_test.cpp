@@ -93,7 +93,8 @@ static_assert(
 static_assert(std::is_same_v<slam::BackendParameters, core::PoseGraphParameters>);
 static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters,
                             core::LocalizationParameters>);
-static_assert(holds_exactly<posegraph::OptimizerOptions, core::PoseGraphParameters, double, double, double, bool>);
+static_assert(
+    holds_exactly<posegraph::OptimizerOptions, core::PoseGraphParameters, double, double, double, bool, double>);
 
 // A member declaration of one of `names`: a plain type, the name, maybe a default, a semicolon
 // (so not a function's argument). The name is group 4.

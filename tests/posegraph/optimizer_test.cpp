@@ -273,5 +273,22 @@ TEST(Optimizer, ASecondCallOnTheSameStructureNeedsNoAnalysisNorFactorisation) {
   EXPECT_NEAR(second.final_cost, reference.final_cost, 1e-6 * reference.final_cost);
 }
 
+// cvo-backendd's stop within its unit's TimeoutStopSec: an optimisation out of time stops before its
+// next iteration and keeps the poses of its last accepted step, never worse than where it began.
+TEST(Optimizer, AnOptimisationOutOfTimeKeepsItsPosesAndSaysSo) {
+  PoseGraph untouched = noisy_lattice(5);
+  PoseGraph graph = untouched;
+  const auto report = optimize(graph, OptimizerOptions{.max_seconds = 0.0});
+  EXPECT_EQ(report.stop_reason, "time limit");
+  EXPECT_FALSE(report.converged);
+  EXPECT_EQ(report.iterations, 0);
+  EXPECT_EQ(report.final_cost, report.initial_cost);
+  for (const auto& [id, node] : untouched.nodes()) EXPECT_LT(pose_error(node.pose, graph.node(id).pose), 1e-12) << id;
+
+  const auto unbounded = optimize(graph);  // the default: no limit
+  EXPECT_TRUE(unbounded.converged) << unbounded.stop_reason;
+  EXPECT_LT(unbounded.final_cost, report.final_cost);
+}
+
 }  // namespace
 }  // namespace cvo::posegraph
