@@ -811,7 +811,7 @@ void Backendd::finish() {
       const auto report = w.mapper.finish(budget);
       notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
                   std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations" +
-                  (report.stop_reason == "time limit" ? ", cut short by backendd.stop_timeout_s" : ""));
+                  (report.stop_reason == posegraph::kTimeLimit ? ", cut short by backendd.stop_timeout_s" : ""));
     }
     publish_corrections(w.mapper.sessions(), false);
     w.schedule.changed();

@@ -495,7 +495,7 @@ std::pair<std::string, bool> LevenbergMarquardt::run(std::chrono::steady_clock::
   lambda_ = options_.initial_lambda;
   for (int it = 0; it < options_.pose_graph.max_iterations; ++it) {
     if (cost_ == 0.0) return {"zero cost", true};
-    if (std::chrono::steady_clock::now() >= deadline) return {"time limit", false};
+    if (std::chrono::steady_clock::now() >= deadline) return {kTimeLimit, false};
     equations_.assemble(problem_, problem_.poses, kernel_);
     IterationRecord record;
     const Outcome outcome = iterate(record);

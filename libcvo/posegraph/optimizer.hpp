@@ -62,6 +62,9 @@ struct OptimizerOptions {
   double max_seconds = std::numeric_limits<double>::infinity();
 };
 
+/// OptimizationReport::stop_reason of a run that max_seconds cut short.
+inline constexpr const char* kTimeLimit = "time limit";
+
 struct IterationRecord {
   double cost = 0;                    // after the iteration
   double lambda = 0;                  // the damping of the accepted (or last tried) step
