@@ -197,8 +197,9 @@ void print_growth_row(std::size_t n, std::size_t sessions, const Window& w, cons
 
 std::size_t window_of(std::size_t n) { return n <= 1000 ? n / 2 : n / 10; }
 
-void growth(const Options& options, const config::Config& config, const std::vector<Route>& routes,
-            const fs::path& scratch) {
+// Returns the keyframes whose update never came.
+std::size_t growth(const Options& options, const config::Config& config, const std::vector<Route>& routes,
+                   const fs::path& scratch) {
   const fs::path dir = scratch / "growth";
   fs::create_directories(dir);
   BackendProbe probe(fs::path(CVO_TOOLS_DIR) / "cvo-backendd", dir, options.settings);
@@ -210,7 +211,7 @@ void growth(const Options& options, const config::Config& config, const std::vec
   auto sizes = options.sizes;
   std::sort(sizes.begin(), sizes.end());
   print_growth_header(options.mapper);
-  std::size_t fed = 0, next = 0, session = 0;
+  std::size_t fed = 0, next = 0, session = 0, missing = 0;
   Window window;
   Snapshot start = probe.snapshot();
   while (next < sizes.size()) {
@@ -222,20 +223,27 @@ void growth(const Options& options, const config::Config& config, const std::vec
         window = {};
         start = probe.snapshot();
       }
-      if (c.latency_ms)
+      if (c.latency_ms) {
         window.latency_ms.push_back(*c.latency_ms);
-      else
+      } else {
         ++window.missing;
+        ++missing;
+      }
       if (mapper) (c.optimised ? window.optimise_ms : window.search_ms).push_back(c.mapper_ms);
-      if (fed == sizes[next])
-        print_growth_row(fed, session + 1, window, start, probe.snapshot(), window_of(fed), options.mapper), ++next;
+      if (fed == sizes[next]) {
+        print_growth_row(fed, session + 1, window, start, probe.snapshot(), window_of(fed), options.mapper);
+        ++next;
+      }
     });
     ++session;
   }
   probe.stop();
+  return missing;
 }
 
-void revisits(const Options& options, const config::Config& config, const Route& route, const fs::path& scratch) {
+// Returns the keyframes whose update never came.
+std::size_t revisits(const Options& options, const config::Config& config, const Route& route,
+                     const fs::path& scratch) {
   const fs::path dir = scratch / "revisits";
   fs::create_directories(dir);
   BackendProbe probe(fs::path(CVO_TOOLS_DIR) / "cvo-backendd", dir, options.settings);
@@ -245,10 +253,14 @@ void revisits(const Options& options, const config::Config& config, const Route&
       "latency p50 ms | latency p99 ms |\n| --- | --- | --- | --- | --- | --- |\n",
       route.name.c_str(), route.keyframes);
   double one_visit = 0;
+  std::size_t missing = 0;
   for (std::size_t v = 1; v <= options.visits; ++v) {
     std::vector<double> latency;
     driver.drive(route, session_id(1000000 + v), 1000000 + v, [&](const SessionDriver::KeyframeCost& c) {
-      if (c.latency_ms) latency.push_back(*c.latency_ms);
+      if (c.latency_ms)
+        latency.push_back(*c.latency_ms);
+      else
+        ++missing;
     });
     const double store = double(probe.snapshot().store_bytes);
     if (v == 1) one_visit = store;
@@ -259,6 +271,7 @@ void revisits(const Options& options, const config::Config& config, const Route&
   }
   probe.stop();
   std::printf("\nkeyframes in the final CVO_MAP: %zu\n", probe.snapshot().published.last_map_keyframes);
+  return missing;
 }
 
 int run(const Options& options) {
@@ -266,9 +279,11 @@ int run(const Options& options) {
   for (const auto& s : options.settings) config::apply_override(config, s);
   const ScratchDir scratch;
   const auto all = routes(options, config, scratch.path());
-  if (!options.sizes.empty()) growth(options, config, all, scratch.path());
-  if (options.visits > 0) revisits(options, config, all.front(), scratch.path());
-  return 0;
+  std::size_t missing = 0;
+  if (!options.sizes.empty()) missing += growth(options, config, all, scratch.path());
+  if (options.visits > 0) missing += revisits(options, config, all.front(), scratch.path());
+  if (missing) std::fprintf(stderr, "map_scale: %zu keyframes had no map update within 60 s\n", missing);
+  return missing ? 1 : 0;
 }
 
 // The bench speaks UDP multicast: only ever inside a private network namespace of its own.
