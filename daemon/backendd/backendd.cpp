@@ -185,7 +185,7 @@ struct Backendd::Work {
         mapping(config.mapping),
         lcm(publish_url(config.backendd)),
         schedule({std::chrono::duration<double>(config.backendd.map_period_s),
-                  std::chrono::duration<double>(config.backendd.status_period_s), kLiveFor}) {}
+                  std::chrono::duration<double>(config.backendd.status_period_s), kLiveFor, kGridPeriod}) {}
 
   slam::Mapper mapper;
   mapping::Mapping mapping;                 // the occupancy grid of the mapper's map (CVO_GRID)
@@ -655,7 +655,7 @@ void Backendd::apply_local_graph(const LocalGraphRecord& record) {
 void Backendd::publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,
                                bool after_loop) {
   Work& w = *work_;
-  w.schedule.changed();
+  w.schedule.changed(after_loop);
   if (replayed_pending_ > 0) {  // a record of the store: what they make goes out once all are in (process())
     w.replay_joined.insert(w.replay_joined.end(), joined.begin(), joined.end());
     return;
@@ -663,7 +663,7 @@ void Backendd::publish_changes(std::optional<core::SessionId> touched, const std
   const bool every = !touched || w.mapper.optimisations() != w.optimisations;
   w.optimisations = w.mapper.optimisations();
   publish_corrections(every ? w.mapper.sessions() : std::vector<core::SessionId>{*touched}, false);
-  if (w.schedule.map_due(Clock::now(), after_loop || !joined.empty())) publish_map(joined, after_loop);
+  if (w.schedule.map_due(Clock::now(), !joined.empty())) publish_map(joined, w.schedule.loop_waiting());
 }
 
 void Backendd::publish_corrections(const std::vector<core::SessionId>& sessions, bool again) {
@@ -690,7 +690,7 @@ void Backendd::publish_due() {
     posed_.clear();
   }
   if (replayed_pending_ > 0) return;  // the store's map goes once it is in
-  if (w.schedule.map_due(now, false)) publish_map({}, false);
+  if (w.schedule.map_due(now, false)) publish_map({}, w.schedule.loop_waiting());
   if (const auto due = w.schedule.resends_due(now); !due.empty()) publish_corrections(due, true);
 }
 

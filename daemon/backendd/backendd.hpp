@@ -14,10 +14,11 @@
 //                 keyframe-graph optimisation) -> after each change CVO_MAP_CORRECTION for each
 //                 session whose entry changed (O(1) bytes each), each live session's again once a
 //                 status period, and the full CVO_MAP at most once backendd.map_period_s while it
-//                 changes, at once after a loop closure or a join (map_schedule.hpp); beside it
+//                 changes, at once after a join, within a second after a loop closure
+//                 (map_schedule.hpp); beside it
 //                 mapping::Mapping, each keyframe's local map placed at the poses of each full map
 //                 -> CVO_GRID (the poses of a CVO_MAP sent) at most once a second while it changes,
-//                 at once after a loop closure that moved keyframes; CVO_STATUS once a period
+//                 at once with a loop's map when it moved keyframes; CVO_STATUS once a period
 //
 // At start-up the store is read back and every record goes through the same door and path, so a
 // restart resumes every session received before; what they make goes out once every one is in

@@ -26,15 +26,17 @@ std::vector<std::int64_t> MapSchedule::resends_due(Clock::time_point now) {
   return due;
 }
 
-bool MapSchedule::map_due(Clock::time_point now, bool at_once) const {
+bool MapSchedule::map_due(Clock::time_point now, bool join) const {
   if (!map_changed_) return false;
-  if (at_once || !map_sent_ || periods_.map.count() <= 0) return true;
-  return now - *map_sent_ >= periods_.map;
+  if (join || !map_sent_ || periods_.map.count() <= 0) return true;
+  const auto since = now - *map_sent_;
+  return since >= periods_.map || (loop_waiting_ && since >= periods_.loop);
 }
 
 void MapSchedule::map_sent(Clock::time_point now) {
   map_sent_ = now;
   map_changed_ = false;
+  loop_waiting_ = false;
 }
 
 }  // namespace cvo::daemon::backendd

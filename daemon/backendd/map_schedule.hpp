@@ -9,10 +9,13 @@
 //   - a live session's correction again once `resend` has passed since its last, so that one lost
 //     on UDP, or missed by a tracker that started listening late, comes again; live: a CVO_POSE or a
 //     record of it within `live`, and not lost;
-//   - the full map at once when the caller says so (a loop closure, a join), the first one at
-//     once, with a `map` period of 0 after every change, else once `map` has passed since the last
-//     while a change waits (the caller asks again from its loop). The final one at the stop is the
-//     caller's.
+//   - the full map: the first one at once, with a `map` period of 0 after every change; after a
+//     join at once (a new session is placed: once per session); after a loop closure once `loop`
+//     has passed since the last (the grid's pace: a planner sees the loop's grid within a second,
+//     yet a robot revisiting a room, whose every keyframe closes a loop, does not send its whole
+//     map after every keyframe: O(N) bytes per keyframe, O(N^2) over a run); else once `map` has
+//     passed since the last while a change waits. The caller asks again from its loop, so a
+//     waiting map goes when its time comes. The final one at the stop is the caller's.
 // Time is the caller's (the steady clock), so the policy is tested without waiting. cvo-backend
 // only.
 #include <chrono>
@@ -30,6 +33,7 @@ class MapSchedule {
     std::chrono::duration<double> map{5.0};     // backendd.map_period_s
     std::chrono::duration<double> resend{1.0};  // backendd.status_period_s
     std::chrono::duration<double> live{10.0};
+    std::chrono::duration<double> loop{1.0};  // the least time between two maps a loop sent
   };
   explicit MapSchedule(const Periods& periods) : periods_(periods) {}
 
@@ -44,10 +48,15 @@ class MapSchedule {
   /// The live sessions whose correction went out `resend` ago or longer; forgets those no longer live.
   std::vector<std::int64_t> resends_due(Clock::time_point now);
 
-  /// The map changed.
-  void changed() { map_changed_ = true; }
-  /// Whether the full map is to go now.
-  [[nodiscard]] bool map_due(Clock::time_point now, bool at_once) const;
+  /// The map changed; `loop`: a loop closure moved it.
+  void changed(bool loop = false) {
+    map_changed_ = true;
+    loop_waiting_ = loop_waiting_ || loop;
+  }
+  /// Whether the full map is to go now; `join`: a session was placed by the change.
+  [[nodiscard]] bool map_due(Clock::time_point now, bool join) const;
+  /// A loop closure moved the map since the last one went.
+  [[nodiscard]] bool loop_waiting() const { return loop_waiting_; }
   /// It went.
   void map_sent(Clock::time_point now);
 
@@ -60,7 +69,7 @@ class MapSchedule {
   std::map<std::int64_t, Sent> sent_;
   std::map<std::int64_t, Clock::time_point> live_;  // when last seen
   std::optional<Clock::time_point> map_sent_;
-  bool map_changed_ = false;
+  bool map_changed_ = false, loop_waiting_ = false;
 };
 
 }  // namespace cvo::daemon::backendd

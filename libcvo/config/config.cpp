@@ -283,8 +283,9 @@ const std::vector<Field>& table() {
       row("backendd.status_period_s", &Config::backendd, &BackenddParameters::status_period_s, kPositive,
           "CVO_STATUS period; each live session's CVO_MAP_CORRECTION goes out again at least this often"),
       row("backendd.map_period_s", &Config::backendd, &BackenddParameters::map_period_s, kNonNegative,
-          "the full CVO_MAP goes out at most this often (s) while the map changes, at once after a loop closure or "
-          "a join, and at the stop (changed sessions' CVO_MAP_CORRECTIONs after every change); 0: after every "
+          "the full CVO_MAP goes out at most this often (s) while the map changes, at once after a "
+          "join, a second after the last after a loop closure, and at the stop (changed sessions' CVO_MAP_CORRECTIONs "
+          "after every change); 0: after every "
           "change"),
       row("backendd.stop_timeout_s", &Config::backendd, &BackenddParameters::stop_timeout_s, kNonNegative,
           "a SIGTERM/SIGINT stop ends within this (s), below the unit's TimeoutStopSec: records still waiting stay "

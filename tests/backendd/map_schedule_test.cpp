@@ -1,7 +1,7 @@
 // When cvo-backendd's map goes out (daemon/backendd/map_schedule.hpp): a session's correction when
-// its entry changed, and again once a period while it is live; the full map at once after a loop
-// or a join, else at most once its period while changes wait, and after every change with a period
-// of 0. Time is given, so nothing here waits.
+// its entry changed, and again once a period while it is live; the full map at once after a join,
+// a second after the last one after a loop closure, else at most once its period while changes
+// wait, and after every change with a period of 0. Time is given, so nothing here waits.
 #include <gtest/gtest.h>
 
 #include "daemon/backendd/map_schedule.hpp"
@@ -40,8 +40,8 @@ TEST(MapSchedule, ALiveSessionsCorrectionGoesAgainOnceAPeriod) {
   EXPECT_TRUE(schedule.resends_due(t0 + 12s).empty()) << "a lost session's tracker has moved on";
 }
 
-TEST(MapSchedule, TheFullMapGoesAtOnceAfterALoopElseAtMostOnceAPeriod) {
-  MapSchedule schedule({5s, 1s, 10s});
+TEST(MapSchedule, TheFullMapGoesAtOnceAfterAJoinElseAtMostOnceAPeriod) {
+  MapSchedule schedule({5s, 1s, 10s, 1s});
   EXPECT_FALSE(schedule.map_due(t0, true)) << "nothing changed";
   schedule.changed();
   EXPECT_TRUE(schedule.map_due(t0, false)) << "the first map at once";
@@ -49,10 +49,26 @@ TEST(MapSchedule, TheFullMapGoesAtOnceAfterALoopElseAtMostOnceAPeriod) {
   schedule.changed();
   EXPECT_FALSE(schedule.map_due(t0 + 1s, false));
   EXPECT_FALSE(schedule.map_due(t0 + 4900ms, false));
-  EXPECT_TRUE(schedule.map_due(t0 + 1s, true)) << "a loop closure or a join";
+  EXPECT_TRUE(schedule.map_due(t0 + 1s, true)) << "a join";
   EXPECT_TRUE(schedule.map_due(t0 + 5s, false)) << "the period passed while a change waited";
   schedule.map_sent(t0 + 5s);
   EXPECT_FALSE(schedule.map_due(t0 + 20s, false)) << "no change since: no map";
+}
+
+TEST(MapSchedule, ALoopClosuresMapGoesASecondAfterTheLastNotAfterEveryKeyframe) {
+  MapSchedule schedule({5s, 1s, 10s, 1s});
+  schedule.changed();
+  schedule.map_sent(t0);
+  schedule.changed(true);
+  EXPECT_TRUE(schedule.loop_waiting());
+  EXPECT_FALSE(schedule.map_due(t0 + 300ms, false)) << "a loop within a second of the last map waits";
+  schedule.changed(true);
+  schedule.changed();
+  EXPECT_TRUE(schedule.map_due(t0 + 1s, false)) << "the loops' map goes once the second has passed";
+  schedule.map_sent(t0 + 1s);
+  EXPECT_FALSE(schedule.loop_waiting()) << "that map had the loops";
+  schedule.changed();
+  EXPECT_FALSE(schedule.map_due(t0 + 2500ms, false)) << "a change without a loop waits for the period";
 }
 
 TEST(MapSchedule, WithAPeriodOfZeroTheMapGoesAfterEveryChange) {
