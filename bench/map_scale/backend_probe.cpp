@@ -7,6 +7,7 @@
 
 #include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
+#include "cvo_lcm/status_t.hpp"
 #include "libcvo/core/units.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/private_network.hpp"
@@ -17,11 +18,17 @@ namespace fs = std::filesystem;
 BackendProbe::BackendProbe(const fs::path& backendd, const fs::path& dir, const std::vector<std::string>& settings)
     : store_(dir / "map.store"), out_(testing::kPrivateLcmUrl), in_(testing::kPrivateLcmUrl) {
   if (!out_.good() || !in_.good()) throw std::runtime_error("map_scale: LCM is not available on the private bus");
-  in_.subscribe("CVO_MAP_CORRECTION|CVO_MAP", &BackendProbe::handle, this);
+  in_.subscribe("CVO_MAP_CORRECTION|CVO_MAP|CVO_STATUS", &BackendProbe::handle, this);
   receiver_ = std::thread([this] { receive(); });
   std::vector<std::string> args{"--lcm-url", testing::kPrivateLcmUrl, "--store", store_.string()};
   for (const auto& s : settings) args.insert(args.end(), {"--set", s});
-  daemon_ = std::make_unique<testing::DaemonProcess>(backendd, args, dir / "backendd.txt");
+  auto daemon = std::make_unique<testing::DaemonProcess>(backendd, args, dir / "backendd.txt");
+  // What is sent before it listens is lost: its first CVO_STATUS says it does.
+  std::unique_lock lock(mutex_);
+  daemon_ = std::move(daemon);
+  if (!changed_.wait_for(lock, std::chrono::seconds(60), [&] { return listening_; }))
+    throw std::runtime_error("map_scale: cvo-backendd sent no CVO_STATUS within 60 s (see " +
+                             (dir / "backendd.txt").string() + ")");
 }
 
 BackendProbe::~BackendProbe() {
@@ -45,6 +52,14 @@ void BackendProbe::receive() {
 void BackendProbe::handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
   const std::lock_guard lock(mutex_);
   const auto bytes = static_cast<std::size_t>(buffer->data_size);
+  if (channel == "CVO_STATUS") {
+    cvo_lcm::status_t status;
+    if (status.decode(buffer->data, 0, buffer->data_size) > 0 && daemon_ && status.pid == daemon_->pid()) {
+      listening_ = true;
+      changed_.notify_all();
+    }
+    return;
+  }
   if (channel == "CVO_MAP") {
     ++published_.maps;
     published_.map_bytes += bytes;

@@ -3,8 +3,8 @@
 // started with a store of its own on the private bus (udpm, ttl=0, inside in-private-netns), fed
 // CVO_LOCAL_GRAPH and CVO_KEYFRAME messages in closed loop (the next keyframe goes out once the back
 // end's update for the last one came back, so its queue never hides its cost), and measured
-// from outside: a keyframe's latency is from its publication to the first CVO_MAP_CORRECTION of its
-// session that counts it (map_session_t.keyframes); every CVO_MAP_CORRECTION and CVO_MAP it
+// from outside, once its first CVO_STATUS said it listens: a keyframe's latency is from its publication to the first
+// CVO_MAP_CORRECTION of its session that counts it (map_session_t.keyframes); every CVO_MAP_CORRECTION and CVO_MAP it
 // publishes is counted with its bytes; its resident memory is the kernel's (VmRSS), its store's
 // size the file's.
 #include <sys/types.h>
@@ -68,7 +68,7 @@ class BackendProbe {
   std::condition_variable changed_;
   std::map<std::int64_t, std::size_t> held_;  // by session: the most keyframes a correction counted
   Published published_;
-  bool stop_ = false;
+  bool stop_ = false, listening_ = false;
   std::thread receiver_;
 };
 
