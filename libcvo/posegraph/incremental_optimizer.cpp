@@ -308,6 +308,34 @@ void IncrementalOptimizer::assemble() {
   cholmod_->matrix = H.to_sparse();
 }
 
+namespace {
+// The largest damping tried: beyond it the graph is taken to be under-constrained.
+constexpr double kMaxDamping = 1e-2;
+}  // namespace
+
+// H = L D Lᵀ; when round-off makes an ill-conditioned H (parking-garage) not positive definite,
+// H + μ diag(H) with μ = 1e-9, 1e-6, ... as Levenberg-Marquardt damps: the step is then a little
+// shorter than Gauss-Newton's, and the fixed point (g = 0) the same.
+void IncrementalOptimizer::factorize_damped(cholmod_sparse* H) {
+  cholmod_common* cc = cholmod_->common.get();
+  const auto* Hp = static_cast<const Index*>(H->p);
+  auto* Hx = static_cast<double*>(H->x);
+  std::vector<double> diagonal(H->ncol);
+  for (std::size_t j = 0; j < H->ncol; ++j) diagonal[j] = Hx[Hp[j + 1] - 1];  // sorted: the diagonal is last
+  for (double mu = 0;;) {
+    {
+      const detail::SerialOpenMp serial;
+      cholmod_l_factorize(H, cholmod_->factor.get(), cc);
+    }
+    if (cc->status == CHOLMOD_OK) return;
+    mu = mu == 0 ? 1e-9 : 1e3 * mu;
+    if (mu > kMaxDamping)
+      throw std::runtime_error(
+          "incremental optimizer: the system is not positive definite (a node without a constraint?)");
+    for (std::size_t j = 0; j < H->ncol; ++j) Hx[Hp[j + 1] - 1] = diagonal[j] + mu * std::max(diagonal[j], 1e-6);
+  }
+}
+
 // Every node relinearised at its estimate, blocks re-assigned in node order, a new ordering and
 // one numeric factorisation: a batch Gauss-Newton step.
 void IncrementalOptimizer::rebuild(UpdateReport& report) {
@@ -332,14 +360,7 @@ void IncrementalOptimizer::rebuild(UpdateReport& report) {
   cholmod_->factor.reset();
   if (H != nullptr) cholmod_->factor = cholmod_->wrap(cholmod_l_analyze_p(H, perm.data(), nullptr, 0, cc));
   if (!cholmod_->factor) throw std::runtime_error("incremental optimizer: CHOLMOD analysis failed");
-  {
-    const detail::SerialOpenMp serial;
-    cholmod_l_factorize(H, cholmod_->factor.get(), cc);
-  }
-  if (cc->status != CHOLMOD_OK)
-    throw std::runtime_error(
-        "incremental optimizer: the system is not positive definite (a node without a "
-        "constraint?)");
+  factorize_damped(H);
   cholmod_->matrix.reset();  // the factor is what is kept
   marks_.assign(6 * capacity_, 0);
   marked_.clear();

@@ -54,6 +54,9 @@ namespace cvo::posegraph {
 namespace detail {
 struct Cholmod;
 }  // namespace detail
+}  // namespace cvo::posegraph
+struct cholmod_sparse_struct;
+namespace cvo::posegraph {
 
 struct IncrementalOptions {
   core::PoseGraphParameters pose_graph{};  // its cauchy_delta, for the edges marked robust
@@ -138,6 +141,7 @@ class IncrementalOptimizer {
   std::vector<long> block_ordering();
   void assemble();  // H into the Cholmod bundle's matrix, g into gradient_
   void rebuild(UpdateReport& report);
+  void factorize_damped(cholmod_sparse_struct* H);
   void solve(UpdateReport& report);
   [[nodiscard]] std::vector<std::size_t> to_relinearise(double threshold) const;
   void relinearise(const std::vector<std::size_t>& moved, UpdateReport& report);
