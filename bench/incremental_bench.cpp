@@ -3,7 +3,9 @@
 // arrives with its edges (libcvo/posegraph/arrivals.hpp) and IncrementalOptimizer::update() runs;
 // at a loop, the batch Optimizer (one kept for the run: its symbolic analysis is reused) also
 // re-optimises the same graph from the same poses, on a copy. Prints one table.
-// Run: build/release/bin/incremental_bench [--batch-samples N]   (batch runs per size, spread over the loops)
+// Run: build/release/bin/incremental_bench [--batch-samples N] [--max-nodes N] [--threshold X] [--rebuild-fraction F]
+//   batch runs per size (spread over the loops), the largest patrol, IncrementalOptions' relinearise_threshold and
+//   rebuild_fraction.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -32,8 +34,9 @@ struct Row {
   std::size_t factor_columns = 0;
 };
 
-Row run(std::size_t route_poses, std::size_t laps, std::size_t batch_samples) {
+Row run(std::size_t route_poses, std::size_t laps, std::size_t batch_samples, const posegraph::IncrementalOptions& io) {
   sim::PatrolOptions options;
+  options.robust_loops = std::getenv("INC_PLAIN") == nullptr;
   options.route_poses = route_poses;
   options.laps = laps;
   const sim::PatrolGraph patrol = sim::patrol_graph(options);
@@ -41,7 +44,7 @@ Row run(std::size_t route_poses, std::size_t laps, std::size_t batch_samples) {
   row.nodes = patrol.truth.size();
   row.loops = patrol.loops;
   const std::size_t every = std::max<std::size_t>(1, patrol.loops / std::max<std::size_t>(batch_samples, 1));
-  posegraph::IncrementalOptimizer incremental;
+  posegraph::IncrementalOptimizer incremental(io);
   posegraph::Optimizer batch;
   std::size_t loop_index = 0;
   for (const auto& arrival : posegraph::arrivals(patrol.graph)) {
@@ -58,6 +61,9 @@ Row run(std::size_t route_poses, std::size_t laps, std::size_t batch_samples) {
     (loop ? row.loop_ms : row.odometry_ms).push_back(ms_since(start));
     if (loop) row.loop_columns.push_back(static_cast<double>(report.touched_columns));
     row.rebuilds += report.rebuilt ? 1 : 0;
+    if (report.rebuilt && std::getenv("INC_DEBUG") != nullptr)
+      std::fprintf(stderr, "%ld %s %zu\n", static_cast<long>(arrival.node), report.rebuild_reason,
+                   report.relinearised_nodes);
   }
   row.factor_columns = incremental.factor_columns();
   row.incremental_cost = incremental.cost();
@@ -71,15 +77,22 @@ double p(std::vector<double> v, double q) { return eval::percentile_in_place(v, 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::size_t batch_samples = 30;
-  for (int k = 1; k + 1 < argc; ++k)
-    if (std::string(argv[k]) == "--batch-samples") batch_samples = std::strtoul(argv[k + 1], nullptr, 10);
+  std::size_t batch_samples = 30, max_nodes = 10000;
+  posegraph::IncrementalOptions io;
+  for (int k = 1; k + 1 < argc; ++k) {
+    const std::string flag = argv[k];
+    if (flag == "--batch-samples") batch_samples = std::strtoul(argv[k + 1], nullptr, 10);
+    if (flag == "--max-nodes") max_nodes = std::strtoul(argv[k + 1], nullptr, 10);
+    if (flag == "--threshold") io.relinearise_threshold = std::strtod(argv[k + 1], nullptr);
+    if (flag == "--rebuild-fraction") io.rebuild_fraction = std::strtod(argv[k + 1], nullptr);
+  }
   std::printf(
       "| nodes | loops | incremental loop update ms p50 / p99 | odometry update ms p50 / p99 | columns touched by a "
       "loop p50 / p99 (of) | rebuilds | batch after a loop ms p50 / p99 (runs) | final cost incremental / batch |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
   for (const auto& [route, laps] : {std::pair<std::size_t, std::size_t>{50, 2}, {250, 4}, {2500, 4}}) {
-    const Row r = run(route, laps, batch_samples);
+    if (route * laps > max_nodes) break;
+    const Row r = run(route, laps, batch_samples, io);
     std::printf(
         "| %zu | %zu | %.3f / %.3f | %.3f / %.3f | %.0f / %.0f (%zu) | %zu | %.2f / %.2f (%zu) | %.4f / %.4f |\n",
         r.nodes, r.loops, p(r.loop_ms, 50), p(r.loop_ms, 99), p(r.odometry_ms, 50), p(r.odometry_ms, 99),

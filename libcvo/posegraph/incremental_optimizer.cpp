@@ -356,10 +356,15 @@ void IncrementalOptimizer::rebuild(UpdateReport& report) {
   cc->nmethods = 1;
   cc->method[0].ordering = CHOLMOD_GIVEN;
   cc->supernodal = CHOLMOD_SIMPLICIAL;
-  cc->final_ll = 0;  // LDLᵀ, which cholmod_updown modifies in place
+  cc->final_ll = 0;   // LDLᵀ, which cholmod_updown modifies in place
+  cc->postorder = 0;  // keep the ordering as given: the reserved blocks last
   cholmod_->factor.reset();
   if (H != nullptr) cholmod_->factor = cholmod_->wrap(cholmod_l_analyze_p(H, perm.data(), nullptr, 0, cc));
+  cc->postorder = 1;
   if (!cholmod_->factor) throw std::runtime_error("incremental optimizer: CHOLMOD analysis failed");
+  // The factor's rows are H's columns permuted by L->Perm: an update's rows go through its inverse.
+  const auto* P = static_cast<const Index*>(cholmod_->factor->Perm);
+  for (std::size_t k = 0; k < 6 * capacity_; ++k) position_[static_cast<std::size_t>(P[k])] = static_cast<Index>(k);
   factorize_damped(H);
   cholmod_->matrix.reset();  // the factor is what is kept
   marks_.assign(6 * capacity_, 0);
