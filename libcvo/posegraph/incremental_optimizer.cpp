@@ -327,7 +327,10 @@ void IncrementalOptimizer::factorize_damped(cholmod_sparse* H) {
       const detail::SerialOpenMp serial;
       cholmod_l_factorize(H, cholmod_->factor.get(), cc);
     }
-    if (cc->status == CHOLMOD_OK) return;
+    // Simplicial LDLᵀ with room to grow per column: what cholmod_updown modifies in place.
+    if (cc->status == CHOLMOD_OK && cholmod_l_change_factor(CHOLMOD_REAL, /*to_ll=*/0, /*to_super=*/0, /*to_packed=*/0,
+                                                            /*to_monotonic=*/1, cholmod_->factor.get(), cc))
+      return;
     mu = mu == 0 ? 1e-9 : 1e3 * mu;
     if (mu > kMaxDamping)
       throw std::runtime_error(
@@ -355,9 +358,9 @@ void IncrementalOptimizer::rebuild(UpdateReport& report) {
   cholmod_common* cc = cholmod_->common.get();
   cc->nmethods = 1;
   cc->method[0].ordering = CHOLMOD_GIVEN;
-  cc->supernodal = CHOLMOD_SIMPLICIAL;
-  cc->final_ll = 0;   // LDLᵀ, which cholmod_updown modifies in place
-  cc->postorder = 0;  // keep the ordering as given: the reserved blocks last
+  cc->supernodal = CHOLMOD_AUTO;  // supernodal when the factor is large: BLAS; then made simplicial LDLᵀ
+  cc->final_ll = 0;               // LDLᵀ, which cholmod_updown modifies in place
+  cc->postorder = 0;              // keep the ordering as given: the reserved blocks last
   cholmod_->factor.reset();
   if (H != nullptr) cholmod_->factor = cholmod_->wrap(cholmod_l_analyze_p(H, perm.data(), nullptr, 0, cc));
   cc->postorder = 1;

@@ -24,21 +24,22 @@
 //  - Δ is solved again, a full forward and back substitution: O(nnz(L)), no factorisation, and
 //    cheap next to one (a factorisation of a pose graph costs tens to thousands of times nnz(L)).
 // When the part to relinearise is large (more than `rebuild_fraction` of the free nodes: a large
-// correction), when the reserved blocks run out, when updates have grown nnz(L) past
-// `fill_growth` times its size after the last analysis, or after set_pose / set_fixed, the
+// correction), when the reserved blocks run out, when updates have grown nnz(L) per block past
+// `fill_growth` times its value after the last analysis, or after set_pose / set_fixed, the
 // factor is rebuilt: every node relinearised at its estimate, a new ordering, one numeric
-// factorisation (a batch Gauss-Newton step). The ordering is CAMD on the 6x6-block pattern with
-// the newest nodes constrained last (the next edges arrive there, so their paths stay short, as
-// iSAM2's constrained COLAMD), then the reserved blocks; the capacity doubles, so rebuilds for
-// capacity happen a logarithmic number of times.
+// factorisation (a batch Gauss-Newton step; should round-off make an ill-conditioned H not
+// positive definite, H + μ diag(H) as Levenberg-Marquardt, μ from 1e-9: same fixed point). The
+// ordering is CAMD on the 6x6-block pattern with the newest nodes constrained last (the next
+// edges arrive there, so their paths stay short, as iSAM2's constrained COLAMD), then the
+// reserved blocks, kept as given (no postorder); the capacity is twice the free nodes, so
+// rebuilds for capacity happen a logarithmic number of times.
 //
 // Convergence: an update() without new edges relinearises every node whose step exceeds
 // `converged_threshold`, so repeated updates are Gauss-Newton iterations and reach the batch
 // optimum (the tests: the shared graphs fed edge by edge).
 //
-// Gauge: fixed nodes are held (no variables); when the first node added is not fixed and no fixed
-// node exists then, the first node is held, as Optimizer holds the first node of a graph without
-// a fixed one.
+// Gauge: fixed nodes are held (no variables); when no node is fixed the first node added is held,
+// as Optimizer holds the first node of a graph without a fixed one.
 #include <cstddef>
 #include <functional>
 #include <memory>
