@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -364,6 +365,7 @@ void IncrementalOptimizer::rebuild(UpdateReport& report) {
   cholmod_->factor.reset();
   if (H != nullptr) cholmod_->factor = cholmod_->wrap(cholmod_l_analyze_p(H, perm.data(), nullptr, 0, cc));
   cc->postorder = 1;
+  factor_flops_ = cc->fl;
   if (!cholmod_->factor) throw std::runtime_error("incremental optimizer: CHOLMOD analysis failed");
   // The factor's rows are H's columns permuted by L->Perm: an update's rows go through its inverse.
   const auto* P = static_cast<const Index*>(cholmod_->factor->Perm);
@@ -396,7 +398,8 @@ void IncrementalOptimizer::solve(UpdateReport& report) {
   for (NodeState& node : nodes_) {
     if (node.held || node.block < 0) continue;
     node.delta = node.active ? Vector6d(step.segment<6>(6 * node.block)) : Vector6d::Zero();
-    report.max_step = std::max(report.max_step, node.delta.cwiseAbs().maxCoeff());
+    const double largest = node.delta.cwiseAbs().maxCoeff();
+    report.max_step = std::isfinite(largest) ? std::max(report.max_step, largest) : largest;
   }
 }
 
@@ -409,17 +412,51 @@ std::vector<std::size_t> IncrementalOptimizer::to_relinearise(double threshold) 
 
 // θ_k ← θ_k (+) Δ_k for the moved nodes; each edge touching one is replaced in H (update with the
 // new linearisation, then downdate the old) and in g.
-void IncrementalOptimizer::relinearise(const std::vector<std::size_t>& moved, UpdateReport& report) {
+std::vector<std::size_t> IncrementalOptimizer::edges_of(const std::vector<std::size_t>& moved) const {
   std::vector<std::size_t> touched;
+  for (const std::size_t k : moved)
+    for (const std::size_t e : nodes_[k].edges)
+      if (edges_[e].factored) touched.push_back(e);
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  return touched;
+}
+
+// What relinearising these edges by rank updates would cost, against one factorisation: each is
+// two rank-6 updowns along its elimination-tree path, ~12 · 6 flops per entry of L on the path.
+// A path far up a large factor (an old node) costs nearly nnz(L), so a few hundred such edges
+// cost more than the rebuild.
+bool IncrementalOptimizer::cheaper_to_rebuild(const std::vector<std::size_t>& edges) const {
+  const cholmod_factor* L = cholmod_->factor.get();
+  const auto* Lp = static_cast<const Index*>(L->p);
+  const auto* Li = static_cast<const Index*>(L->i);
+  const auto* Lnz = static_cast<const Index*>(L->nz);
+  const auto n = static_cast<Index>(L->n);
+  double work = 0;
+  for (const std::size_t index : edges) {
+    const EdgeState& e = edges_[index];
+    Index j = n;
+    for (const std::size_t k : {e.i, e.j})
+      if (!nodes_[k].held) j = std::min(j, position_[6 * static_cast<std::size_t>(nodes_[k].block)]);
+    while (j < n) {
+      work += 72.0 * static_cast<double>(Lnz[j]);
+      if (work > factor_flops_) return true;
+      Index parent = n;
+      for (Index k = Lp[j]; k < Lp[j] + Lnz[j]; ++k)
+        if (Li[k] > j) parent = std::min(parent, Li[k]);
+      j = parent;
+    }
+  }
+  return false;
+}
+
+void IncrementalOptimizer::relinearise(const std::vector<std::size_t>& moved, UpdateReport& report) {
   for (const std::size_t k : moved) {
     NodeState& node = nodes_[k];
     node.theta = retract(node.theta, node.delta);
     node.delta.setZero();
-    for (const std::size_t e : node.edges)
-      if (edges_[e].factored) touched.push_back(e);
   }
-  std::sort(touched.begin(), touched.end());
-  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  const std::vector<std::size_t> touched = edges_of(moved);
   for (const std::size_t index : touched) {
     EdgeState& e = edges_[index];
     const EdgeState old = e;
@@ -448,7 +485,8 @@ UpdateReport IncrementalOptimizer::update(double relinearise_threshold) {
     report.rebuild_reason = "structure changed";
   else if (!assign_blocks())
     report.rebuild_reason = "capacity";
-  else if (static_cast<double>(moved.size()) > options_.rebuild_fraction * free_nodes)
+  else if (static_cast<double>(moved.size()) > options_.rebuild_fraction * free_nodes ||
+           cheaper_to_rebuild(edges_of(moved)))
     report.rebuild_reason = "large correction";
   if (report.rebuild_reason != nullptr) {
     rebuild(report);
@@ -460,9 +498,12 @@ UpdateReport IncrementalOptimizer::update(double relinearise_threshold) {
       add_to_gradient(e, 1.0);
       report.touched_columns += updown(true, e);
       e.factored = true;
-      for (const std::size_t k : {e.i, e.j})
-        if (!nodes_[k].held && !nodes_[k].active) report.touched_columns += remove_identity(nodes_[k]);
     }
+    // Only once every new edge is in: a new node may be constrained by its edges together alone
+    // (two nodes of a new piece and the loop that joins it).
+    for (std::size_t index = first_new_edge_; index < edges_.size(); ++index)
+      for (const std::size_t k : {edges_[index].i, edges_[index].j})
+        if (!nodes_[k].held && !nodes_[k].active) report.touched_columns += remove_identity(nodes_[k]);
     first_new_edge_ = edges_.size();
     for (const Index j : marked_) marks_[static_cast<std::size_t>(j)] = 0;
     marked_.clear();
@@ -472,6 +513,12 @@ UpdateReport IncrementalOptimizer::update(double relinearise_threshold) {
     }
   }
   solve(report);
+  if (!std::isfinite(report.max_step)) {                  // a downdate left H singular (CHOLMOD does not check)
+    for (NodeState& node : nodes_) node.delta.setZero();  // the rebuild starts from θ
+    report.rebuild_reason = "singular";
+    rebuild(report);
+    solve(report);
+  }
   return report;
 }
 

@@ -23,15 +23,14 @@
 //    between recent nodes (their blocks are last in the ordering) touches few columns.
 //  - Δ is solved again, a full forward and back substitution: O(nnz(L)), no factorisation, and
 //    cheap next to one (a factorisation of a pose graph costs tens to thousands of times nnz(L)).
-// When the part to relinearise is large (more than `rebuild_fraction` of the free nodes: a large
-// correction), when the reserved blocks run out, when updates have grown nnz(L) per block past
-// `fill_growth` times its value after the last analysis, or after set_pose / set_fixed, the
-// factor is rebuilt: every node relinearised at its estimate, a new ordering, one numeric
-// factorisation (a batch Gauss-Newton step; should round-off make an ill-conditioned H not
-// positive definite, H + μ diag(H) as Levenberg-Marquardt, μ from 1e-9: same fixed point). The
-// ordering is CAMD on the 6x6-block pattern with the newest nodes constrained last (the next
-// edges arrive there, so their paths stay short, as iSAM2's constrained COLAMD), then the
-// reserved blocks, kept as given (no postorder); the capacity is twice the free nodes, so
+// When the part to relinearise is large (more than `rebuild_fraction` of the free nodes, or rank
+// updates along its paths that would cost more flops than one factorisation: a large correction), when the reserved
+// blocks run out, when updates have grown nnz(L) per block past `fill_growth` times its value after the last analysis,
+// or after set_pose / set_fixed, the factor is rebuilt: every node relinearised at its estimate, a new ordering, one
+// numeric factorisation (a batch Gauss-Newton step; should round-off make an ill-conditioned H not positive definite, H
+// + μ diag(H) as Levenberg-Marquardt, μ from 1e-9: same fixed point). The ordering is CAMD on the 6x6-block pattern
+// with the newest nodes constrained last (the next edges arrive there, so their paths stay short, as iSAM2's
+// constrained COLAMD), then the reserved blocks, kept as given (no postorder); the capacity is twice the free nodes, so
 // rebuilds for capacity happen a logarithmic number of times.
 //
 // Convergence: an update() without new edges relinearises every node whose step exceeds
@@ -146,6 +145,8 @@ class IncrementalOptimizer {
   void solve(UpdateReport& report);
   [[nodiscard]] std::vector<std::size_t> to_relinearise(double threshold) const;
   void relinearise(const std::vector<std::size_t>& moved, UpdateReport& report);
+  [[nodiscard]] std::vector<std::size_t> edges_of(const std::vector<std::size_t>& moved) const;
+  [[nodiscard]] bool cheaper_to_rebuild(const std::vector<std::size_t>& edges) const;
   [[nodiscard]] std::size_t factor_nonzeros() const;
   [[nodiscard]] bool fill_grown() const;
 
@@ -163,6 +164,7 @@ class IncrementalOptimizer {
   Eigen::VectorXd gradient_;           // g, in H's columns
   std::size_t analysed_nonzeros_ = 0;  // nnz(L) of the blocks in use after the last analysis
   std::size_t analysed_blocks_ = 0;
+  double factor_flops_ = 0;  // of one numeric factorisation, from the last analysis
   std::vector<char> marks_;  // factor columns counted in this update
   std::vector<long> marked_;
   bool must_rebuild_ = true;
