@@ -486,7 +486,7 @@ UpdateReport IncrementalOptimizer::update(double relinearise_threshold) {
   else if (!assign_blocks())
     report.rebuild_reason = "capacity";
   else if (static_cast<double>(moved.size()) > options_.rebuild_fraction * free_nodes ||
-           cheaper_to_rebuild(edges_of(moved)))
+           (options_.rebuild_when_cheaper && cheaper_to_rebuild(edges_of(moved))))
     report.rebuild_reason = "large correction";
   if (report.rebuild_reason != nullptr) {
     rebuild(report);

@@ -63,6 +63,7 @@ struct IncrementalOptions {
   double relinearise_threshold = 1e-2;     // |Δ_k|∞ (m, rad) beyond which node k is relinearised
   double converged_threshold = 1e-9;       // the same in an update() without new edges
   double rebuild_fraction = 0.25;          // relinearising more free nodes than this fraction: rebuild
+  bool rebuild_when_cheaper = true;        // also rebuild when the rank updates would cost more flops
   double fill_growth = 2.0;                // nnz(L) per block past this multiple of the last analysis': rebuild
   std::size_t initial_capacity = 64;       // node blocks of the first analysis
   std::size_t newest_last = 16;            // newest nodes the ordering keeps last (CAMD constraint)
