@@ -1,5 +1,6 @@
 #include "libcvo/slam/backend.hpp"
 
+#include <chrono>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -32,9 +33,16 @@ void require_information(const std::string& edge, const core::Matrix6d& informat
     throw std::invalid_argument("backend: " + edge + ": " + check.why());
 }
 
+posegraph::IncrementalOptions incremental_options(const BackendParameters& parameters) {
+  posegraph::IncrementalOptions options;
+  options.pose_graph = parameters;
+  return options;
+}
+
 }  // namespace
 
-Backend::Backend(const BackendParameters& parameters) : parameters_(parameters), optimizer_(optimizer_options()) {}
+Backend::Backend(const BackendParameters& parameters)
+    : parameters_(parameters), incremental_(incremental_options(parameters)) {}
 
 posegraph::OptimizerOptions Backend::optimizer_options() const {
   posegraph::OptimizerOptions options;
@@ -160,10 +168,48 @@ bool Backend::add_loop(const loop_closure::LoopClosure& loop) {
   return false;
 }
 
+namespace {
+bool same_pose(const core::SE3& a, const core::SE3& b) {
+  return a.translation() == b.translation() && a.rotation().coeffs() == b.rotation().coeffs();
+}
+}  // namespace
+
+// The keyframe graph only grows (nodes, edges appended); between optimisations join_pieces may
+// move nodes and release an anchor: those become set_pose / set_fixed (the next update rebuilds).
+void Backend::sync_incremental() {
+  for (const auto& [id, node] : keyframes_.nodes()) {
+    if (!incremental_.contains(id)) {
+      incremental_.add_node(id, node.pose, node.fixed);
+      continue;
+    }
+    if (incremental_.fixed(id) != node.fixed) incremental_.set_fixed(id, node.fixed);
+    if (!same_pose(incremental_.pose(id), node.pose)) incremental_.set_pose(id, node.pose);
+  }
+  for (; synced_edges_ < keyframes_.edges().size(); ++synced_edges_)
+    incremental_.add_edge(keyframes_.edges()[synced_edges_]);
+}
+
 posegraph::OptimizationReport Backend::optimise_keyframes() {
   unoptimised_loops_ = 0;
   if (keyframes_.nodes().size() < 2) return {};
-  auto report = optimizer_.optimize(keyframes_);
+  const auto start = std::chrono::steady_clock::now();
+  sync_incremental();
+  posegraph::OptimizationReport report;
+  const double threshold = posegraph::IncrementalOptions{}.relinearise_threshold;
+  report.stop_reason = "maximum iterations";
+  for (int k = 0; k < parameters_.max_iterations; ++k) {
+    const posegraph::UpdateReport update = incremental_.update(threshold);
+    ++report.iterations;
+    report.factorizations += update.rebuilt ? 1 : 0;
+    if (k > 0 && update.relinearised_nodes == 0) {
+      report.converged = true;
+      report.stop_reason = "no node moved beyond the relinearisation threshold";
+      break;
+    }
+  }
+  for (const auto& [id, node] : std::map<NodeId, posegraph::Node>(keyframes_.nodes()))
+    if (!node.fixed) keyframes_.set_pose(id, incremental_.pose(id));
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ++revision_;
   return report;
 }

@@ -29,8 +29,14 @@
 //                    the `from` frame fixed, need edge_information.hpp's conversion.
 //                    A loop naming a keyframe the graph does not hold yet (a restart keyframe
 //                    before its local graph closed) waits, and enters with that graph.
-//  optimise_keyframes   Levenberg-Marquardt over the keyframe graph (posegraph/optimizer.hpp),
-//                    first keyframe fixed; run after new loops. Frames follow their keyframe.
+//  optimise_keyframes   Incremental Gauss-Newton over the keyframe graph
+//                    (posegraph/incremental_optimizer.hpp), each piece's anchor fixed; run after new
+//                    loops. The keyframe graph's new nodes and edges (keyframes, bridges, loops) are
+//                    added to the incremental optimiser as they came, so a loop costs what the part of
+//                    the factor it changes costs; the updates repeat until no node moves by more than
+//                    the relinearisation threshold (at most max_iterations). A rigid move of a piece
+//                    (a join, below) or a released anchor makes the next one a rebuild (the whole
+//                    graph, once). Frames follow their keyframe.
 //  optimise_all      The final global optimisation: every frame a node, every local edge and
 //                    bridge (plain squares), every loop (robust), first keyframe fixed, from the
 //                    current poses. Its solution replaces the keyframe poses and every frame's
@@ -64,6 +70,7 @@
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/loop_closure/loop_verification.hpp"  // LoopClosure
 #include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/posegraph/incremental_optimizer.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
 #include "libcvo/posegraph/pose_graph.hpp"
 #include "libcvo/slam/local_optimisation.hpp"
@@ -106,7 +113,10 @@ class Backend {
   /// information matrix core::check_information refuses.
   bool add_loop(const loop_closure::LoopClosure& loop);
 
-  /// Optimises the keyframe graph; does nothing (an empty report) with fewer than two nodes.
+  /// Optimises the keyframe graph incrementally; does nothing (an empty report) with fewer than two
+  /// nodes. The report's iterations are the updates, factorizations the rebuilds among them,
+  /// converged whether the last update relinearised no node; its costs are not evaluated (0: that
+  /// would cost a pass over every edge).
   posegraph::OptimizationReport optimise_keyframes();
   /// The global optimisation of every frame (see above), its Levenberg-Marquardt given at most
   /// max_seconds (OptimizerOptions::max_seconds: cut short, it keeps its last accepted step).
@@ -177,7 +187,10 @@ class Backend {
 
   BackendParameters parameters_;
   posegraph::PoseGraph keyframes_;
-  posegraph::Optimizer optimizer_;  // keeps the keyframe graph's symbolic analysis between runs
+  void sync_incremental();  // keyframes_'s new nodes and edges, moved poses, changed anchors into incremental_
+
+  posegraph::IncrementalOptimizer incremental_;  // the keyframe graph's factor, kept between optimisations
+  std::size_t synced_edges_ = 0;                 // keyframes_.edges() already in incremental_
   std::vector<StoredGraph> graphs_;
   std::map<posegraph::NodeId, std::size_t> graph_of_keyframe_;
   std::vector<posegraph::Edge> bridges_;
