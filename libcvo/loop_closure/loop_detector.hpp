@@ -85,6 +85,22 @@ class LoopDetector {
   /// cloud are freed. Throws std::out_of_range when it is not stored.
   void remove_keyframe(std::int64_t id);
 
+  /// How well stored keyframe `covering` would serve as the keyframe of stored keyframe `covered`
+  /// seen from it at `T` (T_covering^covered, a verified loop's measurement): the tracker's γ
+  /// (eq. 9) with its kernel (keyframe_tracking's γ ℓ, σ, stride), the inner product
+  /// <f_Xc, T.f_Xk> normalised by the RKHS norms, √(<f_Xc, f_Xc> <f_Xk, f_Xk>), instead of by the
+  /// tracker's reference (the keyframe against its next frame, which the back end never sees).
+  /// By Cauchy-Schwarz it is at most 1, and 1 only for the same view; against the frame after it a
+  /// keyframe scores below its self product, so this γ is the stricter of the two: a keyframe it
+  /// calls covered, the tracker would have kept tracking from c. Throws std::out_of_range for an
+  /// id not stored.
+  double coverage(std::int64_t covering, std::int64_t covered, const core::SE3& T);
+
+  /// Forgets a keyframe merged into another (slam/mapper.hpp) as remove_keyframe does, but keeps
+  /// its bag-of-words vector as η's normaliser for the one keyframe that names it as `previous`
+  /// (its successor in its session), then frees it: one vector per session at most.
+  void retire_keyframe(std::int64_t id);
+
   /// New global estimates after an optimisation (used for T_rel in the α test). Ids that are not
   /// stored keyframes (e.g. ordinary frames of the graph) are ignored.
   void update_poses(const std::map<std::int64_t, core::SE3>& poses);
@@ -99,9 +115,11 @@ class LoopDetector {
   LoopDetectorParameters parameters_;
   KeyframeDatabase database_;
   registration::Registration registration_;
+  registration::Registration gamma_registration_;   // γ's kernel (coverage)
   std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
   std::optional<std::int64_t> previous_;            // the last keyframe added
   std::vector<LoopAttempt> attempts_;
+  std::map<std::int64_t, BowVector> retired_;  // merged keyframes' vectors, until their successor came
 };
 
 }  // namespace cvo::loop_closure
