@@ -58,8 +58,8 @@ class KeyframeDatabase {
   /// Empty when previous_id is not in the database or s(bow, v_previous) == 0.
   [[nodiscard]] std::vector<LoopCandidate> candidates(KeyframeId query_id, const BowVector& bow, KeyframeId previous_id,
                                                       double min_eta) const;
-  /// The same with the previous keyframe's vector given (it was removed: a keyframe merged into
-  /// the one that covers it, slam/mapper.hpp, still normalises its successor's η) and none excluded.
+  /// The same with the normaliser's vector given and none left out (the predecessor was merged
+  /// into the keyframe that covers it, which normalises in its place: slam/mapper.hpp).
   [[nodiscard]] std::vector<LoopCandidate> candidates(KeyframeId query_id, const BowVector& bow,
                                                       const BowVector& previous_bow, double min_eta) const {
     return candidates(query_id, bow, previous_bow, min_eta, kNone);

@@ -55,13 +55,11 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
 
   std::vector<LoopClosure> loops;
   std::vector<LoopCandidate> candidates;
-  if (placement.previous && database_.contains(*placement.previous)) {
-    candidates = database_.candidates(id, bow, *placement.previous, parameters_.loop.similarity_threshold);
-  } else if (const auto retired = placement.previous ? retired_.find(*placement.previous) : retired_.end();
-             retired != retired_.end()) {
-    candidates = database_.candidates(id, bow, retired->second, parameters_.loop.similarity_threshold);
-    retired_.erase(retired);
-  }
+  const double eta = parameters_.loop.similarity_threshold;
+  if (placement.previous && database_.contains(*placement.previous))
+    candidates = placement.previous_is_candidate
+                     ? database_.candidates(id, bow, database_.bow(*placement.previous), eta)
+                     : database_.candidates(id, bow, *placement.previous, eta);
   const int max_refinements = parameters_.verification.max_refinements;
   int refinements = 0;
   for (const auto& c : candidates) {  // best η first
@@ -87,12 +85,6 @@ void LoopDetector::remove_keyframe(std::int64_t id) {
     throw std::out_of_range("LoopDetector::remove_keyframe: keyframe " + std::to_string(id) + " is not stored");
   database_.remove(id);
   if (previous_ == id) previous_.reset();
-}
-
-void LoopDetector::retire_keyframe(std::int64_t id) {
-  BowVector bow = database_.bow(id);
-  remove_keyframe(id);
-  retired_.emplace(id, std::move(bow));
 }
 
 void LoopDetector::update_poses(const std::map<std::int64_t, core::SE3>& poses) {

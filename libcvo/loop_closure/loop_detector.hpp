@@ -54,6 +54,9 @@ struct KeyframePlacement {
   core::SE3 pose;
   std::int64_t piece = 0;
   std::optional<std::int64_t> candidates_below = std::nullopt;
+  // `previous` is the keyframe the predecessor was merged into (slam/mapper.hpp): it normalises η
+  // in the predecessor's place, and is a candidate like any other (no odometry edge links it).
+  bool previous_is_candidate = false;
 };
 
 /// A keyframe's current estimate after an optimisation or a join of pieces.
@@ -96,11 +99,6 @@ class LoopDetector {
   /// id not stored.
   double coverage(std::int64_t covering, std::int64_t covered, const core::SE3& T);
 
-  /// Forgets a keyframe merged into another (slam/mapper.hpp) as remove_keyframe does, but keeps
-  /// its bag-of-words vector as η's normaliser for the one keyframe that names it as `previous`
-  /// (its successor in its session), then frees it: one vector per session at most.
-  void retire_keyframe(std::int64_t id);
-
   /// New global estimates after an optimisation (used for T_rel in the α test). Ids that are not
   /// stored keyframes (e.g. ordinary frames of the graph) are ignored.
   void update_poses(const std::map<std::int64_t, core::SE3>& poses);
@@ -119,7 +117,6 @@ class LoopDetector {
   std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
   std::optional<std::int64_t> previous_;            // the last keyframe added
   std::vector<LoopAttempt> attempts_;
-  std::map<std::int64_t, BowVector> retired_;  // merged keyframes' vectors, until their successor came
 };
 
 }  // namespace cvo::loop_closure

@@ -93,7 +93,11 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   const posegraph::NodeId id = node(s, frame);
   loop_closure::KeyframePlacement placement{id, std::nullopt, {}, backend_.piece(k.session), std::nullopt};
   if (const auto after = s.keyframes.upper_bound(k.id); after != s.keyframes.begin())
-    placement.previous = node(s, std::prev(after)->second.frame);  // η's normaliser: its predecessor
+    placement.previous = node(s, std::prev(after)->second.frame);    // η's normaliser: its predecessor
+  if (placement.previous && backend_.merged(*placement.previous)) {  // or the keyframe covering it
+    placement.previous = backend_.resolve(*placement.previous);
+    placement.previous_is_candidate = true;
+  }
   placement.pose = backend_.holds(id) ? backend_.pose_of(id) : backend_.odometry_correction(k.session) * k.odometry;
 
   std::vector<loop_closure::LoopClosure> loops;

@@ -61,9 +61,10 @@
 // the same key; LoopDetector::coverage says how γ is normalised here). Of several such loops the
 // best γ wins. k is then merged into c (Backend::merge_keyframe): an alias X_k = X_c · T_c^k, not a
 // node of the keyframe graph, its edges moved onto c and fused with c's (keyframe_merge.hpp), its
-// other loops kept as loops of c; the loop detector forgets it (its cloud and features freed, its
-// bag of words only normalises its successor's η). Its pose stays X_c · T_c^k for correction() and
-// the session's correction, and map() leaves it out: the map's keyframes follow the area. Only a
+// other loops kept as loops of c; the loop detector forgets it (its cloud, features and bag of
+// words freed; its successor's η is normalised by c's vector instead, c then a candidate too: the
+// same with or without k's images, so a store's merge record replays to the same map). Its pose stays X_c · T_c^k for
+// correction() and the session's correction, and map() leaves it out: the map's keyframes follow the area. Only a
 // keyframe already in the graph (its predecessor's local graph closed: cvo-run and the tracker send
 // that graph first) and not its piece's anchor is merged. A wrong loop passes α rarely; a merge
 // holds k rigidly to c in the keyframe graph, and the final optimisation relaxes it as a robust

@@ -23,7 +23,7 @@ std::optional<std::pair<std::size_t, double>> Mapper::covering_loop(const std::v
 
 void Mapper::merge(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph::NodeId covering) {
   backend_.merge_keyframe(keyframe, covering, m.relative, m.information);
-  detector_.retire_keyframe(keyframe);
+  detector_.remove_keyframe(keyframe);
   sessions_.at(m.session).keyframes.at(m.id).merged = true;
   marginals_.invalidate();
   ++revision_;
