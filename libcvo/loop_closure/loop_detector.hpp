@@ -106,6 +106,7 @@ class LoopDetector {
 
   [[nodiscard]] const std::vector<LoopAttempt>& last_attempts() const { return attempts_; }
   [[nodiscard]] std::size_t size() const { return keyframes_.size(); }
+  [[nodiscard]] bool contains(std::int64_t id) const { return keyframes_.contains(id); }
   [[nodiscard]] const LoopDetectorParameters& parameters() const { return parameters_; }
 
  private:

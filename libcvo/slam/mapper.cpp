@@ -114,35 +114,52 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   outcome.loops_tried = detector_.last_attempts().size();
   loops_tried_ += outcome.loops_tried;
   std::vector<bool> entered(loops.size(), false);
-  const auto enter_loop = [&](std::size_t i) {
-    const auto& loop = loops[i];
-    entered[i] = true;
-    backend_.add_loop(loop);
-    loops_.push_back(loop);
-    outcome.loops.push_back(describe(loop));
-    if (const MapLoop& m = outcome.loops.back(); m.from_session != m.to_session)
-      for (const core::SessionId end : {m.from_session, m.to_session})
-        sessions_.at(end).loops.push_back(loops_.size() - 1);
-    s.last_match_time = k.frame.timestamp;
-  };
+  std::vector<loop_closure::LoopClosure> joining;
   // Loops that join pieces first: then the keyframe is in the map and may be merged (see the header).
   for (std::size_t i = 0; i < loops.size(); ++i)
     if (backend_.holds(loops[i].from) &&
-        backend_.piece(backend_.session_of(backend_.resolve(loops[i].from))) != backend_.piece(k.session))
-      enter_loop(i);
-  if (const auto covering = covering_loop(loops, entered, id, k.session)) {
+        backend_.piece(backend_.session_of(backend_.resolve(loops[i].from))) != backend_.piece(k.session)) {
+      enter_loop(s, loops[i], k.frame.timestamp, outcome);
+      joining.push_back(loops[i]);
+      entered[i] = true;
+    }
+  const auto covering = covering_loop(loops, entered, id, k.session);
+  if (covering) {
     const auto& loop = loops[covering->first];
     const auto& [covering_session, covering_id] = keyframe_of_node_.at(loop.from);
-    outcome.merge = KeyframeMerge{
-        k.session, k.id, covering_session, covering_id, loop.measurement, loop.information, covering->second};
+    outcome.merge = KeyframeMerge{k.session,
+                                  k.id,
+                                  frame,
+                                  k.frame.timestamp,
+                                  k.odometry,
+                                  covering_session,
+                                  covering_id,
+                                  loop.measurement,
+                                  loop.information,
+                                  covering->second,
+                                  std::move(joining),
+                                  {}};
     merge(*outcome.merge, id, loop.from);
     entered[covering->first] = true;  // the alias holds it
     s.last_match_time = k.frame.timestamp;
   }
   for (std::size_t i = 0; i < loops.size(); ++i)
-    if (!entered[i]) enter_loop(i);
+    if (!entered[i]) {
+      enter_loop(s, loops[i], k.frame.timestamp, outcome);
+      if (outcome.merge) outcome.merge->others.push_back(loops[i]);
+    }
   outcome.joined = after_change();
   return outcome;
+}
+
+void Mapper::enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome) {
+  backend_.add_loop(loop);
+  loops_.push_back(loop);
+  outcome.loops.push_back(describe(loop));
+  if (const MapLoop& m = outcome.loops.back(); m.from_session != m.to_session)
+    for (const core::SessionId end : {m.from_session, m.to_session})
+      sessions_.at(end).loops.push_back(loops_.size() - 1);
+  s.last_match_time = time;
 }
 
 std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,

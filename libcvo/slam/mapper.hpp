@@ -176,11 +176,17 @@ struct Map {
 struct KeyframeMerge {
   core::SessionId session = 0;
   std::int64_t id = 0;
+  std::int64_t frame = 0;  // the merged keyframe's frame index, colour time and odometry pose, so a
+  double timestamp = 0;    // store can replay the merge without the keyframe's record
+  core::SE3 odometry;
   core::SessionId covering_session = 0;
   std::int64_t covering_id = 0;
   core::SE3 relative;                                       // T_covering^id, the loop's measurement
   core::Matrix6d information = core::Matrix6d::Identity();  // the loop's
   double gamma = 0;                                         // its coverage γ
+  // The keyframe's other verified loops, in the order entered: those that joined its session's
+  // piece to the covering keyframe's (before the merge), and the rest (after it, as loops of c).
+  std::vector<loop_closure::LoopClosure> joining, others;
 };
 
 /// What one add_keyframe did.
@@ -243,10 +249,13 @@ class Mapper {
   [[nodiscard]] std::size_t loops_accepted() const { return loops_.size(); }
   /// Keyframes merged into ones that cover them (see the header).
   [[nodiscard]] std::size_t merged_keyframes() const { return backend_.merged_keyframes(); }
-  /// Applies a merge add_keyframe made before (a store's record, replayed without the keyframe's
-  /// images): keyframe (session, id) must be known, in the graph and not merged yet; the covering one
-  /// known. Throws MapperError otherwise.
-  void apply_merge(const KeyframeMerge& merge);
+  /// Applies a merge add_keyframe made before (a store's record): when keyframe (session, id) is
+  /// known and merged so already, nothing (false); known and not merged, it is merged; not known
+  /// (its record compacted away), it is registered from the merge alone, without images or loop
+  /// detection, its other loops entered as add_keyframe entered them (then optimised likewise). Its frame must then be
+  /// in the keyframe graph (the local graph ending at it applied) and free, the covering keyframe known and in the
+  /// graph. Throws MapperError otherwise, nothing changed.
+  bool apply_merge(const KeyframeMerge& merge);
   /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
   [[nodiscard]] std::size_t window_keyframes() const;
 
@@ -306,6 +315,7 @@ class Mapper {
                                                               const std::vector<bool>& entered,
                                                               posegraph::NodeId keyframe, core::SessionId session);
   void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
+  void enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome);
 
   loop_closure::LoopDetector detector_;
   Backend backend_;
