@@ -1,10 +1,12 @@
 #include "store_output.hpp"
+#include "daemon/backendd/merge_record.hpp"
 
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "daemon/backendd/keyframe_store.hpp"
+#include "daemon/backendd/merge_record.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -69,6 +71,10 @@ void StoreOutput::keyframe(core::SessionId session, std::int64_t id, const core:
 void StoreOutput::local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph) {
   const auto closed = static_cast<std::int64_t>(std::llround(graph.nodes().back().timestamp * 1e6));
   state_->append(RecordKind::kLocalGraph, lcm::encode(lcm::to_message(graph, session, keyframe_id, closed)));
+}
+
+void StoreOutput::merge(const slam::KeyframeMerge& merge) {
+  state_->append(RecordKind::kMerge, daemon::backendd::encode_merge(merge));
 }
 
 std::uint64_t StoreOutput::records() const { return state_->store->records(); }
