@@ -57,7 +57,8 @@ class Reader {
     return value;
   }
   core::SE3 pose() {
-    const Eigen::Vector3d t(get<double>(), get<double>(), get<double>());
+    Eigen::Vector3d t;
+    for (int i = 0; i < 3; ++i) t[i] = get<double>();  // in order (arguments of one call are not)
     const double x = get<double>(), y = get<double>(), z = get<double>(), w = get<double>();
     if (!ok || !(std::abs(w * w + x * x + y * y + z * z - 1) < 1e-6)) {
       ok = false;

@@ -15,6 +15,12 @@
 // candidates past η, verifying all of them would cost far more than the recording lasts while
 // the best few find the same loops (the figures: bench/odometry-tuning.md).
 // Candidates refused at steps 1-2 are cheap and do not count.
+// What bounds a query: step 1 visits only the inverted-file postings of the new keyframe's words
+// (keyframe_database.hpp), and step 2 runs on the candidates past η, so both grow with the keyframes
+// the database holds; revisits merge their keyframes into those that cover them (slam/mapper.hpp),
+// which leave the database, so it holds the area explored rather than the time spent, and step 3,
+// CVO, the cost that matters, runs at most max_refinements times whatever the database holds. No
+// cap on steps 1-2 beyond that is set (one would be a new tunable).
 // Steps 2-4, the exact directions of the transforms, the length-scale of the α inner products and
 // why the CVO Hessian is the edge's information as it comes: loop_verification.hpp.
 //

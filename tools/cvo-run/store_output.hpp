@@ -39,7 +39,8 @@ class StoreOutput {
   void local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
 
   /// Appends the record of a merge the mapper made (daemon/backendd/merge_record.hpp), after the
-  /// keyframe's own record, as above.
+  /// keyframe's own record, as above; that record is garbage then, and the store compacts when
+  /// garbage passes half of it (keyframe_store.hpp).
   void merge(const slam::KeyframeMerge& merge);
 
   [[nodiscard]] std::uint64_t records() const;
