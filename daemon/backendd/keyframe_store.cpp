@@ -126,10 +126,10 @@ struct CleanCopy {
 };
 
 // Writes the intact ranges of `data` to FILE.recovering, makes it durable, keeps the original
-// aside and renames the copy over FILE. A crash at any point leaves FILE whole (the original or
-// the complete copy); on a failure nothing but FILE is left.
+// aside (when `keep_original`: a damaged one) and renames the copy over FILE. A crash at any point
+// leaves FILE whole (the original or the complete copy); on a failure nothing but FILE is left.
 CleanCopy replace_with_clean_copy(const fs::path& file, const std::uint8_t* data, const std::vector<Range>& intact,
-                                  mode_t mode) {
+                                  mode_t mode, bool keep_original = true) {
   const fs::path temp = file.string() + ".recovering";
   CleanCopy copy;
   copy.fd = ::open(temp.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, mode & 07777);
@@ -144,11 +144,11 @@ CleanCopy replace_with_clean_copy(const fs::path& file, const std::uint8_t* data
   if (error != 0)
     copy.error = "cannot write " + temp.string() + ": " + std::strerror(error);
   else
-    copy.aside = keep_aside(file, copy.error);
+    copy.aside = keep_original ? keep_aside(file, copy.error) : file;
   if (!copy.aside.empty() && ::rename(temp.c_str(), file.c_str()) != 0) {
     const int rename_error = errno;
     copy.error = "cannot rename " + temp.string() + ": " + std::strerror(rename_error);
-    ::unlink(copy.aside.c_str());
+    if (keep_original) ::unlink(copy.aside.c_str());
     copy.aside.clear();
   }
   if (copy.aside.empty()) {
@@ -292,6 +292,41 @@ Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>&
   held_.pop_back();
   ++health_.not_durable;
   return Appended::kNotDurable;
+}
+
+bool KeyframeStore::discard(const RecordRef& where) {
+  const std::lock_guard lock(mutex_);
+  if (where.offset < static_cast<off_t>(kStoreMagic.size()) || where.offset >= end_) return false;
+  if (!garbage_.emplace(where.offset, where.bytes).second) return false;
+  garbage_bytes_ += where.bytes;
+  if (!held_.empty() || 2 * garbage_bytes_ <= static_cast<std::size_t>(end_)) return false;
+  return compact();
+}
+
+// The records outside garbage_, copied as a damaged store's intact ones are (replace_with_clean_copy,
+// the original not kept). Under mutex_.
+bool KeyframeStore::compact() {
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) return false;
+  const auto size = static_cast<std::size_t>(end_);
+  const Mapping map(fd_, size, file_);
+  std::vector<Range> live;
+  std::size_t from = kStoreMagic.size();
+  for (const auto& [at, bytes] : garbage_) {
+    if (static_cast<std::size_t>(at) > from) live.push_back({from, static_cast<std::size_t>(at) - from});
+    from = static_cast<std::size_t>(at) + bytes;
+  }
+  if (size > from) live.push_back({from, size - from});
+  const auto copy = replace_with_clean_copy(file_, map.data(), live, st.st_mode, /*keep_original=*/false);
+  if (copy.fd < 0) return false;  // left as it was: its garbage replays harmlessly, and is tried again later
+  ::close(fd_);
+  fd_ = copy.fd;
+  end_ = copy.size;
+  records_ -= garbage_.size();
+  garbage_.clear();
+  garbage_bytes_ = 0;
+  ++compactions_;
+  return true;
 }
 
 std::optional<StoredRecord> KeyframeStore::read(const RecordRef& where, std::string* error) const {

@@ -16,6 +16,14 @@
 // is cut off in place: copying a whole store after every such crash would cost its size each
 // time.
 //
+// Garbage (issue #27 item 3): a record made useless by a later one (a merged keyframe's, once its
+// merge record is stored: merge_record.hpp) is discard()ed; once such records pass half of the file,
+// the store is compacted: its other records are copied in order to FILE.recovering, made durable and
+// renamed over FILE, as a damaged store's intact records are (the original is not kept), so the file
+// stays within about twice its live records. RecordRefs from before a compaction are void. Garbage
+// is counted in this run only: a restarted store starts with none (its merged keyframes' records
+// replay harmlessly, their merge records after them).
+//
 // A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
 // write is cut back so no torn record stays in front of the next one, and the record is held in
 // memory, up to a bound, and written in order, before any newer one, once writing works again
@@ -26,6 +34,7 @@
 #include <cstdint>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -89,6 +98,12 @@ class KeyframeStore {
   /// The record append() stored at `where`, read back from disk and checked as at recovery
   /// (magic, kind, length, checksum); nullopt with `*error` saying why when it cannot be.
   std::optional<StoredRecord> read(const RecordRef& where, std::string* error) const;
+  /// Marks the record append() stored at `where` as garbage (see the header); compacts the file when
+  /// garbage passes half of it and nothing is held. True when it compacted (every RecordRef is void
+  /// then); a failed compaction leaves the file as it was.
+  bool discard(const RecordRef& where);
+  /// Compactions so far.
+  [[nodiscard]] std::size_t compactions() const { return compactions_; }
   /// Writes the held records, oldest first, as far as the store allows; true when none is left.
   bool retry();
   [[nodiscard]] StoreHealth health() const;
@@ -102,6 +117,7 @@ class KeyframeStore {
   void recover(std::vector<StoredRecord>& recovered, std::string& warning);
   int write_at_end(const std::uint8_t* data, std::size_t size);
   bool write_held();
+  bool compact();
 
   std::filesystem::path file_;
   std::size_t held_max_;
@@ -111,6 +127,9 @@ class KeyframeStore {
   std::uint64_t records_ = 0;                   // on disk
   std::deque<std::vector<std::uint8_t>> held_;  // encoded records not yet written, oldest first
   StoreHealth health_;
+  std::map<off_t, std::size_t> garbage_;  // discarded records: offset -> bytes
+  std::size_t garbage_bytes_ = 0;
+  std::size_t compactions_ = 0;
 };
 
 }  // namespace cvo::daemon::backendd

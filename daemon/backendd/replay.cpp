@@ -4,6 +4,7 @@
 #include <utility>
 #include <variant>
 
+#include "daemon/backendd/merge_record.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 
 namespace cvo::daemon::backendd {
@@ -31,6 +32,7 @@ std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, cons
 
 Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const std::uint8_t* data, std::size_t size) {
   Replayed out;
+  if (kind == RecordKind::kMerge) return replay_merge(mapper, data, size);
   const auto message = let_in_stored(door, kind, data, size, &out.why);
   if (!message) return out;
   auto value = usable(*message, &out.why, nullptr);
@@ -46,6 +48,18 @@ Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const 
   }
   out.value = std::move(value);
   return out;
+}
+
+Replayed replay_merge(slam::Mapper& mapper, const std::uint8_t* data, std::size_t size) {
+  std::string error;
+  const auto merge = decode_merge(data, size, &error);
+  if (!merge) return {"stored record skipped: " + error, std::nullopt};
+  try {
+    mapper.apply_merge(*merge);        // false: merged so by its keyframe's own replay already
+  } catch (const std::exception& e) {  // slam::MapperError: nothing changed
+    return {"not applied: " + std::string(e.what()), std::nullopt};
+  }
+  return {};
 }
 
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& k) {

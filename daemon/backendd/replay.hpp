@@ -2,7 +2,8 @@
 // A stored record replayed into the back end, the one way cvo-backendd does it at start-up and
 // cvo-map does it for a whole store: through the door (decoded once, each name once: a repeat of
 // a name already let in is skipped), its content checked (message_door.hpp's usable()), then
-// applied to the slam::Mapper (a keyframe with add_keyframe, a local graph with add_local_graph).
+// applied to the slam::Mapper (a keyframe with add_keyframe, a local graph with add_local_graph, a
+// merge record with apply_merge).
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -35,6 +36,10 @@ struct Replayed {
   std::optional<RecordValue> value;
 };
 Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const std::uint8_t* data, std::size_t size);
+
+/// A merge record (merge_record.hpp) applied to the mapper (Mapper::apply_merge), not through the
+/// door: it names no message. A merge its keyframe's replay made already is used, changing nothing.
+Replayed replay_merge(slam::Mapper& mapper, const std::uint8_t* data, std::size_t size);
 
 /// A keyframe into the mapper; throws slam::MapperError when it cannot be applied (nothing changed).
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& keyframe);

@@ -35,7 +35,8 @@ std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size
 
 bool known_kind(std::uint8_t kind) {
   return kind == static_cast<std::uint8_t>(RecordKind::kKeyframe) ||
-         kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph);
+         kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph) ||
+         kind == static_cast<std::uint8_t>(RecordKind::kMerge);
 }
 
 // Where the next valid record starts after `from` (`size` when none does): the record magic with

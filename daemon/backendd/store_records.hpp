@@ -23,7 +23,8 @@
 
 namespace cvo::daemon::backendd {
 
-enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2 };
+// kMerge: a keyframe merged into one covering it (merge_record.hpp), after the keyframe's record.
+enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2, kMerge = 3 };
 
 inline constexpr std::array<std::uint8_t, 8> kStoreMagic{'C', 'V', 'O', 'K', 'F', 'S', '1', '\n'};
 inline constexpr std::size_t kRecordHeaderBytes = 16;  // before each payload

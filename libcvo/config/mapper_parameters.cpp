@@ -9,6 +9,8 @@ loop_closure::LoopDetectorParameters loop_detector_parameters(const Config& conf
   p.cvo = config.cvo;
   p.selection = config.selection;
   p.odometry = config.odometry;
+  p.keyframe = config.keyframe;
+  p.keyframe_tracking = config.keyframe_tracking;
   return p;
 }
 

@@ -61,7 +61,13 @@ std::vector<LoopCandidate> KeyframeDatabase::candidates(KeyframeId query_id, con
                                                         KeyframeId previous_id, double min_eta) const {
   const auto previous = position_.find(previous_id);
   if (previous == position_.end()) return {};
-  const double reference = score(bow, bows_[previous->second]);
+  return candidates(query_id, bow, bows_[previous->second], min_eta, previous->second);
+}
+
+std::vector<LoopCandidate> KeyframeDatabase::candidates(KeyframeId query_id, const BowVector& bow,
+                                                        const BowVector& previous_bow, double min_eta,
+                                                        std::uint32_t excluded) const {
+  const double reference = score(bow, previous_bow);
   if (!(reference > 0)) return {};
   const auto query = position_.find(query_id);
   const std::size_t earlier = query == position_.end() ? ids_.size() : query->second;
@@ -75,7 +81,7 @@ std::vector<LoopCandidate> KeyframeDatabase::candidates(KeyframeId query_id, con
   }
   std::vector<LoopCandidate> out;
   for (std::uint32_t j = 0; j < earlier; ++j) {
-    if (j == previous->second || bows_[j].empty()) continue;  // removed ones too
+    if (j == excluded || bows_[j].empty()) continue;  // removed ones too
     const double s = std::clamp(common[j], 0.0, 1.0);
     if (const double eta = s / reference; eta > min_eta) out.push_back({ids_[j], s, eta});
   }

@@ -58,6 +58,12 @@ class KeyframeDatabase {
   /// Empty when previous_id is not in the database or s(bow, v_previous) == 0.
   [[nodiscard]] std::vector<LoopCandidate> candidates(KeyframeId query_id, const BowVector& bow, KeyframeId previous_id,
                                                       double min_eta) const;
+  /// The same with the normaliser's vector given and none left out (the predecessor was merged
+  /// into the keyframe that covers it, which normalises in its place: slam/mapper.hpp).
+  [[nodiscard]] std::vector<LoopCandidate> candidates(KeyframeId query_id, const BowVector& bow,
+                                                      const BowVector& previous_bow, double min_eta) const {
+    return candidates(query_id, bow, previous_bow, min_eta, kNone);
+  }
 
  private:
   struct Posting {
@@ -65,6 +71,10 @@ class KeyframeDatabase {
     double weight;
   };
   void compact();
+  static constexpr std::uint32_t kNone = 0xffffffffU;
+  [[nodiscard]] std::vector<LoopCandidate> candidates(KeyframeId query_id, const BowVector& bow,
+                                                      const BowVector& previous_bow, double min_eta,
+                                                      std::uint32_t excluded) const;
 
   std::vector<KeyframeId> ids_;  // by position; removed ones stay until compact() (bows_ empty)
   std::vector<BowVector> bows_;

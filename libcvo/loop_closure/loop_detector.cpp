@@ -1,15 +1,38 @@
 #include "libcvo/loop_closure/loop_detector.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 namespace cvo::loop_closure {
+namespace {
+
+// γ's kernel, as the tracker's (keyframe_odometry.cpp): the CVO kernel with γ's looser signal.
+core::CvoParameters gamma_parameters(const LoopDetectorParameters& p) {
+  core::CvoParameters c = p.cvo;
+  c.sigma = p.keyframe_tracking.gamma_sigma;
+  return c;
+}
+
+}  // namespace
 
 LoopDetector::LoopDetector(Vocabulary vocabulary, const LoopDetectorParameters& parameters)
     : vocabulary_(std::move(vocabulary)),
       parameters_(parameters),
-      registration_(registration::Capacities{parameters.odometry.max_points}, parameters.cvo) {}
+      registration_(registration::Capacities{parameters.odometry.max_points}, parameters.cvo),
+      gamma_registration_(registration::Capacities{parameters.odometry.max_points, 0}, gamma_parameters(parameters)) {}
+
+double LoopDetector::coverage(std::int64_t covering, std::int64_t covered, const core::SE3& T) {
+  const auto& c = keyframes_.at(covering).cloud;
+  const auto& k = keyframes_.at(covered).cloud;
+  const double ell = parameters_.keyframe_tracking.gamma_ell;
+  const std::size_t stride = parameters_.keyframe_tracking.gamma_stride;
+  const double norms = gamma_registration_.inner_product(c, c, core::SE3(), ell, stride) *
+                       gamma_registration_.inner_product(k, k, core::SE3(), ell, stride);
+  if (!(norms > 0)) return 0;
+  return gamma_registration_.inner_product(c, k, T, ell, stride) / std::sqrt(norms);
+}
 
 std::vector<LoopClosure> LoopDetector::add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
                                                     const registration::PointCloud& cloud, const core::SE3& pose) {
@@ -31,21 +54,24 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
   BowVector bow = vocabulary_.transform(features.descriptors);
 
   std::vector<LoopClosure> loops;
-  if (placement.previous && database_.contains(*placement.previous)) {
-    const auto candidates = database_.candidates(id, bow, *placement.previous, parameters_.loop.similarity_threshold);
-    const int max_refinements = parameters_.verification.max_refinements;
-    int refinements = 0;
-    for (const auto& c : candidates) {  // best η first
-      if (placement.candidates_below && c.id >= *placement.candidates_below) continue;
-      if (max_refinements > 0 && refinements == max_refinements) break;
-      auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
-      if (v.refinement.iterations > 0) ++refinements;
-      v.attempt.eta = c.eta;
-      attempts_.push_back(v.attempt);
-      if (v.closure) {
-        v.closure->eta = c.eta;
-        loops.push_back(*v.closure);
-      }
+  std::vector<LoopCandidate> candidates;
+  const double eta = parameters_.loop.similarity_threshold;
+  if (placement.previous && database_.contains(*placement.previous))
+    candidates = placement.previous_is_candidate
+                     ? database_.candidates(id, bow, database_.bow(*placement.previous), eta)
+                     : database_.candidates(id, bow, *placement.previous, eta);
+  const int max_refinements = parameters_.verification.max_refinements;
+  int refinements = 0;
+  for (const auto& c : candidates) {  // best η first
+    if (placement.candidates_below && c.id >= *placement.candidates_below) continue;
+    if (max_refinements > 0 && refinements == max_refinements) break;
+    auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
+    if (v.refinement.iterations > 0) ++refinements;
+    v.attempt.eta = c.eta;
+    attempts_.push_back(v.attempt);
+    if (v.closure) {
+      v.closure->eta = c.eta;
+      loops.push_back(*v.closure);
     }
   }
   database_.add(id, std::move(bow));

@@ -15,6 +15,12 @@
 // candidates past η, verifying all of them would cost far more than the recording lasts while
 // the best few find the same loops (the figures: bench/odometry-tuning.md).
 // Candidates refused at steps 1-2 are cheap and do not count.
+// What bounds a query: step 1 visits only the inverted-file postings of the new keyframe's words
+// (keyframe_database.hpp), and step 2 runs on the candidates past η, so both grow with the keyframes
+// the database holds; revisits merge their keyframes into those that cover them (slam/mapper.hpp),
+// which leave the database, so it holds the area explored rather than the time spent, and step 3,
+// CVO, the cost that matters, runs at most max_refinements times whatever the database holds. No
+// cap on steps 1-2 beyond that is set (one would be a new tunable).
 // Steps 2-4, the exact directions of the transforms, the length-scale of the α inner products and
 // why the CVO Hessian is the edge's information as it comes: loop_verification.hpp.
 //
@@ -54,6 +60,9 @@ struct KeyframePlacement {
   core::SE3 pose;
   std::int64_t piece = 0;
   std::optional<std::int64_t> candidates_below = std::nullopt;
+  // `previous` is the keyframe the predecessor was merged into (slam/mapper.hpp): it normalises η
+  // in the predecessor's place, and is a candidate like any other (no odometry edge links it).
+  bool previous_is_candidate = false;
 };
 
 /// A keyframe's current estimate after an optimisation or a join of pieces.
@@ -85,6 +94,17 @@ class LoopDetector {
   /// cloud are freed. Throws std::out_of_range when it is not stored.
   void remove_keyframe(std::int64_t id);
 
+  /// How well stored keyframe `covering` would serve as the keyframe of stored keyframe `covered`
+  /// seen from it at `T` (T_covering^covered, a verified loop's measurement): the tracker's γ
+  /// (eq. 9) with its kernel (keyframe_tracking's γ ℓ, σ, stride), the inner product
+  /// <f_Xc, T.f_Xk> normalised by the RKHS norms, √(<f_Xc, f_Xc> <f_Xk, f_Xk>), instead of by the
+  /// tracker's reference (the keyframe against its next frame, which the back end never sees).
+  /// By Cauchy-Schwarz it is at most 1, and 1 only for the same view; against the frame after it a
+  /// keyframe scores below its self product, so this γ is the stricter of the two: a keyframe it
+  /// calls covered, the tracker would have kept tracking from c. Throws std::out_of_range for an
+  /// id not stored.
+  double coverage(std::int64_t covering, std::int64_t covered, const core::SE3& T);
+
   /// New global estimates after an optimisation (used for T_rel in the α test). Ids that are not
   /// stored keyframes (e.g. ordinary frames of the graph) are ignored.
   void update_poses(const std::map<std::int64_t, core::SE3>& poses);
@@ -92,6 +112,7 @@ class LoopDetector {
 
   [[nodiscard]] const std::vector<LoopAttempt>& last_attempts() const { return attempts_; }
   [[nodiscard]] std::size_t size() const { return keyframes_.size(); }
+  [[nodiscard]] bool contains(std::int64_t id) const { return keyframes_.contains(id); }
   [[nodiscard]] const LoopDetectorParameters& parameters() const { return parameters_; }
 
  private:
@@ -99,6 +120,7 @@ class LoopDetector {
   LoopDetectorParameters parameters_;
   KeyframeDatabase database_;
   registration::Registration registration_;
+  registration::Registration gamma_registration_;   // γ's kernel (coverage)
   std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
   std::optional<std::int64_t> previous_;            // the last keyframe added
   std::vector<LoopAttempt> attempts_;

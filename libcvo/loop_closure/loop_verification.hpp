@@ -69,6 +69,10 @@ struct LoopDetectorParameters {
   core::CvoParameters cvo;                        // of the refinement
   core::SelectionParameters selection;            // min_depth_m / max_depth_m: the keypoints' depth range
   core::OdometryParameters odometry;              // max_points: capacity of the stored clouds
+  // The tracker's keyframe test, for a revisit's coverage (loop_detector.hpp: coverage()):
+  // γ_thres, and γ's kernel (its length-scale, signal, stride).
+  core::KeyframeParameters keyframe;
+  core::KeyframeTrackingParameters keyframe_tracking;
 };
 
 /// An accepted loop: an edge of the keyframe pose graph, in posegraph::Edge's convention.

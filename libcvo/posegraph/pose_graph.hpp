@@ -7,6 +7,7 @@
 // equal to log(E) to first order (residual.hpp says why not log(E) itself), and its information matrix Omega (6x6,
 // symmetric positive semi-definite) is in that same order. The cost of the graph is  F = 1/2 sum_edges rho(e^T Omega e)
 // with rho the identity, or the Cauchy kernel on edges marked robust (see cost.hpp).
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <vector>
@@ -41,6 +42,13 @@ class PoseGraph {
 
   void set_pose(NodeId id, const core::SE3& pose);  // throws std::out_of_range for an unknown id
   void set_fixed(NodeId id, bool fixed);            // throws std::out_of_range for an unknown id
+  /// Removes a node and every edge that touches it, returned in their order (a keyframe merged into
+  /// another, slam/keyframe_merge.hpp). Throws std::out_of_range for an unknown id.
+  std::vector<Edge> remove_node(NodeId id);
+  /// The index in edges() of an edge between a and b in either direction; edges().size() if none.
+  [[nodiscard]] std::size_t edge_between(NodeId a, NodeId b) const;
+  /// Replaces edge `index` by one between the same two nodes (checked as add_edge does).
+  void replace_edge(std::size_t index, const Edge& edge);
 
   [[nodiscard]] bool contains(NodeId id) const { return nodes_.contains(id); }
   [[nodiscard]] const Node& node(NodeId id) const { return nodes_.at(id); }

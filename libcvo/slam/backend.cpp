@@ -67,17 +67,17 @@ bool Backend::placed(core::SessionId session) const { return !order_.empty() && 
 // keyframe anchors its piece at its tracker pose; a restart's keyframe is bridged from the end of
 // the session's previous graph.
 void Backend::join_keyframe(SessionState& session, NodeId keyframe, const LocalFrame& first) {
-  if (keyframes_.contains(keyframe)) return;
+  if (holds(keyframe)) return;
   if (!session.last_node) {
     keyframes_.add_node(keyframe, first.odometry, /*fixed=*/true);
     session.anchor = keyframe;
     return;
   }
   const core::SE3 guess = session.last_odometry.inverse() * first.odometry;  // the tracker's prediction
-  keyframes_.add_node(keyframe, keyframes_.node(*session.last_node).pose * guess);
+  keyframes_.add_node(keyframe, pose_of(*session.last_node) * guess);
   const posegraph::Edge bridge{*session.last_node, keyframe, guess,
                                parameters_.bridge_information * core::Matrix6d::Identity(), false};
-  keyframes_.add_edge(bridge);
+  add_graph_edge(bridge);
   bridges_.push_back(bridge);
 }
 
@@ -108,9 +108,9 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
 
   // The keyframe→next-keyframe edge (see the header).
   const LocalFrame& last = solution.frames.back();
-  if (solution.frames.size() > 1 && !keyframes_.contains(last.id)) {
-    keyframes_.add_node(last.id, keyframes_.node(keyframe_id).pose * last.relative);
-    keyframes_.add_edge({keyframe_id, last.id, last.relative, information_into(solution, keyframe_id, last.id), false});
+  if (solution.frames.size() > 1 && !holds(last.id)) {
+    keyframes_.add_node(last.id, pose_of(keyframe_id) * last.relative);
+    add_graph_edge({keyframe_id, last.id, last.relative, information_into(solution, keyframe_id, last.id), false});
     session_of_node_.emplace(last.id, session_id);
   }
   session.last_node = last.id;
@@ -129,13 +129,13 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
 }
 
 bool Backend::insert_loop(const loop_closure::LoopClosure& loop) {
-  if (!keyframes_.contains(loop.from) || !keyframes_.contains(loop.to)) return false;
+  if (!holds(loop.from) || !holds(loop.to)) return false;
   if (piece(session_of(loop.from)) != piece(session_of(loop.to))) join_pieces(loop);
   // The detector's information is the residual's already (see the header): no conversion.
   const posegraph::Edge edge{loop.from, loop.to, loop.measurement,
                              0.5 * (loop.information + loop.information.transpose()),
                              /*robust=*/true};
-  keyframes_.add_edge(edge);
+  add_graph_edge(edge);
   loops_.push_back({loop, edge});
   ++unoptimised_loops_;
   return true;
@@ -146,8 +146,8 @@ void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
   const core::SessionId a = piece(session_of(loop.from)), b = piece(session_of(loop.to));
   const bool move_to_side = sessions_.at(b).ordinal > sessions_.at(a).ordinal;
   const core::SessionId keep = move_to_side ? a : b, moved = move_to_side ? b : a;
-  const core::SE3& from = keyframes_.node(loop.from).pose;
-  const core::SE3& to = keyframes_.node(loop.to).pose;
+  const core::SE3 from = pose_of(loop.from);
+  const core::SE3 to = pose_of(loop.to);
   const core::SE3 move =
       move_to_side ? from * loop.measurement * to.inverse() : to * loop.measurement.inverse() * from.inverse();
   for (const auto& [id, node] : std::map<NodeId, posegraph::Node>(keyframes_.nodes()))
@@ -224,12 +224,14 @@ posegraph::OptimizationReport Backend::optimise_all(double max_seconds) {
     for (const auto& e : g.solution.edges) all.add_edge(e);
   for (const auto& e : bridges_) all.add_edge(e);
   for (const auto& l : loops_) all.add_edge(l.edge);
+  add_alias_edges(all);
   if (all.nodes().size() < 2) return {};
 
   auto options = optimizer_options();
   options.max_seconds = max_seconds;
   auto report = posegraph::optimize(all, options);
   for (const auto& [id, node] : keyframes_.nodes()) keyframes_.set_pose(id, all.node(id).pose);
+  follow_aliases(all);
   for (auto& g : graphs_) {
     const core::SE3 keyframe_inverse = all.node(g.keyframe).pose.inverse();
     for (auto& f : g.solution.frames) f.relative = keyframe_inverse * all.node(f.id).pose;
@@ -242,9 +244,9 @@ std::map<NodeId, core::StampedPose> Backend::frame_poses(std::optional<core::Ses
   std::map<NodeId, core::StampedPose> poses;
   for (const auto& g : graphs_) {
     if (session && g.session != *session) continue;
-    const core::SE3& keyframe = keyframes_.node(g.keyframe).pose;
+    const core::SE3 keyframe = pose_of(g.keyframe);
     for (const auto& f : g.solution.frames)
-      poses[f.id] = {f.timestamp, keyframes_.contains(f.id) ? keyframes_.node(f.id).pose : keyframe * f.relative};
+      poses[f.id] = {f.timestamp, holds(f.id) ? pose_of(f.id) : keyframe * f.relative};
   }
   return poses;
 }
@@ -272,7 +274,7 @@ core::Trajectory Backend::frame_trajectory(core::SessionId session) const {
 core::SE3 Backend::odometry_correction(core::SessionId session) const {
   const auto it = sessions_.find(session);
   if (it == sessions_.end() || !it->second.last_node) return {};
-  return keyframes_.node(*it->second.last_node).pose * it->second.last_odometry.inverse();
+  return pose_of(*it->second.last_node) * it->second.last_odometry.inverse();
 }
 
 std::optional<NodeId> Backend::last_node(core::SessionId session) const {
@@ -289,7 +291,8 @@ std::vector<LoopState> Backend::loops() const {
   std::vector<LoopState> states;
   states.reserve(loops_.size());
   for (const auto& l : loops_) {
-    const double chi2 = posegraph::edge_chi2(keyframes_, l.edge);
+    const posegraph::Edge edge = resolved(l.edge);
+    const double chi2 = edge.from == edge.to ? 0.0 : posegraph::edge_chi2(keyframes_, edge);
     states.push_back({l.loop, chi2, kernel.weight(chi2, true)});
   }
   return states;

@@ -53,6 +53,16 @@
 // piece (the map, when either was). Every optimisation holds each piece's anchor, so pieces that
 // share no loop stay well-posed side by side.
 //
+// Merged keyframes (backend_merge.cpp, keyframe_merge.hpp has the algebra; slam/mapper.hpp decides
+// when): merge_keyframe(k, c, T) takes keyframe k out of the keyframe graph; it is an alias of c
+// with X_k = X_c · T from then on. Its edges, and every later edge naming it (a local graph that
+// starts or ends at k, a restart's bridge, a loop), are re-expressed as edges of c, and an edge
+// between two nodes that already have one (same kind: plain or robust) is fused into it, so the
+// keyframe graph grows with the area a revisit covers, not with the time spent there. The final
+// global optimisation has every frame as a node, k included: there k is held to c by a robust edge
+// with the loop's information, and T follows its solution. The local graphs themselves (the frames)
+// are kept whole: they still grow with the time.
+//
 // A frame's pose is its keyframe's optimised pose ∘ its locally optimised pose relative to that
 // keyframe (after optimise_all: the global solution); a keyframe-graph node's is its own. Node ids
 // are the caller's (the mapper's per-session frame numbering); within a session they increase along
@@ -73,6 +83,7 @@
 #include "libcvo/posegraph/incremental_optimizer.hpp"
 #include "libcvo/posegraph/optimizer.hpp"
 #include "libcvo/posegraph/pose_graph.hpp"
+#include "libcvo/slam/keyframe_merge.hpp"
 #include "libcvo/slam/local_optimisation.hpp"
 
 namespace cvo::slam {
@@ -155,6 +166,24 @@ class Backend {
   [[nodiscard]] std::size_t unoptimised_loops() const { return unoptimised_loops_; }
 
   [[nodiscard]] const posegraph::PoseGraph& keyframe_graph() const { return keyframes_; }
+
+  /// Merges keyframe-graph node `alias` into node `covering` (see the header): T = T_covering^alias,
+  /// `information` that of the loop that measured it. Throws std::invalid_argument when `covering`
+  /// is not a node of the graph (an alias included), `alias` is not a node or is fixed (a piece's
+  /// anchor), or they are one node.
+  void merge_keyframe(posegraph::NodeId alias, posegraph::NodeId covering, const core::SE3& T,
+                      const core::Matrix6d& information);
+  /// A node of the keyframe graph or an alias of one.
+  [[nodiscard]] bool holds(posegraph::NodeId node) const {
+    return keyframes_.contains(node) || aliases_.contains(node);
+  }
+  /// The keyframe-graph node a held node is (itself, or the one it was merged into).
+  [[nodiscard]] posegraph::NodeId resolve(posegraph::NodeId node) const;
+  /// T_piece_node of a held node (an alias: its covering node's pose · T). std::out_of_range if not held.
+  [[nodiscard]] core::SE3 pose_of(posegraph::NodeId node) const;
+  /// Keyframes merged so far.
+  [[nodiscard]] std::size_t merged_keyframes() const { return aliases_.size(); }
+  [[nodiscard]] bool merged(posegraph::NodeId node) const { return aliases_.contains(node); }
   [[nodiscard]] std::size_t local_graphs() const { return graphs_.size(); }
   /// Increases whenever a pose keyframe_poses() or frame_trajectory() returns may have changed.
   [[nodiscard]] std::uint64_t revision() const { return revision_; }
@@ -184,6 +213,12 @@ class Backend {
   void join_keyframe(SessionState& session, posegraph::NodeId keyframe, const LocalFrame& first);
   bool insert_loop(const loop_closure::LoopClosure& loop);
   void join_pieces(const loop_closure::LoopClosure& loop);
+  // An edge of the keyframe graph, its ends resolved through aliases, fused into an existing one
+  // of its kind between the same nodes, dropped when both ends are one node.
+  void add_graph_edge(const posegraph::Edge& edge);
+  [[nodiscard]] posegraph::Edge resolved(const posegraph::Edge& edge) const;
+  void add_alias_edges(posegraph::PoseGraph& all) const;
+  void follow_aliases(const posegraph::PoseGraph& all);
 
   BackendParameters parameters_;
   posegraph::PoseGraph keyframes_;
@@ -201,6 +236,11 @@ class Backend {
   std::vector<core::SessionId> order_;
   std::map<posegraph::NodeId, core::SessionId> session_of_node_;  // keyframe-graph nodes
   std::uint64_t revision_ = 0;
+  struct StoredAlias {
+    KeyframeAlias alias;
+    core::Matrix6d information = core::Matrix6d::Identity();
+  };
+  std::map<posegraph::NodeId, StoredAlias> aliases_;  // by alias node
 };
 
 }  // namespace cvo::slam

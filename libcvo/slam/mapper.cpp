@@ -93,9 +93,12 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   const posegraph::NodeId id = node(s, frame);
   loop_closure::KeyframePlacement placement{id, std::nullopt, {}, backend_.piece(k.session), std::nullopt};
   if (const auto after = s.keyframes.upper_bound(k.id); after != s.keyframes.begin())
-    placement.previous = node(s, std::prev(after)->second.frame);  // η's normaliser: its predecessor
-  const auto& graph = backend_.keyframe_graph();
-  placement.pose = graph.contains(id) ? graph.node(id).pose : backend_.odometry_correction(k.session) * k.odometry;
+    placement.previous = node(s, std::prev(after)->second.frame);    // η's normaliser: its predecessor
+  if (placement.previous && backend_.merged(*placement.previous)) {  // or the keyframe covering it
+    placement.previous = backend_.resolve(*placement.previous);
+    placement.previous_is_candidate = true;
+  }
+  placement.pose = backend_.holds(id) ? backend_.pose_of(id) : backend_.odometry_correction(k.session) * k.odometry;
 
   std::vector<loop_closure::LoopClosure> loops;
   try {
@@ -110,17 +113,53 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   KeyframeOutcome outcome;
   outcome.loops_tried = detector_.last_attempts().size();
   loops_tried_ += outcome.loops_tried;
-  for (const auto& loop : loops) {
-    backend_.add_loop(loop);
-    loops_.push_back(loop);
-    outcome.loops.push_back(describe(loop));
-    if (const MapLoop& m = outcome.loops.back(); m.from_session != m.to_session)
-      for (const core::SessionId end : {m.from_session, m.to_session})
-        sessions_.at(end).loops.push_back(loops_.size() - 1);
+  std::vector<bool> entered(loops.size(), false);
+  std::vector<loop_closure::LoopClosure> joining;
+  // Loops that join pieces first: then the keyframe is in the map and may be merged (see the header).
+  for (std::size_t i = 0; i < loops.size(); ++i)
+    if (backend_.holds(loops[i].from) &&
+        backend_.piece(backend_.session_of(backend_.resolve(loops[i].from))) != backend_.piece(k.session)) {
+      enter_loop(s, loops[i], k.frame.timestamp, outcome);
+      joining.push_back(loops[i]);
+      entered[i] = true;
+    }
+  const auto covering = covering_loop(loops, entered, id, k.session);
+  if (covering) {
+    const auto& loop = loops[covering->first];
+    const auto& [covering_session, covering_id] = keyframe_of_node_.at(loop.from);
+    outcome.merge = KeyframeMerge{k.session,
+                                  k.id,
+                                  frame,
+                                  k.frame.timestamp,
+                                  k.odometry,
+                                  covering_session,
+                                  covering_id,
+                                  loop.measurement,
+                                  loop.information,
+                                  covering->second,
+                                  std::move(joining),
+                                  {}};
+    merge(*outcome.merge, id, loop.from);
+    entered[covering->first] = true;  // the alias holds it
     s.last_match_time = k.frame.timestamp;
   }
+  for (std::size_t i = 0; i < loops.size(); ++i)
+    if (!entered[i]) {
+      enter_loop(s, loops[i], k.frame.timestamp, outcome);
+      if (outcome.merge) outcome.merge->others.push_back(loops[i]);
+    }
   outcome.joined = after_change();
   return outcome;
+}
+
+void Mapper::enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome) {
+  backend_.add_loop(loop);
+  loops_.push_back(loop);
+  outcome.loops.push_back(describe(loop));
+  if (const MapLoop& m = outcome.loops.back(); m.from_session != m.to_session)
+    for (const core::SessionId end : {m.from_session, m.to_session})
+      sessions_.at(end).loops.push_back(loops_.size() - 1);
+  s.last_match_time = time;
 }
 
 std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
@@ -208,8 +247,10 @@ std::vector<posegraph::NodeId> Mapper::covariance_nodes() const {
   std::vector<posegraph::NodeId> nodes;
   for (const auto& [id, s] : sessions_) {
     if (const auto newest = newest_in_graph(s)) nodes.push_back(newest->second);
-    if (const auto last = backend_.last_node(id); last && (nodes.empty() || nodes.back() != *last))
-      nodes.push_back(*last);
+    if (auto last = backend_.last_node(id)) {
+      last = backend_.resolve(*last);
+      if (nodes.empty() || nodes.back() != *last) nodes.push_back(*last);
+    }
   }
   return nodes;
 }
@@ -258,6 +299,7 @@ Map Mapper::map() const {
     map.sessions.push_back(describe(id, s));
     const core::SE3& correction = map.sessions.back().correction;
     for (const auto& [keyframe, record] : s.keyframes) {
+      if (record.merged) continue;  // the map follows the area (see the header)
       // A keyframe whose local graph has not closed yet follows its session's newest correction.
       const auto it = poses.find(node(s, record.frame));
       map.keyframes.push_back(
@@ -285,15 +327,14 @@ SessionCorrection Mapper::correction(core::SessionId id, std::size_t max_loops) 
   SessionCorrection c{revision(), session(id), {}};
   const auto it = sessions_.find(id);
   if (it == sessions_.end()) return c;
-  const auto& graph = backend_.keyframe_graph();
   for (auto i = it->second.loops.rbegin(); i != it->second.loops.rend() && c.loops.size() < max_loops; ++i) {
     const loop_closure::LoopClosure& loop = loops_[*i];
-    if (!graph.contains(loop.from) || !graph.contains(loop.to)) continue;  // waiting: not in the map yet
+    if (!backend_.holds(loop.from) || !backend_.holds(loop.to)) continue;  // waiting: not in the map yet
     const MapLoop m = describe(loop);
     const bool from_own = m.from_session == id;
     c.loops.push_back({from_own ? m.from_id : m.to_id, from_own ? m.to_session : m.from_session,
                        from_own ? m.to_id : m.from_id, from_own ? loop.measurement : loop.measurement.inverse(),
-                       graph.node(from_own ? loop.to : loop.from).pose});
+                       backend_.pose_of(from_own ? loop.to : loop.from)});
   }
   return c;
 }

@@ -53,6 +53,23 @@
 // last_match_time is the sensor time of the session's newest keyframe with a verified loop to the
 // map (to another session, for a mapped one; the first session's newest keyframe: it is the map).
 //
+// Revisits (issue #27 item 3; ORB-SLAM culls redundant keyframes, RTAB-Map bounds its working
+// memory): a new keyframe k of a session already in the piece of an earlier keyframe c is covered by c
+// when a verified loop c → k (bag of words, RANSAC, CVO, α: nothing new) shows that c would still
+// serve as k's keyframe: the tracker's own keyframe test γ (eq. 9) of k's cloud against c's at the
+// loop's pose is at or above the tracker's threshold γ_thres (keyframe.inner_product_ratio_threshold,
+// the same key; LoopDetector::coverage says how γ is normalised here). Of several such loops the
+// best γ wins. k is then merged into c (Backend::merge_keyframe): an alias X_k = X_c · T_c^k, not a
+// node of the keyframe graph, its edges moved onto c and fused with c's (keyframe_merge.hpp), its
+// other loops kept as loops of c; the loop detector forgets it (its cloud, features and bag of
+// words freed; its successor's η is normalised by c's vector instead, c then a candidate too: the
+// same with or without k's images, so a store's merge record replays to the same map). Its pose stays X_c · T_c^k for
+// correction() and the session's correction, and map() leaves it out: the map's keyframes follow the area. Only a
+// keyframe already in the graph (its predecessor's local graph closed: cvo-run and the tracker send
+// that graph first) and not its piece's anchor is merged. A wrong loop passes α rarely; a merge
+// holds k rigidly to c in the keyframe graph, and the final optimisation relaxes it as a robust
+// edge (backend.hpp).
+//
 // Everything that cannot be applied throws MapperError before anything changed, with a message
 // naming the session and keyframe; the mapper stays usable.
 #include <cstddef>
@@ -155,12 +172,30 @@ struct Map {
   std::vector<MapLoop> loops;          // in the order accepted
 };
 
+/// A keyframe merged into the earlier keyframe that covers it (see the header).
+struct KeyframeMerge {
+  core::SessionId session = 0;
+  std::int64_t id = 0;
+  std::int64_t frame = 0;  // the merged keyframe's frame index, colour time and odometry pose, so a
+  double timestamp = 0;    // store can replay the merge without the keyframe's record
+  core::SE3 odometry;
+  core::SessionId covering_session = 0;
+  std::int64_t covering_id = 0;
+  core::SE3 relative;                                       // T_covering^id, the loop's measurement
+  core::Matrix6d information = core::Matrix6d::Identity();  // the loop's
+  double gamma = 0;                                         // its coverage γ
+  // The keyframe's other verified loops, in the order entered: those that joined its session's
+  // piece to the covering keyframe's (before the merge), and the rest (after it, as loops of c).
+  std::vector<loop_closure::LoopClosure> joining, others;
+};
+
 /// What one add_keyframe did.
 struct KeyframeOutcome {
   bool duplicate = false;               // the same keyframe again: nothing done
   std::size_t loops_tried = 0;          // candidates verified
   std::vector<MapLoop> loops;           // accepted
   std::vector<core::SessionId> joined;  // sessions placed in the map by it
+  std::optional<KeyframeMerge> merge;   // it was merged (see the header); its loop is not in `loops`
 };
 
 class Mapper {
@@ -212,6 +247,15 @@ class Mapper {
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
   [[nodiscard]] std::size_t loops_accepted() const { return loops_.size(); }
+  /// Keyframes merged into ones that cover them (see the header).
+  [[nodiscard]] std::size_t merged_keyframes() const { return backend_.merged_keyframes(); }
+  /// Applies a merge add_keyframe made before (a store's record): when keyframe (session, id) is
+  /// known and merged so already, nothing (false); known and not merged, it is merged; not known
+  /// (its record compacted away), it is registered from the merge alone, without images or loop
+  /// detection, its other loops entered as add_keyframe entered them (then optimised likewise). Its frame must then be
+  /// in the keyframe graph (the local graph ending at it applied) and free, the covering keyframe known and in the
+  /// graph. Throws MapperError otherwise, nothing changed.
+  bool apply_merge(const KeyframeMerge& merge);
   /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
   [[nodiscard]] std::size_t window_keyframes() const;
 
@@ -223,6 +267,7 @@ class Mapper {
     std::int64_t frame = 0;  // index in its session
     double timestamp = 0;
     core::SE3 odometry;
+    bool merged = false;  // into a keyframe that covers it (see the header)
   };
   struct Session {
     std::int64_t ordinal = 0;
@@ -264,6 +309,13 @@ class Mapper {
   [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
   [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
   std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
+  // Of the new keyframe's loops not entered yet, the one to the keyframe that covers it best, if
+  // any (the header), with its γ.
+  std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
+                                                              const std::vector<bool>& entered,
+                                                              posegraph::NodeId keyframe, core::SessionId session);
+  void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
+  void enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome);
 
   loop_closure::LoopDetector detector_;
   Backend backend_;

@@ -119,6 +119,41 @@ TEST(KeyframeStore, RecordsSurviveAReopenInOrder) {
   expect_all_but(records, written, {});
 }
 
+// Records discarded as garbage (a merged keyframe's, issue #27 item 3) are compacted away once they
+// pass half of the file: the rest survive, in order, and the file holds only them.
+TEST(KeyframeStore, DiscardedRecordsAreCompactedAwayOnceTheyPassHalfTheFile) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  std::vector<StoredRecord> kept;
+  {
+    std::vector<StoredRecord> none;
+    std::string warning;
+    KeyframeStore store(file, none, warning);
+    std::vector<RecordRef> refs;
+    for (int i = 0; i < 6; ++i) {
+      RecordRef where;
+      const auto p = payload(1000, static_cast<std::uint8_t>(i));
+      ASSERT_EQ(store.append(RecordKind::kKeyframe, p, &where), Appended::kStored);
+      refs.push_back(where);
+      if (i % 3 == 2) kept.push_back({RecordKind::kKeyframe, p});
+    }
+    std::size_t compacted_at = 0;
+    for (const int i : {0, 1, 3, 4})
+      if (store.discard(refs[static_cast<std::size_t>(i)])) compacted_at = static_cast<std::size_t>(i);
+    EXPECT_EQ(compacted_at, 4u);  // 3 of 6 equal records are not half the file (its magic): the fourth is
+    EXPECT_EQ(store.compactions(), 1u);
+    EXPECT_EQ(store.records(), 2u);
+  }
+  std::string warning;
+  const auto records = reopen(file, warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(records[0].payload, kept[0].payload);
+  EXPECT_EQ(records[1].payload, kept[1].payload);
+  EXPECT_LT(fs::file_size(file), 2 * 1100u);
+  EXPECT_FALSE(fs::exists(file.string() + ".recovering"));
+}
+
 // What append() stored can be read back where it says, while the store is open (how the back end
 // takes a record that waited in the store); a place that holds no record it wrote, or a record
 // damaged since, is refused with a reason.

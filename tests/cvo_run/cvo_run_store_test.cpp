@@ -4,6 +4,7 @@
 // leaves it as it was; the same input writes the same bytes, and a store that exists already is not touched.
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -75,6 +76,38 @@ TEST(CvoRunStore, CvoMapReadsTheStoreOfATwoSessionRun) {
       << map.out;
   EXPECT_EQ(number_after(map.out, "map:"), keyframes) << map.out;
   EXPECT_NE(map.out.find("2 of 2 sessions in the map"), std::string::npos) << map.out << map.err;
+}
+
+// Five visits of the sample (issue #27 item 3): the revisits' keyframes are merged into the first
+// visit's, each merge a small record after the keyframe's, and the merged keyframes' records are
+// compacted away (keyframe_store.hpp): the store holds at most about twice its live records, and
+// cvo-map replays it, merged keyframes from their merge records alone, to the map cvo-run made.
+TEST(CvoRunStore, RevisitsAreMergedAndTheirKeyframeRecordsCompactedAway) {
+  const test::TempDir dir("cvo_run_store_revisits");
+  const auto store = dir.path() / "map.store";
+  const fs::path sample = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
+  const ToolRun r = slam_with_store({sample, sample, sample, sample, sample}, store, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const long keyframes = std::stol(json_value(r.out, "keyframes"));
+  const long merged = std::stol(json_value(r.out, "keyframes_merged"));
+  ASSERT_GT(merged, 0);
+
+  const auto scan = daemon::backendd::read_store(store).scan;
+  EXPECT_TRUE(scan.clean());
+  long keyframe_records = 0, merge_records = 0;
+  for (const auto& record : scan.records) {
+    keyframe_records += record.kind == RecordKind::kKeyframe;
+    merge_records += record.kind == RecordKind::kMerge;
+  }
+  EXPECT_EQ(merge_records, merged);
+  EXPECT_LT(keyframe_records, keyframes);  // some merged keyframes' records are gone
+  std::printf("5 visits: %ld keyframes, %ld merged, %ld keyframe records kept, store %zu bytes\n", keyframes, merged,
+              keyframe_records, static_cast<std::size_t>(fs::file_size(store)));
+
+  const ToolRun map = run_tool("cvo-map", quoted(store) + " --out " + quoted(dir.path() / "map"), dir.path());
+  ASSERT_EQ(map.exit_code, 0) << map.err;
+  EXPECT_NE(map.out.find("5 of 5 sessions in the map"), std::string::npos) << map.out << map.err;
+  EXPECT_EQ(map.err.find("not applied"), std::string::npos) << map.err;
 }
 
 // A local graph is stamped with its sensor time, not the wall clock's: a map made again is the same file.

@@ -346,6 +346,9 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
   auto& s = *report.slam;
   s.loops_accepted = mapper.loops_accepted();
   s.loops_tried = mapper.loops_tried();
+  s.keyframes_merged = mapper.merged_keyframes();
+  s.graph_nodes = mapper.backend().keyframe_graph().nodes().size();
+  s.graph_edges = mapper.backend().keyframe_graph().edges().size();
   s.backend_ms = pipeline.statistics().backend_ms;
   s.final_optimisation_ms = pipeline.statistics().final_ms;
   for (const auto& l : map.loops)

@@ -101,6 +101,8 @@ void print_text(std::FILE* out, const RunReport& r) {
         std::count_if(r.slam->loops.begin(), r.slam->loops.end(), [](const LoopEntry& l) { return l.weight < 0.1; });
     std::fprintf(out, "loops       %zu accepted of %zu tried, %td down-weighted (Cauchy weight < 0.1)\n",
                  r.slam->loops_accepted, r.slam->loops_tried, outliers);
+    std::fprintf(out, "graph       %zu keyframe-graph nodes, %zu edges, %zu keyframes merged into ones covering them\n",
+                 r.slam->graph_nodes, r.slam->graph_edges, r.slam->keyframes_merged);
     std::fprintf(
         out, "back end    %.0f ms in the run (local graphs, loop detection, keyframe optimisations), final %.0f ms\n",
         r.slam->backend_ms, r.slam->final_optimisation_ms);
@@ -181,6 +183,9 @@ program::Json to_json(const RunReport& r) {
   o["rpe_rot_deg_s"] = rpe([](const auto& p) { return p.rotation_deg.rmse; });
   o["loops_accepted"] = slam([](const auto& s) { return s.loops_accepted; });
   o["loops_tried"] = slam([](const auto& s) { return s.loops_tried; });
+  o["keyframes_merged"] = slam([](const auto& s) { return s.keyframes_merged; });
+  o["graph_nodes"] = slam([](const auto& s) { return s.graph_nodes; });
+  o["graph_edges"] = slam([](const auto& s) { return s.graph_edges; });
   o["loop_list"] = loop_list(r);
   o["sessions"] = session_list(r);
   o["backend_ms_total"] = slam([](const auto& s) { return s.backend_ms; });

@@ -63,7 +63,10 @@ struct StoreReport {
 
 struct SlamReport {
   std::size_t loops_accepted = 0;
-  std::size_t loops_tried = 0;                  // candidates verified (matches, RANSAC, CVO, α)
+  std::size_t loops_tried = 0;       // candidates verified (matches, RANSAC, CVO, α)
+  std::size_t keyframes_merged = 0;  // into earlier keyframes covering them (slam/mapper.hpp)
+  std::size_t graph_nodes = 0;       // of the keyframe graph, at the end
+  std::size_t graph_edges = 0;
   double backend_ms = 0;                        // local graphs, loop detection, keyframe optimisations
   double final_optimisation_ms = 0;             // the last local graph and the global optimisation
   std::optional<eval::AteResult> ate_odometry;  // of the tracker's poses, before the back end

@@ -49,7 +49,8 @@ odometry::TrackStep SlamPipeline::track(const core::RgbdFrame& frame) {
   if (const auto& g = step.closed_graph) add_local_graph(s.id, *g);
   if (const auto& k = step.new_keyframe) {
     to_store([&](StoreOutput& store) { store.keyframe(s.id, k->id, k->frame, k->pose, *k->cloud); });
-    mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
+    const auto outcome = mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
+    if (outcome.merge) to_store([&](StoreOutput& store) { store.merge(*outcome.merge); });
     if (mapping_)
       mapping_->add_keyframe({s.id, k->id}, k->frame, io::mean_specific_force(s.accelerometer, k->frame.timestamp));
   }

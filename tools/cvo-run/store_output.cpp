@@ -1,10 +1,12 @@
 #include "store_output.hpp"
+#include "daemon/backendd/merge_record.hpp"
 
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "daemon/backendd/keyframe_store.hpp"
+#include "daemon/backendd/merge_record.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -46,14 +48,16 @@ struct StoreOutput::State {
   std::unique_ptr<KeyframeStore> store;
 
   // Nothing is held in memory (no unsaved records): a record not written fails the run.
-  void append(RecordKind kind, const std::vector<std::uint8_t>& bytes) {
-    if (store->append(kind, bytes) != Appended::kStored)
+  daemon::backendd::RecordRef last_keyframe;  // the newest keyframe record: garbage once merged
+
+  void append(RecordKind kind, const std::vector<std::uint8_t>& bytes, daemon::backendd::RecordRef* where = nullptr) {
+    if (store->append(kind, bytes, where) != Appended::kStored)
       throw io::InputError(store->file(), "cannot write the keyframe store: " + describe(store->health()));
   }
 };
 
 StoreOutput::StoreOutput(const fs::path& file, const config::Config& config)
-    : state_(std::make_unique<State>(State{keyframe_encoding(config), create_store(file)})) {}
+    : state_(std::make_unique<State>(State{keyframe_encoding(config), create_store(file), {}})) {}
 
 StoreOutput::~StoreOutput() = default;
 
@@ -63,12 +67,17 @@ void StoreOutput::keyframe(core::SessionId session, std::int64_t id, const core:
   const auto message = lcm::to_message(lcm::Keyframe{session, id, frame, pose, cloud}, state_->encoding, &error);
   if (!message)
     throw io::InputError(state_->store->file(), "keyframe " + std::to_string(id) + " cannot be encoded: " + error);
-  state_->append(RecordKind::kKeyframe, lcm::encode(*message));
+  state_->append(RecordKind::kKeyframe, lcm::encode(*message), &state_->last_keyframe);
 }
 
 void StoreOutput::local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph) {
   const auto closed = static_cast<std::int64_t>(std::llround(graph.nodes().back().timestamp * 1e6));
   state_->append(RecordKind::kLocalGraph, lcm::encode(lcm::to_message(graph, session, keyframe_id, closed)));
+}
+
+void StoreOutput::merge(const slam::KeyframeMerge& merge) {
+  state_->append(RecordKind::kMerge, daemon::backendd::encode_merge(merge));
+  state_->store->discard(state_->last_keyframe);  // the merge follows its keyframe's record at once
 }
 
 std::uint64_t StoreOutput::records() const { return state_->store->records(); }

@@ -20,6 +20,7 @@
 #include "libcvo/core/session.hpp"
 #include "libcvo/odometry/local_graph.hpp"
 #include "libcvo/registration/point_cloud.hpp"
+#include "libcvo/slam/mapper.hpp"
 
 namespace cvo::tools {
 
@@ -36,6 +37,11 @@ class StoreOutput {
                 const registration::PointCloud& cloud);
   /// Appends the local graph's record (keyframe `keyframe_id` of `session`), as above.
   void local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
+
+  /// Appends the record of a merge the mapper made (daemon/backendd/merge_record.hpp), after the
+  /// keyframe's own record, as above; that record is garbage then, and the store compacts when
+  /// garbage passes half of it (keyframe_store.hpp).
+  void merge(const slam::KeyframeMerge& merge);
 
   [[nodiscard]] std::uint64_t records() const;
 

@@ -1,0 +1,49 @@
+#include "libcvo/slam/keyframe_merge.hpp"
+
+#include <stdexcept>
+
+namespace cvo::slam {
+namespace {
+
+core::Matrix6d moved(const core::Matrix6d& information, const core::SE3& by) {
+  const core::Matrix6d ad = by.adjoint();
+  const core::Matrix6d out = ad.transpose() * information * ad;
+  return 0.5 * (out + out.transpose());
+}
+
+}  // namespace
+
+posegraph::Edge reroute(const posegraph::Edge& edge, const KeyframeAlias& alias) {
+  posegraph::Edge out = edge;
+  if (edge.from == alias.alias) {
+    out.from = alias.covering;
+    out.measurement = alias.relative * out.measurement;
+  }
+  if (edge.to == alias.alias) {
+    const core::SE3 inverse = alias.relative.inverse();
+    out.to = alias.covering;
+    out.measurement = out.measurement * inverse;
+    out.information = moved(out.information, inverse);
+  }
+  return out;
+}
+
+posegraph::Edge reversed(const posegraph::Edge& edge) {
+  const core::SE3 inverse = edge.measurement.inverse();
+  return {edge.to, edge.from, inverse, moved(edge.information, inverse), edge.robust};
+}
+
+posegraph::Edge fused(const posegraph::Edge& existing, const posegraph::Edge& added) {
+  const bool same = added.from == existing.from && added.to == existing.to;
+  if (!same && !(added.from == existing.to && added.to == existing.from))
+    throw std::invalid_argument("fused: the edges join other nodes");
+  const posegraph::Edge a = same ? added : reversed(added);
+  const core::Matrix6d sum = existing.information + a.information;
+  const core::Vector6d delta = (existing.measurement.inverse() * a.measurement).log();
+  posegraph::Edge out = existing;
+  out.measurement = existing.measurement * core::SE3::exp(sum.ldlt().solve(a.information * delta));
+  out.information = sum;
+  return out;
+}
+
+}  // namespace cvo::slam

@@ -1,0 +1,37 @@
+#pragma once
+// The edge algebra of merging a keyframe k into a keyframe c that covers its view (issue #27 item 3,
+// slam/mapper.hpp says when): k stops being a node and becomes an alias, X_k = X_c · T with
+// T = T_c^k fixed (the verified loop's measurement), and its edges become edges of c.
+//
+// posegraph's residual of an edge (i, j) with measurement Z is e = log(Z⁻¹ X_i⁻¹ X_j) (to first order).
+//   leaving k, (k, j):   Z' = T · Z. Then Z⁻¹ X_k⁻¹ X_j = Z'⁻¹ X_c⁻¹ X_j: the same residual, Ω' = Ω.
+//   arriving, (i, k):    Z' = Z · T⁻¹. Then Z⁻¹ X_i⁻¹ X_c T = T⁻¹ exp(e') T = exp(Ad(T⁻¹) e'),
+//                        so e = Ad(T⁻¹) e' and Ω' = Ad(T⁻¹)ᵀ Ω Ad(T⁻¹): the same cost, moved.
+//   reversed, (j, i):    Z' = Z⁻¹, e = -Ad(Z⁻¹) e', Ω' = Ad(Z⁻¹)ᵀ Ω Ad(Z⁻¹).
+// Each is exact for the quadratic cost to first order; nothing is lost but k's own degrees of freedom.
+//
+// Fusion: two edges between the same nodes (a revisit's k→k' on top of the first visit's c→c') are
+// two measurements of one relative pose: in the tangent space at the existing one Z₀,
+// δ = log(Z₀⁻¹ Z₁), the information-weighted mean is Z = Z₀ · exp((Ω₀ + Ω₁)⁻¹ Ω₁ δ) and its
+// information Ω₀ + Ω₁ (the sum of the two quadratics to first order). So the graph keeps one edge per
+// pair of nodes it ever linked: its size follows the area, not the time spent in it.
+#include "libcvo/core/se3.hpp"
+#include "libcvo/posegraph/pose_graph.hpp"
+
+namespace cvo::slam {
+
+/// Keyframe `alias` is `covering` · relative (T_covering^alias).
+struct KeyframeAlias {
+  posegraph::NodeId alias = 0;
+  posegraph::NodeId covering = 0;
+  core::SE3 relative;
+};
+
+/// `edge` with the alias's end moved onto the covering keyframe (unchanged if it has no such end).
+[[nodiscard]] posegraph::Edge reroute(const posegraph::Edge& edge, const KeyframeAlias& alias);
+/// The same constraint as an edge to → from.
+[[nodiscard]] posegraph::Edge reversed(const posegraph::Edge& edge);
+/// `added` fused into `existing` (same nodes, either direction): the result runs as `existing` does.
+[[nodiscard]] posegraph::Edge fused(const posegraph::Edge& existing, const posegraph::Edge& added);
+
+}  // namespace cvo::slam
