@@ -68,10 +68,7 @@ struct Heard {
   std::vector<std::uint8_t> newest_keyframe;  // the bytes of the newest CVO_KEYFRAME heard
 
   [[nodiscard]] bool map_holds_every_keyframe() const {
-    if (!map || keyframes.empty()) return false;
-    std::set<std::pair<std::int64_t, std::int64_t>> in_map;
-    for (const auto& k : map->keyframes) in_map.emplace(k.session, k.id);
-    return std::includes(in_map.begin(), in_map.end(), keyframes.begin(), keyframes.end());
+    return map && !keyframes.empty() && testing::map_holds(*map, keyframes);
   }
 };
 

@@ -40,6 +40,27 @@ using KeyframeName = std::pair<std::int64_t, std::int64_t>;  // (session, id)
 
 inline constexpr const char* kUrl = kPrivateLcmUrl;
 
+/// `map` holds every keyframe of `names`: each session's entry counts at least its names
+/// (map_session_t.keyframes: what the back end holds of it, keyframes merged into earlier ones
+/// included, which the map's keyframe list leaves out: slam/mapper.hpp, revisits), and the names
+/// not in the keyframe list are at most those merged: what the entry counts beyond the list.
+inline bool map_holds(const cvo_lcm::map_t& map, const std::set<KeyframeName>& names) {
+  std::map<std::int64_t, std::size_t> named, listed, in_list;
+  for (const auto& n : names) ++named[n.first];
+  for (const auto& k : map.keyframes) {
+    ++in_list[k.session];
+    listed[k.session] += names.count({k.session, k.id});
+  }
+  for (const auto& [session, count] : named) {
+    const auto entry = std::find_if(map.sessions.begin(), map.sessions.end(),
+                                    [&](const cvo_lcm::map_session_t& e) { return e.session == session; });
+    if (entry == map.sessions.end()) return false;
+    const auto held = static_cast<std::size_t>(std::max(0, entry->keyframes));
+    if (held < count || held < in_list[session] || held - in_list[session] < count - listed[session]) return false;
+  }
+  return true;
+}
+
 struct Captured {
   std::optional<cvo_lcm::map_t> map;                // the last CVO_MAP
   std::vector<cvo_lcm::status_t> backend_statuses;  // cvo-backendd's CVO_STATUS, in order
@@ -48,14 +69,9 @@ struct Captured {
   // CVO_POSE: each session's states as they changed (pose_t STATE_*), sessions in the order seen.
   std::vector<std::pair<std::int64_t, std::vector<std::int8_t>>> state_changes;
 
-  /// The last map holds every keyframe of `names`.
+  /// The last map holds every keyframe of `names` (cvo::testing::map_holds).
   [[nodiscard]] bool map_holds(const std::set<KeyframeName>& names) const {
-    if (!map) return names.empty();
-    std::set<KeyframeName> in_map;
-    for (const auto& k : map->keyframes) in_map.emplace(k.session, k.id);
-    for (const auto& n : names)
-      if (!in_map.count(n)) return false;
-    return true;
+    return map ? testing::map_holds(*map, names) : names.empty();
   }
   [[nodiscard]] std::set<KeyframeName> keyframes_of(std::int64_t session) const {
     std::set<KeyframeName> out;

@@ -47,7 +47,7 @@ consteval std::size_t member_count() {
 template <class S>
 auto member_types(const S& s) {
   constexpr std::size_t n = member_count<S>();
-  static_assert(n >= 1 && n <= 7, "member_types: add a case");
+  static_assert(n >= 1 && n <= 8, "member_types: add a case");
 #define CVO_T(x) std::remove_cvref_t<decltype(x)>
   if constexpr (n == 1) {
     const auto& [a] = s;
@@ -67,9 +67,12 @@ auto member_types(const S& s) {
   } else if constexpr (n == 6) {
     const auto& [a, b, c, d, e, f] = s;
     return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d), CVO_T(e), CVO_T(f)>{};
-  } else {
+  } else if constexpr (n == 7) {
     const auto& [a, b, c, d, e, f, g] = s;
     return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d), CVO_T(e), CVO_T(f), CVO_T(g)>{};
+  } else {
+    const auto& [a, b, c, d, e, f, g, h] = s;
+    return Types<CVO_T(a), CVO_T(b), CVO_T(c), CVO_T(d), CVO_T(e), CVO_T(f), CVO_T(g), CVO_T(h)>{};
   }
 #undef CVO_T
 }
@@ -89,7 +92,8 @@ static_assert(holds_exactly<odometry::OpenCvOdometryParameters, odometry::OpenCv
                             core::OdometryParameters, core::SE3>);
 static_assert(
     holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters, core::LoopVerificationParameters,
-                  core::CvoParameters, core::SelectionParameters, core::OdometryParameters>);
+                  core::CvoParameters, core::SelectionParameters, core::OdometryParameters, core::KeyframeParameters,
+                  core::KeyframeTrackingParameters>);
 static_assert(std::is_same_v<slam::BackendParameters, core::PoseGraphParameters>);
 static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters,
                             core::LocalizationParameters>);
