@@ -36,10 +36,10 @@
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "libcvo/registration/point_selection.hpp"
-#include "libcvo/sim/sequence.hpp"
 #include "libcvo/slam/mapper.hpp"
 #include "program/cli.hpp"
 #include "route.hpp"
+#include "tests/support/loop_orbit.hpp"
 
 namespace cvo::bench {
 namespace {
@@ -73,23 +73,10 @@ class ScratchDir {
   fs::path path_;
 };
 
-// The rendered route: tests/support/loop_orbit.hpp's orbit (its end sees its start: loops close).
-fs::path rendered_orbit(const fs::path& dir) {
-  sim::SequenceOptions o;
-  o.frames = 130;
-  o.rate_hz = 10.0;
-  o.seed = 7;
-  o.noise.enabled = true;
-  o.render.supersample = false;
-  o.intrinsics = {262.5, 262.5, 159.25, 119.25, 320, 240, 5000.0};
-  sim::write_sequence(dir / "orbit", o);
-  return dir / "orbit";
-}
-
 std::vector<Route> routes(const Options& options, const config::Config& config, const fs::path& scratch) {
   std::vector<fs::path> folders = options.sequences;
   if (folders.empty()) {
-    folders = {fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50", rendered_orbit(scratch)};
+    folders = {fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50", testing::write_loop_orbit(scratch)};
     const fs::path shared = fs::path(CVO_SHARED_DATA_DIR) / "tum" / "fr1_rpy";
     if (fs::exists(shared / "rgb.txt")) folders.push_back(shared);
   }
