@@ -1,5 +1,4 @@
 #include "store_output.hpp"
-#include "daemon/backendd/merge_record.hpp"
 
 #include <cmath>
 #include <string>
