@@ -90,10 +90,9 @@ static_assert(
                   core::KeyframeParameters, core::KeyframeTrackingParameters, core::OdometryParameters, core::SE3>);
 static_assert(holds_exactly<odometry::OpenCvOdometryParameters, odometry::OpenCvVariant, core::SelectionParameters,
                             core::OdometryParameters, core::SE3>);
-static_assert(
-    holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters, core::LoopVerificationParameters,
-                  core::CvoParameters, core::SelectionParameters, core::OdometryParameters, core::KeyframeParameters,
-                  core::KeyframeTrackingParameters>);
+static_assert(holds_exactly<loop_closure::LoopDetectorParameters, core::LoopClosureParameters,
+                            core::LoopVerificationParameters, core::CvoParameters, core::SelectionParameters,
+                            core::OdometryParameters, core::KeyframeParameters, core::KeyframeTrackingParameters>);
 static_assert(std::is_same_v<slam::BackendParameters, core::PoseGraphParameters>);
 static_assert(holds_exactly<slam::MapperParameters, loop_closure::LoopDetectorParameters, slam::BackendParameters,
                             core::LocalizationParameters>);
