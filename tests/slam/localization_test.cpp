@@ -14,6 +14,7 @@
 #include "libcvo/registration/point_selection.hpp"
 #include "libcvo/sim/sequence.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "tests/slam/truth_keyframes.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace cvo::slam {
@@ -21,30 +22,8 @@ namespace {
 
 using core::LocalizationState;
 
-struct Keyframe {
-  core::RgbdFrame frame;
-  registration::PointCloud cloud{4096};
-  core::SE3 truth;  // T_world_camera
-};
-
-core::SE3 ground_truth_at(const core::Trajectory& gt, double t) {
-  return gt[core::find_closest_index(core::timestamps(gt), t)].pose;
-}
-
-// Every third frame of a TUM folder from `first` to `last`, with its ground-truth pose.
-std::vector<Keyframe> keyframes_of(const std::filesystem::path& folder, std::size_t first, std::size_t last) {
-  const auto sequence = io::TumSequence::open(folder);
-  const auto gt = io::read_tum_trajectory(folder / "groundtruth.txt");
-  std::vector<Keyframe> out;
-  for (std::size_t i = first; i <= last; i += 3) {
-    Keyframe& k = out.emplace_back();
-    k.frame = sequence.read(i);
-    registration::PointSelector selector(k.frame.bgr.cols, k.frame.bgr.rows, core::SelectionParameters{});
-    selector.select(k.frame, k.cloud);
-    k.truth = ground_truth_at(gt, k.frame.timestamp);
-  }
-  return out;
-}
+using Keyframe = testing::TruthKeyframe;
+using testing::keyframes_of;
 
 std::vector<Keyframe> sample_keyframes(std::size_t first, std::size_t last) {
   return keyframes_of(CVO_TEST_DATA_DIR "/fr1_rpy_50", first, last);
@@ -53,11 +32,7 @@ std::vector<Keyframe> sample_keyframes(std::size_t first, std::size_t last) {
 // The keyframe→next-keyframe local graph a tracker would close, exact: its information far above
 // any registration's (σ 0.1 mm), so that the map's loops do not bend the ground truth.
 odometry::LocalGraph graph_between(const Keyframe& a, const Keyframe& b, const core::SE3& odom_T_world) {
-  odometry::LocalGraph graph(2);
-  graph.add_node({a.frame.index, a.frame.timestamp, odom_T_world * a.truth});
-  graph.add_node({b.frame.index, b.frame.timestamp, odom_T_world * b.truth});
-  graph.add_edge({a.frame.index, b.frame.index, a.truth.inverse() * b.truth, 1e8 * core::Matrix6d::Identity()});
-  return graph;
+  return testing::graph_between(a, b, odom_T_world, 1e8);
 }
 
 // A session: its keyframes in order (ids from 0), each with the graph of the one before.

@@ -11,42 +11,20 @@
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/registration/point_selection.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "tests/slam/truth_keyframes.hpp"
 
 namespace cvo::slam {
 namespace {
 
-struct Keyframe {
-  core::RgbdFrame frame;
-  registration::PointCloud cloud{4096};
-  core::SE3 truth;  // T_world_camera
-};
+using Keyframe = testing::TruthKeyframe;
 
 // Every third frame of the sample with its ground-truth pose.
-std::vector<Keyframe> sample_keyframes() {
-  const std::filesystem::path folder = CVO_TEST_DATA_DIR "/fr1_rpy_50";
-  const auto sequence = io::TumSequence::open(folder);
-  const auto gt = io::read_tum_trajectory(folder / "groundtruth.txt");
-  std::vector<Keyframe> out;
-  for (std::size_t i = 0; i < 50; i += 3) {
-    Keyframe& k = out.emplace_back();
-    k.frame = sequence.read(i);
-    registration::PointSelector selector(k.frame.bgr.cols, k.frame.bgr.rows, core::SelectionParameters{});
-    selector.select(k.frame, k.cloud);
-    k.truth = gt[core::find_closest_index(core::timestamps(gt), k.frame.timestamp)].pose;
-  }
-  return out;
-}
+std::vector<Keyframe> sample_keyframes() { return testing::keyframes_of(CVO_TEST_DATA_DIR "/fr1_rpy_50", 0, 49); }
 
 odometry::LocalGraph graph_between(const Keyframe& a, const Keyframe& b, const core::SE3& odom_T_world) {
-  odometry::LocalGraph graph(2);
-  graph.add_node({a.frame.index, a.frame.timestamp, odom_T_world * a.truth});
-  graph.add_node({b.frame.index, b.frame.timestamp, odom_T_world * b.truth});
-  graph.add_edge({a.frame.index, b.frame.index, a.truth.inverse() * b.truth, 1e6 * core::Matrix6d::Identity()});
-  return graph;
+  return testing::graph_between(a, b, odom_T_world, 1e6);
 }
 
-// A session's keyframes in order, each after the graph of the one before; a keyframe with an entry
-// in `replayed` is applied from that merge instead of its images. Returns the merges made.
 std::map<std::int64_t, KeyframeMerge> feed(Mapper& mapper, core::SessionId session, const std::vector<Keyframe>& ks,
                                            const core::SE3& odom_T_world,
                                            const std::map<std::int64_t, KeyframeMerge>& replayed = {}) {
