@@ -22,6 +22,8 @@
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/backendd/map_schedule.hpp"
+#include "daemon/backendd/merge_record.hpp"
+#include "daemon/backendd/store_merges.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "daemon/common/status.hpp"
@@ -202,7 +204,8 @@ struct Backendd::Work {
   std::vector<std::string> joins;  // every join noted, repeated in the closing note
   MapSummary summary;              // of the last map published
   GridSummary grid;
-  bool grid_due = false;  // the grid changed since the last CVO_GRID
+  std::optional<StoreMerges> merges;  // none in localization mode: the store is only read
+  bool grid_due = false;              // the grid changed since the last CVO_GRID
   std::int64_t local_graphs = 0, processed = 0, processed_at_last_status = 0;
   Clock::time_point last_status = Clock::now();
 };
@@ -226,6 +229,7 @@ Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(c
   std::string warning;
   store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning, b.unsaved_records_max);
   if (!warning.empty()) notes_.note("warning: " + warning);
+  work_->merges.emplace(*store_);
   note_store_change();  // a new store on a full disk: started degraded
 }
 
@@ -280,6 +284,16 @@ int Backendd::run() {
 void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
   for (auto& record : recovered) {
     std::string why;
+    if (record.kind == RecordKind::kMerge) {  // names no message: it does not pass the door
+      auto merge = decode_merge(record.payload.data(), record.payload.size(), &why);
+      if (!merge) {
+        notes_.note_limited("stored skipped", "stored record skipped: " + why);
+        continue;
+      }
+      ++replayed_pending_;
+      queue_.push({std::move(*merge), std::nullopt, record.where});
+      continue;
+    }
     // A record of an older schema (another fingerprint or version), or a repeat, is skipped, said here.
     auto message = let_in_stored(door_, record.kind, record.payload.data(), record.payload.size(), &why);
     const std::int64_t sender = stored_sender(record.payload);
@@ -293,7 +307,7 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());  // a gap in the store is asked for too
     ++replayed_pending_;
-    queue_.push({std::move(*message), std::nullopt});
+    queue_.push({std::move(*message), std::nullopt, record.where});
   }
 }
 
@@ -416,6 +430,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
                key.session, key.id, Clock::now());
     // Had the store failed just now, the record is queued whole, past the bound by this one.
     QueuedRecord queued{std::move(*value), Clock::now()};
+    if (appended == Appended::kStored && store_) queued.stored = where;
     if (to_store && appended == Appended::kStored) {
       queued.content = where;
       ++waiting_in_store_;
@@ -558,6 +573,7 @@ void Backendd::process(QueuedRecord& queued) {
   if (queued.arrived) localize_when_stored();
   process_record(queued);
   if (!queued.arrived && --replayed_pending_ == 0) {
+    if (work_->merges) work_->merges->replay_done(waiting_in_store_ == 0);
     if (localization())
       localize_when_stored();
     else  // the store's map at once, and each session's correction
@@ -574,15 +590,16 @@ void Backendd::process_record(QueuedRecord& queued) {
       publish_changes(lost->session, {}, false);
       return work_->schedule.lost(lost->session);
     }
+    if (const auto* merge = std::get_if<slam::KeyframeMerge>(&queued.content)) return apply_merge(*merge);
     std::string error;
     const auto value = value_of(queued, &error);
     if (!value) return notes_.note_limited("unreadable", error);
     if (queued.arrived)  // live input: its session is live
       work_->schedule.seen(std::visit([](const auto& v) { return v.session; }, *value), *queued.arrived);
     if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
-      apply_keyframe(*keyframe, queued.arrived);
+      apply_keyframe(*keyframe, queued);
     else
-      apply_local_graph(std::get<LocalGraphRecord>(*value));
+      apply_local_graph(std::get<LocalGraphRecord>(*value), !queued.arrived);
   } catch (const slam::MapperError& e) {
     notes_.note_limited("not applied", std::string("not applied: ") + e.what());
   } catch (const std::exception& e) {
@@ -626,11 +643,13 @@ std::optional<RecordValue> Backendd::value_of(QueuedRecord& queued, std::string*
   return value;
 }
 
-void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_point> arrived) {
+void Backendd::apply_keyframe(const lcm::Keyframe& k, const QueuedRecord& queued) {
   Work& w = *work_;
   const auto outcome = apply(w.mapper, k);
   if (outcome.duplicate) return;
-  w.first_arrival.try_emplace(k.session, arrived);
+  w.first_arrival.try_emplace(k.session, queued.arrived);
+  if (w.merges) w.merges->keyframe(k.session, k.id, queued.stored);
+  for (const auto& merge : outcome.merges) store_merge(merge, !queued.arrived);
   for (const auto& loop : outcome.loops)
     notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
                 keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
@@ -645,10 +664,32 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, std::optional<Clock::time_
   publish_changes(k.session, outcome.joined, !outcome.loops.empty() || !outcome.joined.empty());
 }
 
-void Backendd::apply_local_graph(const LocalGraphRecord& record) {
-  const auto joined = apply(work_->mapper, record);
+// Compaction waits while records wait in the store: their references must not age past two.
+void Backendd::store_merge(const slam::KeyframeMerge& merge, bool replayed) {
+  if (!work_->merges) return;
+  const auto compactions = work_->merges->compactions();
+  if (work_->merges->merged(merge, replayed, waiting_in_store_ == 0) == Appended::kNotDurable)
+    notes_.note_limited("not stored", "warning: the merge of " + keyframe_name(merge.session, merge.id) +
+                                          " not stored: its keyframe's record stays (" + describe(store_->health()) +
+                                          ")");
+  if (work_->merges->compactions() != compactions)
+    notes_.note("store compacted: merged keyframes' records dropped, " + std::to_string(store_->records()) +
+                " records left");
+}
+
+// A stored merge record: the keyframe's own replay merged it already, or (its record compacted
+// away) it is registered from the merge alone.
+void Backendd::apply_merge(const slam::KeyframeMerge& merge) {
+  work_->mapper.apply_merge(merge);
+  if (work_->merges) work_->merges->record_replayed(merge, waiting_in_store_ == 0);
+  publish_changes(merge.session, {}, true);
+}
+
+void Backendd::apply_local_graph(const LocalGraphRecord& record, bool replayed) {
+  const auto outcome = apply(work_->mapper, record);
   ++work_->local_graphs;
-  publish_changes(record.session, joined, !joined.empty());
+  for (const auto& merge : outcome.merges) store_merge(merge, replayed);
+  publish_changes(record.session, outcome.joined, !outcome.joined.empty() || !outcome.merges.empty());
 }
 
 // A change that optimised the keyframe graph may have moved every session; any other, only its own.

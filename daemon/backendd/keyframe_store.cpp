@@ -69,6 +69,20 @@ std::vector<Range> intact_ranges(const StoreScan& s, std::size_t size) {
   return out;
 }
 
+// Where the byte at `at` lies once the stretches `removed` (by offset, ascending) are cut out of the
+// file; nullopt when it lies inside one of them.
+template <typename Stretches, typename Bounds>
+std::optional<off_t> after_removing(off_t at, const Stretches& removed, Bounds bounds) {
+  off_t shift = 0;
+  for (const auto& stretch : removed) {
+    const auto [from, bytes] = bounds(stretch);
+    if (from > at) break;
+    if (at < from + static_cast<off_t>(bytes)) return std::nullopt;
+    shift += static_cast<off_t>(bytes);
+  }
+  return at - shift;
+}
+
 // The file, mapped read-only while it is read back (no copy of a large store in memory).
 class Mapping {
  public:
@@ -216,8 +230,15 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
   const StoreScan s = scan_store(file_, data, size);
   if (size < kStoreMagic.size()) return create();
 
+  // Each record's place as the file will be: a clean copy leaves out the damaged stretches.
+  const auto place = [&](const IntactRecord& r) {
+    const auto at = after_removing(static_cast<off_t>(r.at), s.damaged, [](const SkippedStretch& d) {
+      return std::pair{static_cast<off_t>(d.at), d.bytes};
+    });
+    return RecordRef{at.value_or(0), r.bytes, 0};
+  };
   for (const auto& r : s.records)
-    recovered.push_back({r.kind, {data + r.at + kRecordHeaderBytes, data + r.at + r.bytes}});
+    recovered.push_back({r.kind, {data + r.at + kRecordHeaderBytes, data + r.at + r.bytes}, place(r)});
   records_ = s.records.size();
   end_ = static_cast<off_t>(size);
   if (s.clean()) return;
@@ -232,6 +253,9 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
                  " now holds the intact records";
       return;
     }
+    for (std::size_t i = 0; i < s.records.size(); ++i)  // each stays where it is
+      recovered[recovered.size() - s.records.size() + i].where = {static_cast<off_t>(s.records[i].at),
+                                                                  s.records[i].bytes, 0};
     warning += "; no clean copy could be written (" + copy.error + "): the damaged stretches stay in " +
                file_.string() + " and are skipped at every start";
   }
@@ -285,7 +309,7 @@ Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>&
   const std::lock_guard lock(mutex_);
   held_.push_back(std::move(record));  // behind every record held before it: the order is kept
   if (write_held()) {
-    if (where != nullptr) *where = {end_ - static_cast<off_t>(bytes), bytes};  // written last
+    if (where != nullptr) *where = {end_ - static_cast<off_t>(bytes), bytes, compactions_};  // written last
     return Appended::kStored;
   }
   if (held_.size() <= held_max_) return Appended::kHeld;
@@ -294,12 +318,24 @@ Appended KeyframeStore::append(RecordKind kind, const std::vector<std::uint8_t>&
   return Appended::kNotDurable;
 }
 
-bool KeyframeStore::discard(const RecordRef& where) {
+// `where` as the store is now: moved by the last compaction when it was given before it. Under mutex_.
+std::optional<RecordRef> KeyframeStore::now_at(const RecordRef& where) const {
+  if (where.generation == compactions_) return where;
+  if (where.generation + 1 != compactions_) return std::nullopt;
+  const auto at = after_removing(where.offset, compacted_away_, [](const auto& g) { return g; });
+  if (!at) return std::nullopt;
+  return RecordRef{*at, where.bytes, compactions_};
+}
+
+bool KeyframeStore::discard(const RecordRef& given, bool may_compact) {
   const std::lock_guard lock(mutex_);
-  if (where.offset < static_cast<off_t>(kStoreMagic.size()) || where.offset >= end_) return false;
-  if (!garbage_.emplace(where.offset, where.bytes).second) return false;
-  garbage_bytes_ += where.bytes;
-  if (!held_.empty() || 2 * garbage_bytes_ <= static_cast<std::size_t>(end_)) return false;
+  const auto where = now_at(given);
+  if (!where || where->offset < static_cast<off_t>(kStoreMagic.size()) ||
+      where->offset + static_cast<off_t>(where->bytes) > end_)
+    return false;
+  if (!garbage_.emplace(where->offset, where->bytes).second) return false;
+  garbage_bytes_ += where->bytes;
+  if (!may_compact || !held_.empty() || 4 * garbage_bytes_ <= static_cast<std::size_t>(end_)) return false;
   return compact();
 }
 
@@ -323,27 +359,28 @@ bool KeyframeStore::compact() {
   fd_ = copy.fd;
   end_ = copy.size;
   records_ -= garbage_.size();
+  compacted_away_.assign(garbage_.begin(), garbage_.end());
   garbage_.clear();
   garbage_bytes_ = 0;
   ++compactions_;
   return true;
 }
 
-std::optional<StoredRecord> KeyframeStore::read(const RecordRef& where, std::string* error) const {
+std::optional<StoredRecord> KeyframeStore::read(const RecordRef& given, std::string* error) const {
   const auto fail = [&](const std::string& why) -> std::optional<StoredRecord> {
     if (error != nullptr)
-      *error = "record at byte " + std::to_string(where.offset) + " of " + file_.string() + ": " + why;
+      *error = "record at byte " + std::to_string(given.offset) + " of " + file_.string() + ": " + why;
     return std::nullopt;
   };
-  {
-    const std::lock_guard lock(mutex_);
-    if (where.offset < static_cast<off_t>(kStoreMagic.size()) || where.bytes < kRecordHeaderBytes ||
-        where.offset + static_cast<off_t>(where.bytes) > end_)
-      return fail("not within the records written");
-  }
-  std::vector<std::uint8_t> bytes(where.bytes);
+  const std::lock_guard lock(mutex_);  // a compaction replaces fd_
+  const auto where = now_at(given);
+  if (!where) return fail("compacted away");
+  if (where->offset < static_cast<off_t>(kStoreMagic.size()) || where->bytes < kRecordHeaderBytes ||
+      where->offset + static_cast<off_t>(where->bytes) > end_)
+    return fail("not within the records written");
+  std::vector<std::uint8_t> bytes(where->bytes);
   for (std::size_t done = 0; done < bytes.size();) {  // records below end_ are never written again
-    const ssize_t n = ::pread(fd_, bytes.data() + done, bytes.size() - done, where.offset + static_cast<off_t>(done));
+    const ssize_t n = ::pread(fd_, bytes.data() + done, bytes.size() - done, where->offset + static_cast<off_t>(done));
     if (n < 0 && errno == EINTR) continue;
     if (n < 0) return fail(std::strerror(errno));
     if (n == 0) return fail("the file ends before it");

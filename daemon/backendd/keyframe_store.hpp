@@ -17,12 +17,14 @@
 // time.
 //
 // Garbage (issue #27 item 3): a record made useless by a later one (a merged keyframe's, once its
-// merge record is stored: merge_record.hpp) is discard()ed; once such records pass half of the file,
-// the store is compacted: its other records are copied in order to FILE.recovering, made durable and
-// renamed over FILE, as a damaged store's intact records are (the original is not kept), so the file
-// stays within about twice its live records. RecordRefs from before a compaction are void. Garbage
-// is counted in this run only: a restarted store starts with none (its merged keyframes' records
-// replay harmlessly, their merge records after them).
+// merge record is stored: merge_record.hpp) is discard()ed; once such records pass a quarter of the
+// file, the store is compacted: its other records are copied in order to FILE.recovering, made durable
+// and renamed over FILE, as a damaged store's intact records are (the original is not kept), so the
+// file stays within 4/3 of its live records (each compaction copies at most three times the garbage
+// it drops: the disk's cost of a merged keyframe is bounded too). A RecordRef from before the last compaction is moved
+// with its record; one from before two is void. Garbage is counted in this run only: a restarted
+// store starts with none (its merged keyframes' records replay harmlessly, their merge records after
+// them, and the back end discards them again: each recovered record says where it lies).
 //
 // A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
 // write is cut back so no torn record stays in front of the next one, and the record is held in
@@ -38,22 +40,27 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "daemon/backendd/store_records.hpp"
 
 namespace cvo::daemon::backendd {
 
+/// Where a record lies in the store file: the start of its header and its whole size. Lets a
+/// reader that is behind take a record back from disk instead of holding it in memory, and a
+/// record made garbage be named (discard()). A reference outlives one compaction (it is moved with
+/// its record), not two.
+struct RecordRef {
+  off_t offset = 0;
+  std::size_t bytes = 0;       // header and payload
+  std::size_t generation = 0;  // compactions() when it was given
+};
+
 struct StoredRecord {
   RecordKind kind;
   std::vector<std::uint8_t> payload;
-};
-
-/// Where a record lies in the store file: the start of its header and its whole size. Lets a
-/// reader that is behind take a record back from disk instead of holding it in memory.
-struct RecordRef {
-  off_t offset = 0;
-  std::size_t bytes = 0;  // header and payload
+  RecordRef where{};  // a recovered record's place in the store as it is now (read() leaves it empty)
 };
 
 /// What became of an appended record.
@@ -98,10 +105,13 @@ class KeyframeStore {
   /// The record append() stored at `where`, read back from disk and checked as at recovery
   /// (magic, kind, length, checksum); nullopt with `*error` saying why when it cannot be.
   std::optional<StoredRecord> read(const RecordRef& where, std::string* error) const;
-  /// Marks the record append() stored at `where` as garbage (see the header); compacts the file when
-  /// garbage passes half of it and nothing is held. True when it compacted (every RecordRef is void
-  /// then); a failed compaction leaves the file as it was.
-  bool discard(const RecordRef& where);
+  /// Marks the record at `where` (given by append() or recovery) as garbage (see the header);
+  /// compacts the file when garbage passes a quarter of it, nothing is held and the caller allows it
+  /// (`may_compact`: false while it holds references it must still read, which could otherwise
+  /// age past two compactions). True when it compacted; a failed compaction leaves the file as it
+  /// was. A reference to no record of the store now (older than the last compaction's input, or
+  /// garbage already) changes nothing.
+  bool discard(const RecordRef& where, bool may_compact = true);
   /// Compactions so far.
   [[nodiscard]] std::size_t compactions() const { return compactions_; }
   /// Writes the held records, oldest first, as far as the store allows; true when none is left.
@@ -118,6 +128,7 @@ class KeyframeStore {
   int write_at_end(const std::uint8_t* data, std::size_t size);
   bool write_held();
   bool compact();
+  [[nodiscard]] std::optional<RecordRef> now_at(const RecordRef& where) const;
 
   std::filesystem::path file_;
   std::size_t held_max_;
@@ -130,6 +141,7 @@ class KeyframeStore {
   std::map<off_t, std::size_t> garbage_;  // discarded records: offset -> bytes
   std::size_t garbage_bytes_ = 0;
   std::size_t compactions_ = 0;
+  std::vector<std::pair<off_t, std::size_t>> compacted_away_;  // the last compaction's garbage, by offset
 };
 
 }  // namespace cvo::daemon::backendd

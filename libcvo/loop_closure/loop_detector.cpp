@@ -53,17 +53,37 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
   keyframe.piece = placement.piece;
   BowVector bow = vocabulary_.transform(features.descriptors);
 
-  std::vector<LoopClosure> loops;
   std::vector<LoopCandidate> candidates;
   const double eta = parameters_.loop.similarity_threshold;
   if (placement.previous && database_.contains(*placement.previous))
     candidates = placement.previous_is_candidate
                      ? database_.candidates(id, bow, database_.bow(*placement.previous), eta)
                      : database_.candidates(id, bow, *placement.previous, eta);
+  auto loops = verify(keyframe, candidates, placement.candidates_below);
+  database_.add(id, std::move(bow));
+  keyframes_.emplace(id, std::move(keyframe));
+  previous_ = id;
+  return loops;
+}
+
+std::vector<LoopClosure> LoopDetector::detect_first(std::int64_t first, std::int64_t next) {
+  attempts_.clear();
+  const auto& keyframe = keyframes_.at(first);
+  if (!keyframes_.contains(next))
+    throw std::out_of_range("LoopDetector::detect_first: no keyframe " + std::to_string(next));
+  const auto candidates =
+      database_.candidates(first, database_.bow(first), next, parameters_.loop.similarity_threshold);
+  return verify(keyframe, candidates, std::nullopt);
+}
+
+std::vector<LoopClosure> LoopDetector::verify(const LoopKeyframe& keyframe,
+                                              const std::vector<LoopCandidate>& candidates,
+                                              std::optional<std::int64_t> candidates_below) {
+  std::vector<LoopClosure> loops;
   const int max_refinements = parameters_.verification.max_refinements;
   int refinements = 0;
   for (const auto& c : candidates) {  // best η first
-    if (placement.candidates_below && c.id >= *placement.candidates_below) continue;
+    if (candidates_below && c.id >= *candidates_below) continue;
     if (max_refinements > 0 && refinements == max_refinements) break;
     auto v = verify_loop(keyframe, keyframes_.at(c.id), parameters_, registration_);
     if (v.refinement.iterations > 0) ++refinements;
@@ -74,9 +94,6 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
       loops.push_back(*v.closure);
     }
   }
-  database_.add(id, std::move(bow));
-  keyframes_.emplace(id, std::move(keyframe));
-  previous_ = id;
   return loops;
 }
 

@@ -90,6 +90,12 @@ class LoopDetector {
   std::vector<LoopClosure> add_keyframe(std::int64_t id, const core::RgbdFrame& frame,
                                         const registration::PointCloud& cloud, const core::SE3& pose);
 
+  /// A session's first keyframe proposes no candidates when it comes (no predecessor normalises η).
+  /// Once its successor `next` is stored, this is its detection: η normalised by the successor (its
+  /// one neighbour in the session), the candidates those stored before it, verified as add_keyframe
+  /// verifies (last_attempts() says how). Throws std::out_of_range for an id not stored.
+  std::vector<LoopClosure> detect_first(std::int64_t first, std::int64_t next);
+
   /// Forgets a keyframe: it is no candidate and no η normaliser any more, and its features and
   /// cloud are freed. Throws std::out_of_range when it is not stored.
   void remove_keyframe(std::int64_t id);
@@ -124,6 +130,11 @@ class LoopDetector {
   std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
   std::optional<std::int64_t> previous_;            // the last keyframe added
   std::vector<LoopAttempt> attempts_;
+
+  // Steps 2-4 for `keyframe` against `candidates` (best η first), at most max_refinements CVO runs:
+  // the loops accepted; each attempt into attempts_.
+  std::vector<LoopClosure> verify(const LoopKeyframe& keyframe, const std::vector<LoopCandidate>& candidates,
+                                  std::optional<std::int64_t> candidates_below);
 };
 
 }  // namespace cvo::loop_closure

@@ -113,41 +113,22 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   KeyframeOutcome outcome;
   outcome.loops_tried = detector_.last_attempts().size();
   loops_tried_ += outcome.loops_tried;
-  std::vector<bool> entered(loops.size(), false);
-  std::vector<loop_closure::LoopClosure> joining;
-  // Loops that join pieces first: then the keyframe is in the map and may be merged (see the header).
-  for (std::size_t i = 0; i < loops.size(); ++i)
-    if (backend_.holds(loops[i].from) &&
-        backend_.piece(backend_.session_of(backend_.resolve(loops[i].from))) != backend_.piece(k.session)) {
-      enter_loop(s, loops[i], k.frame.timestamp, outcome);
-      joining.push_back(loops[i]);
-      entered[i] = true;
-    }
-  const auto covering = covering_loop(loops, entered, id, k.session);
-  if (covering) {
-    const auto& loop = loops[covering->first];
-    const auto& [covering_session, covering_id] = keyframe_of_node_.at(loop.from);
-    outcome.merge = KeyframeMerge{k.session,
-                                  k.id,
-                                  frame,
-                                  k.frame.timestamp,
-                                  k.odometry,
-                                  covering_session,
-                                  covering_id,
-                                  loop.measurement,
-                                  loop.information,
-                                  covering->second,
-                                  std::move(joining),
-                                  {}};
-    merge(*outcome.merge, id, loop.from);
-    entered[covering->first] = true;  // the alias holds it
-    s.last_match_time = k.frame.timestamp;
+  KeyframeMerge fields;  // the keyframe's own, for a merge
+  fields.session = k.session;
+  fields.id = k.id;
+  fields.frame = frame;
+  fields.timestamp = k.frame.timestamp;
+  fields.odometry = k.odometry;
+  const auto first = first_loops(s, k.id, id);  // before this keyframe may be merged
+  if (auto merged = enter_loops(s, fields, id, loops, outcome)) {
+    outcome.merges.push_back(std::move(*merged));
+  } else if (!loops.empty() && !backend_.keyframe_graph().contains(id)) {
+    fields.joining = loops;
+    waiting_for_node_.insert_or_assign(id, std::move(fields));
   }
-  for (std::size_t i = 0; i < loops.size(); ++i)
-    if (!entered[i]) {
-      enter_loop(s, loops[i], k.frame.timestamp, outcome);
-      if (outcome.merge) outcome.merge->others.push_back(loops[i]);
-    }
+  if (!placement.previous) s.undetected_first = k.id;
+  if (first)
+    if (auto m = merge_first(s, *first)) outcome.merges.push_back(std::move(*m));
   outcome.joined = after_change();
   return outcome;
 }
@@ -162,8 +143,8 @@ void Mapper::enter_loop(Session& s, const loop_closure::LoopClosure& loop, doubl
   s.last_match_time = time;
 }
 
-std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
-                                                     const odometry::LocalGraph& graph) {
+LocalGraphOutcome Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
+                                          const odometry::LocalGraph& graph) {
   if (graph.empty()) throw MapperError("local graph of " + name(session_id, keyframe_id) + " is empty");
   const auto first = static_cast<std::int64_t>(graph.keyframe().frame_index);
   for (const auto& n : graph.nodes())
@@ -190,7 +171,12 @@ std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id,
     throw MapperError("local graph of " + name(session_id, keyframe_id) + ": " + e.what());
   }
   ++revision_;
-  return after_change();
+  LocalGraphOutcome outcome;
+  for (const auto& n : {graph.nodes().front(), graph.nodes().back()})
+    if (auto m = merge_once_in_graph(offset + static_cast<posegraph::NodeId>(n.frame_index)))
+      outcome.merges.push_back(std::move(*m));
+  outcome.joined = after_change();
+  return outcome;
 }
 
 std::vector<core::SessionId> Mapper::after_change() {

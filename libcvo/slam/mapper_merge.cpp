@@ -1,12 +1,13 @@
 // Mapper: keyframes merged into the earlier keyframes that cover them (mapper.hpp's header).
 #include "libcvo/slam/mapper.hpp"
 
+#include <tuple>
+
 #include "libcvo/core/information.hpp"
 
 namespace cvo::slam {
 
 std::optional<std::pair<std::size_t, double>> Mapper::covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
-                                                                    const std::vector<bool>& entered,
                                                                     posegraph::NodeId keyframe,
                                                                     core::SessionId session) {
   const auto& graph = backend_.keyframe_graph();
@@ -15,7 +16,7 @@ std::optional<std::pair<std::size_t, double>> Mapper::covering_loop(const std::v
   std::optional<std::pair<std::size_t, double>> best;
   for (std::size_t i = 0; i < loops.size(); ++i) {
     const auto& loop = loops[i];
-    if (entered[i] || loop.to != keyframe || !graph.contains(loop.from)) continue;
+    if (loop.to != keyframe || !graph.contains(loop.from)) continue;
     if (backend_.piece(backend_.session_of(loop.from)) != backend_.piece(session)) continue;  // a join, not a revisit
     const double gamma = detector_.coverage(loop.from, keyframe, loop.measurement);
     if (gamma >= threshold && (!best || gamma > best->second)) best = std::pair{i, gamma};
@@ -29,6 +30,81 @@ void Mapper::merge(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph
   sessions_.at(m.session).keyframes.at(m.id).merged = true;
   marginals_.invalidate();
   ++revision_;
+}
+
+std::optional<KeyframeMerge> Mapper::enter_loops(Session& s, KeyframeMerge m, posegraph::NodeId node,
+                                                 const std::vector<loop_closure::LoopClosure>& loops,
+                                                 KeyframeOutcome& outcome) {
+  std::vector<bool> entered(loops.size(), false);
+  // Loops that join pieces first: then the keyframe is in the map and may be merged (see the header).
+  for (std::size_t i = 0; i < loops.size(); ++i)
+    if (backend_.holds(loops[i].from) &&
+        backend_.piece(backend_.session_of(backend_.resolve(loops[i].from))) != backend_.piece(m.session)) {
+      enter_loop(s, loops[i], m.timestamp, outcome);
+      m.joining.push_back(loops[i]);
+      entered[i] = true;
+    }
+  const auto covering = covering_loop(loops, node, m.session);
+  if (covering) {
+    const auto& loop = loops[covering->first];
+    std::tie(m.covering_session, m.covering_id) = keyframe_of_node_.at(loop.from);
+    m.relative = loop.measurement;
+    m.information = loop.information;
+    m.gamma = covering->second;
+    merge(m, node, loop.from);
+    entered[covering->first] = true;  // the alias holds it (a joining loop: from now on)
+    s.last_match_time = m.timestamp;
+  }
+  for (std::size_t i = 0; i < loops.size(); ++i)
+    if (!entered[i]) {
+      enter_loop(s, loops[i], m.timestamp, outcome);
+      if (covering) m.others.push_back(loops[i]);
+    }
+  if (!covering) return std::nullopt;
+  return m;
+}
+
+std::optional<Mapper::FirstLoops> Mapper::first_loops(Session& s, std::int64_t next, posegraph::NodeId next_node) {
+  if (!s.undetected_first) return std::nullopt;
+  const std::int64_t first = *s.undetected_first;
+  const auto before = s.keyframes.lower_bound(next);
+  if (before == s.keyframes.begin() || std::prev(before)->first != first) return std::nullopt;  // not its successor
+  s.undetected_first.reset();
+  const auto node = this->node(s, std::prev(before)->second.frame);
+  if (std::prev(before)->second.merged || !detector_.contains(node) || !detector_.contains(next_node))
+    return std::nullopt;
+  auto loops = detector_.detect_first(node, next_node);
+  loops_tried_ += detector_.last_attempts().size();
+  return FirstLoops{first, node, std::move(loops)};
+}
+
+std::optional<KeyframeMerge> Mapper::merge_first(Session& s, const FirstLoops& found) {
+  if (!covering_loop(found.loops, found.node, keyframe_of_node_.at(found.node).first)) return std::nullopt;
+  const KeyframeRecord& record = s.keyframes.at(found.id);
+  KeyframeMerge m;
+  m.session = keyframe_of_node_.at(found.node).first;
+  m.id = found.id;
+  m.frame = record.frame;
+  m.timestamp = record.timestamp;
+  m.odometry = record.odometry;
+  KeyframeOutcome ignored;  // its loops are the merge's
+  return enter_loops(s, std::move(m), found.node, found.loops, ignored);
+}
+
+std::optional<KeyframeMerge> Mapper::merge_once_in_graph(posegraph::NodeId keyframe) {
+  const auto waiting = waiting_for_node_.find(keyframe);
+  if (waiting == waiting_for_node_.end() || !backend_.keyframe_graph().contains(keyframe)) return std::nullopt;
+  KeyframeMerge m = std::move(waiting->second);
+  waiting_for_node_.erase(waiting);
+  const auto covering = covering_loop(m.joining, keyframe, m.session);  // its loops are entered now
+  if (!covering) return std::nullopt;
+  const auto& loop = m.joining[covering->first];
+  std::tie(m.covering_session, m.covering_id) = keyframe_of_node_.at(loop.from);
+  m.relative = loop.measurement;
+  m.information = loop.information;
+  m.gamma = covering->second;
+  merge(m, keyframe, loop.from);
+  return m;
 }
 
 bool Mapper::apply_merge(const KeyframeMerge& m) {
@@ -49,15 +125,22 @@ bool Mapper::apply_merge(const KeyframeMerge& m) {
   const auto keyframe = node(s->second, m.frame);
   const auto covering = node(c->second, c->second.keyframes.at(m.covering_id).frame);
   const auto& graph = backend_.keyframe_graph();
-  if (!graph.contains(keyframe) || graph.node(keyframe).fixed || !graph.contains(covering) || keyframe == covering)
+  // An anchor may be merged through a loop that joins its piece (which frees it) and is entered first.
+  const bool freed_by_join = !m.joining.empty() && backend_.piece(m.session) != backend_.piece(m.covering_session);
+  if (!graph.contains(keyframe) || (graph.node(keyframe).fixed && !freed_by_join) || !graph.contains(covering) ||
+      keyframe == covering)
     throw MapperError(what + ": not two keyframes of the graph, the first free");
-  if (known != s->second.keyframes.end()) {  // replayed with its images: its loops are in already
+  // Replayed with its images, its loops are in already, unless it is a first keyframe whose
+  // successor's images are gone (its loops searched at the successor: merge_first).
+  if (known != s->second.keyframes.end() && s->second.undetected_first != m.id) {
     merge(m, keyframe, covering);
     return true;
   }
-  // Its record compacted away: registered from the merge alone, its loops as add_keyframe entered them.
-  s->second.keyframes.emplace(m.id, KeyframeRecord{m.frame, m.timestamp, m.odometry});
-  keyframe_of_node_.emplace(keyframe, std::pair{m.session, m.id});
+  if (known == s->second.keyframes.end()) {  // its record compacted away: registered from the merge alone
+    s->second.keyframes.emplace(m.id, KeyframeRecord{m.frame, m.timestamp, m.odometry});
+    keyframe_of_node_.emplace(keyframe, std::pair{m.session, m.id});
+  }
+  if (s->second.undetected_first == m.id) s->second.undetected_first.reset();
   KeyframeOutcome outcome;
   for (const auto& loop : m.joining) enter_loop(s->second, loop, m.timestamp, outcome);
   merge(m, keyframe, covering);

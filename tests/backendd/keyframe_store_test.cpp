@@ -120,8 +120,9 @@ TEST(KeyframeStore, RecordsSurviveAReopenInOrder) {
 }
 
 // Records discarded as garbage (a merged keyframe's, issue #27 item 3) are compacted away once they
-// pass half of the file: the rest survive, in order, and the file holds only them.
-TEST(KeyframeStore, DiscardedRecordsAreCompactedAwayOnceTheyPassHalfTheFile) {
+// pass a quarter of the file: the rest survive, in order, and the file holds only them. A reference
+// given before a compaction still names its record after it (the later discards are of such).
+TEST(KeyframeStore, DiscardedRecordsAreCompactedAwayOnceTheyPassAQuarterOfTheFile) {
   cvo::test::TempDir dir;
   const auto file = dir.path() / "keyframes.store";
   std::vector<StoredRecord> kept;
@@ -137,12 +138,17 @@ TEST(KeyframeStore, DiscardedRecordsAreCompactedAwayOnceTheyPassHalfTheFile) {
       refs.push_back(where);
       if (i % 3 == 2) kept.push_back({RecordKind::kKeyframe, p});
     }
-    std::size_t compacted_at = 0;
+    std::vector<int> compacted_at;
     for (const int i : {0, 1, 3, 4})
-      if (store.discard(refs[static_cast<std::size_t>(i)])) compacted_at = static_cast<std::size_t>(i);
-    EXPECT_EQ(compacted_at, 4u);  // 3 of 6 equal records are not half the file (its magic): the fourth is
-    EXPECT_EQ(store.compactions(), 1u);
+      if (store.discard(refs[static_cast<std::size_t>(i)])) compacted_at.push_back(i);
+    // 1 of 6 equal records is not a quarter of the file (its magic), 2 are; then 1 of 4 is not, 2 are.
+    EXPECT_EQ(compacted_at, (std::vector<int>{1, 4}));
+    EXPECT_EQ(store.compactions(), 2u);
     EXPECT_EQ(store.records(), 2u);
+    std::string error;
+    const auto last = store.read(refs[5], &error);  // given before both compactions: void
+    EXPECT_FALSE(last);
+    EXPECT_NE(error.find("compacted away"), std::string::npos) << error;
   }
   std::string warning;
   const auto records = reopen(file, warning);
@@ -152,6 +158,59 @@ TEST(KeyframeStore, DiscardedRecordsAreCompactedAwayOnceTheyPassHalfTheFile) {
   EXPECT_EQ(records[1].payload, kept[1].payload);
   EXPECT_LT(fs::file_size(file), 2 * 1100u);
   EXPECT_FALSE(fs::exists(file.string() + ".recovering"));
+}
+
+// A caller that still holds references it must read (records waiting in the store) forbids
+// compaction: garbage is only counted, and the references still read their records. Once it allows
+// it, the next discard compacts, and a reference from before that compaction reads its record.
+TEST(KeyframeStore, NoCompactionWhileTheCallerSaysNoAndReferencesOutliveOneCompaction) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  std::vector<StoredRecord> none;
+  std::string warning;
+  KeyframeStore store(file, none, warning);
+  std::vector<RecordRef> refs(6);
+  for (std::size_t i = 0; i < refs.size(); ++i)
+    ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(1000, static_cast<std::uint8_t>(i)), &refs[i]),
+              Appended::kStored);
+  for (const std::size_t i : {0u, 1u, 2u}) EXPECT_FALSE(store.discard(refs[i], /*may_compact=*/false));
+  EXPECT_EQ(store.compactions(), 0u);
+  std::string error;
+  EXPECT_TRUE(store.read(refs[4], &error)) << error;
+  EXPECT_FALSE(store.discard(refs[1])) << "discarded already: nothing changes";
+  EXPECT_TRUE(store.discard(refs[3]));  // allowed now: 4 of 6 are garbage
+  EXPECT_EQ(store.records(), 2u);
+  const auto moved = store.read(refs[5], &error);
+  ASSERT_TRUE(moved) << error;
+  EXPECT_EQ(moved->payload, payload(1000, 5));
+  EXPECT_FALSE(store.read(refs[2], &error)) << "compacted away";
+}
+
+// A restarted store says where each recovered record lies, so that what a record made garbage
+// before the restart (a merged keyframe's) can be discarded again.
+TEST(KeyframeStore, RecoveredRecordsSayWhereTheyLie) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  {
+    std::vector<StoredRecord> none;
+    std::string warning;
+    KeyframeStore store(file, none, warning);
+    for (int i = 0; i < 4; ++i)
+      ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(500, static_cast<std::uint8_t>(i))), Appended::kStored);
+  }
+  std::vector<StoredRecord> recovered;
+  std::string warning;
+  KeyframeStore store(file, recovered, warning);
+  ASSERT_EQ(recovered.size(), 4u);
+  std::string error;
+  for (const auto& r : recovered) {
+    const auto back = store.read(r.where, &error);
+    ASSERT_TRUE(back) << error;
+    EXPECT_EQ(back->payload, r.payload);
+  }
+  store.discard(recovered[0].where);
+  EXPECT_TRUE(store.discard(recovered[1].where));
+  EXPECT_EQ(store.records(), 2u);
 }
 
 // What append() stored can be read back where it says, while the store is open (how the back end

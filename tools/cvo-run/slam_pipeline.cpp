@@ -50,7 +50,7 @@ odometry::TrackStep SlamPipeline::track(const core::RgbdFrame& frame) {
   if (const auto& k = step.new_keyframe) {
     to_store([&](StoreOutput& store) { store.keyframe(s.id, k->id, k->frame, k->pose, *k->cloud); });
     const auto outcome = mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
-    if (outcome.merge) to_store([&](StoreOutput& store) { store.merge(*outcome.merge); });
+    for (const auto& merge : outcome.merges) to_store([&](StoreOutput& store) { store.merge(merge); });
     if (mapping_)
       mapping_->add_keyframe({s.id, k->id}, k->frame, io::mean_specific_force(s.accelerometer, k->frame.timestamp));
   }
@@ -75,7 +75,8 @@ void SlamPipeline::to_store(Write&& write) {
 
 void SlamPipeline::add_local_graph(core::SessionId session, const odometry::HandedLocalGraph& g) {
   to_store([&](StoreOutput& store) { store.local_graph(session, g.keyframe_id, *g.graph); });
-  mapper_.add_local_graph(session, g.keyframe_id, *g.graph);
+  const auto outcome = mapper_.add_local_graph(session, g.keyframe_id, *g.graph);
+  for (const auto& merge : outcome.merges) to_store([&](StoreOutput& store) { store.merge(merge); });
 }
 
 void SlamPipeline::finish() {

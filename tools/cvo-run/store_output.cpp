@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/merge_record.hpp"
+#include "daemon/backendd/store_merges.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -43,12 +43,14 @@ lcm::RgbdEncoding keyframe_encoding(const config::Config& config) {
 }  // namespace
 
 struct StoreOutput::State {
+  State(const fs::path& file, const config::Config& config)
+      : encoding(keyframe_encoding(config)), store(create_store(file)), merges(*store) {}
+
   lcm::RgbdEncoding encoding;  // first: a bad setting fails before the file is made
   std::unique_ptr<KeyframeStore> store;
+  daemon::backendd::StoreMerges merges;  // a merged keyframe's record is garbage once its merge is stored
 
   // Nothing is held in memory (no unsaved records): a record not written fails the run.
-  daemon::backendd::RecordRef last_keyframe;  // the newest keyframe record: garbage once merged
-
   void append(RecordKind kind, const std::vector<std::uint8_t>& bytes, daemon::backendd::RecordRef* where = nullptr) {
     if (store->append(kind, bytes, where) != Appended::kStored)
       throw io::InputError(store->file(), "cannot write the keyframe store: " + describe(store->health()));
@@ -56,7 +58,7 @@ struct StoreOutput::State {
 };
 
 StoreOutput::StoreOutput(const fs::path& file, const config::Config& config)
-    : state_(std::make_unique<State>(State{keyframe_encoding(config), create_store(file), {}})) {}
+    : state_(std::make_unique<State>(file, config)) {}
 
 StoreOutput::~StoreOutput() = default;
 
@@ -66,7 +68,9 @@ void StoreOutput::keyframe(core::SessionId session, std::int64_t id, const core:
   const auto message = lcm::to_message(lcm::Keyframe{session, id, frame, pose, cloud}, state_->encoding, &error);
   if (!message)
     throw io::InputError(state_->store->file(), "keyframe " + std::to_string(id) + " cannot be encoded: " + error);
-  state_->append(RecordKind::kKeyframe, lcm::encode(*message), &state_->last_keyframe);
+  daemon::backendd::RecordRef where;
+  state_->append(RecordKind::kKeyframe, lcm::encode(*message), &where);
+  state_->merges.keyframe(session, id, where);
 }
 
 void StoreOutput::local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph) {
@@ -75,8 +79,9 @@ void StoreOutput::local_graph(core::SessionId session, std::int64_t keyframe_id,
 }
 
 void StoreOutput::merge(const slam::KeyframeMerge& merge) {
-  state_->append(RecordKind::kMerge, daemon::backendd::encode_merge(merge));
-  state_->store->discard(state_->last_keyframe);  // the merge follows its keyframe's record at once
+  if (state_->merges.merged(merge, /*replayed=*/false, /*may_compact=*/true) != Appended::kStored)
+    throw io::InputError(state_->store->file(),
+                         "cannot write the keyframe store: " + describe(state_->store->health()));
 }
 
 std::uint64_t StoreOutput::records() const { return state_->store->records(); }
