@@ -14,13 +14,15 @@ Appended StoreMerges::store(const slam::KeyframeMerge& merge, const std::optiona
 }
 
 void StoreMerges::keyframe(core::SessionId session, std::int64_t id, const std::optional<RecordRef>& stored) {
-  newest_.insert_or_assign(session, std::pair{id, stored});
+  auto& newest = newest_[session];
+  newest.insert_or_assign(id, stored);
+  while (newest.size() > 2) newest.erase(newest.begin());
 }
 
 Appended StoreMerges::merged(const slam::KeyframeMerge& merge, bool replayed, bool may_compact) {
   std::optional<RecordRef> keyframe;
-  if (const auto it = newest_.find(merge.session); it != newest_.end() && it->second.first == merge.id)
-    keyframe = it->second.second;
+  if (const auto it = newest_.find(merge.session); it != newest_.end())
+    if (const auto k = it->second.find(merge.id); k != it->second.end()) keyframe = k->second;
   if (!replayed) return store(merge, keyframe, may_compact);
   awaiting_.insert_or_assign({merge.session, merge.id}, std::pair{merge, keyframe});
   return Appended::kStored;

@@ -23,8 +23,9 @@ class StoreMerges {
   explicit StoreMerges(KeyframeStore& store) : store_(store) {}
 
   /// The newest keyframe the mapper took of its session, and where its record lies (nullopt: not
-  /// on disk). A merge is of the newest keyframe of its session (merged when it comes, or, a
-  /// session's first, when its own local graph does), so only that one is remembered.
+  /// on disk). A merge is of one of the two newest keyframes of its session (the newest, merged
+  /// when it or its local graph comes; its predecessor, a session's first, when its successor
+  /// comes), so only those are remembered.
   void keyframe(core::SessionId session, std::int64_t id, const std::optional<RecordRef>& stored);
   /// The mapper merged keyframe (merge.session, merge.id). Live: its merge is stored and the
   /// keyframe's record discarded (store_merge). Replayed: the merge's record is waited for.
@@ -44,8 +45,8 @@ class StoreMerges {
   Appended store(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& keyframe, bool may_compact);
 
   KeyframeStore& store_;
-  // Each session's newest keyframe: its id and where its record lies.
-  std::map<core::SessionId, std::pair<std::int64_t, std::optional<RecordRef>>> newest_;
+  // Each session's two newest keyframes: where their records lie, by id.
+  std::map<core::SessionId, std::map<std::int64_t, std::optional<RecordRef>>> newest_;
   // Replayed merged keyframes whose merge record has not come yet: where their record lies.
   std::map<std::pair<core::SessionId, std::int64_t>, std::pair<slam::KeyframeMerge, std::optional<RecordRef>>>
       awaiting_;

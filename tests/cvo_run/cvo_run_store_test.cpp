@@ -81,7 +81,7 @@ TEST(CvoRunStore, CvoMapReadsTheStoreOfATwoSessionRun) {
 
 // Five visits of the sample (issue #27 item 3): the revisits' keyframes are merged into the first
 // visit's, each merge a small record after the keyframe's, and the merged keyframes' records are
-// compacted away (keyframe_store.hpp): the store holds at most about twice its live records, and
+// compacted away (keyframe_store.hpp): the store holds at most 4/3 of its live records, and
 // cvo-map replays it, merged keyframes from their merge records alone, to the map cvo-run made.
 TEST(CvoRunStore, RevisitsAreMergedAndTheirKeyframeRecordsCompactedAway) {
   const test::TempDir dir("cvo_run_store_revisits");
@@ -101,7 +101,8 @@ TEST(CvoRunStore, RevisitsAreMergedAndTheirKeyframeRecordsCompactedAway) {
     merge_records += record.kind == RecordKind::kMerge;
   }
   EXPECT_EQ(merge_records, merged);
-  EXPECT_LT(keyframe_records, keyframes);  // some merged keyframes' records are gone
+  EXPECT_LT(keyframe_records, keyframes);  // merged keyframes' records are gone, but for garbage below a quarter:
+  EXPECT_LE(3 * keyframe_records, 4 * (keyframes - merged));
   std::printf("5 visits: %ld keyframes, %ld merged, %ld keyframe records kept, store %zu bytes\n", keyframes, merged,
               keyframe_records, static_cast<std::size_t>(fs::file_size(store)));
 
