@@ -599,7 +599,7 @@ void Backendd::process_record(QueuedRecord& queued) {
     if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
       apply_keyframe(*keyframe, queued);
     else
-      apply_local_graph(std::get<LocalGraphRecord>(*value), !queued.arrived);
+      apply_local_graph(std::get<LocalGraphRecord>(*value));
   } catch (const slam::MapperError& e) {
     notes_.note_limited("not applied", std::string("not applied: ") + e.what());
   } catch (const std::exception& e) {
@@ -685,11 +685,10 @@ void Backendd::apply_merge(const slam::KeyframeMerge& merge) {
   publish_changes(merge.session, {}, true);
 }
 
-void Backendd::apply_local_graph(const LocalGraphRecord& record, bool replayed) {
-  const auto outcome = apply(work_->mapper, record);
+void Backendd::apply_local_graph(const LocalGraphRecord& record) {
+  const auto joined = apply(work_->mapper, record);
   ++work_->local_graphs;
-  for (const auto& merge : outcome.merges) store_merge(merge, replayed);
-  publish_changes(record.session, outcome.joined, !outcome.joined.empty() || !outcome.merges.empty());
+  publish_changes(record.session, joined, !joined.empty());
 }
 
 // A change that optimised the keyframe graph may have moved every session; any other, only its own.

@@ -127,7 +127,7 @@ class Backendd {
   void apply_merge(const slam::KeyframeMerge& merge);
   // A keyframe the mapper merged: its merge into the store, its own record discarded (store_merges.hpp).
   void store_merge(const slam::KeyframeMerge& merge, bool replayed);
-  void apply_local_graph(const LocalGraphRecord& record, bool replayed);
+  void apply_local_graph(const LocalGraphRecord& record);
   // After a change that may have touched `touched` only (nullopt: every session): the corrections
   // that changed, the full map when due (map_schedule.hpp).
   void publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,

@@ -66,7 +66,7 @@ slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& k) {
   return mapper.add_keyframe({k.session, k.id, k.frame, k.pose, k.cloud});
 }
 
-slam::LocalGraphOutcome apply(slam::Mapper& mapper, const LocalGraphRecord& record) {
+std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord& record) {
   return mapper.add_local_graph(record.session, record.keyframe_id, record.graph);
 }
 

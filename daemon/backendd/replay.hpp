@@ -43,7 +43,7 @@ Replayed replay_merge(slam::Mapper& mapper, const std::uint8_t* data, std::size_
 
 /// A keyframe into the mapper; throws slam::MapperError when it cannot be applied (nothing changed).
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& keyframe);
-/// A local graph into the mapper: the sessions it placed in the map, the merge it allowed; throws as above.
-slam::LocalGraphOutcome apply(slam::Mapper& mapper, const LocalGraphRecord& record);
+/// A local graph into the mapper: the sessions it placed in the map; throws as above.
+std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord& record);
 
 }  // namespace cvo::daemon::backendd

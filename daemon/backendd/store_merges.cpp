@@ -8,7 +8,6 @@ Appended StoreMerges::store(const slam::KeyframeMerge& merge, const std::optiona
                             bool may_compact) {
   const Appended appended = store_.append(RecordKind::kMerge, encode_merge(merge));
   if (appended == Appended::kNotDurable) return appended;  // held records are written before any newer one
-  ++written_;
   if (keyframe && store_.discard(*keyframe, may_compact)) ++compactions_;
   return appended;
 }

@@ -24,8 +24,8 @@ class StoreMerges {
 
   /// The newest keyframe the mapper took of its session, and where its record lies (nullopt: not
   /// on disk). A merge is of one of the two newest keyframes of its session (the newest, merged
-  /// when it or its local graph comes; its predecessor, a session's first, when its successor
-  /// comes), so only those are remembered.
+  /// when it comes; its predecessor, a session's first, when its successor comes), so only those
+  /// are remembered.
   void keyframe(core::SessionId session, std::int64_t id, const std::optional<RecordRef>& stored);
   /// The mapper merged keyframe (merge.session, merge.id). Live: its merge is stored and the
   /// keyframe's record discarded (store_merge). Replayed: the merge's record is waited for.
@@ -35,9 +35,8 @@ class StoreMerges {
   /// The replay is over: merges it made that have no record yet are stored now.
   void replay_done(bool may_compact);
 
-  /// Compactions this made (the store counts them too); merge records written.
+  /// Compactions this made (the store counts them too).
   [[nodiscard]] std::int64_t compactions() const { return compactions_; }
-  [[nodiscard]] std::int64_t written() const { return written_; }
 
  private:
   // Appends `merge`, then discards the keyframe's record at `keyframe` (when known) unless the merge
@@ -50,7 +49,7 @@ class StoreMerges {
   // Replayed merged keyframes whose merge record has not come yet: where their record lies.
   std::map<std::pair<core::SessionId, std::int64_t>, std::pair<slam::KeyframeMerge, std::optional<RecordRef>>>
       awaiting_;
-  std::int64_t compactions_ = 0, written_ = 0;
+  std::int64_t compactions_ = 0;
 };
 
 }  // namespace cvo::daemon::backendd

@@ -120,12 +120,7 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   fields.timestamp = k.frame.timestamp;
   fields.odometry = k.odometry;
   const auto first = first_loops(s, k.id, id);  // before this keyframe may be merged
-  if (auto merged = enter_loops(s, fields, id, loops, outcome)) {
-    outcome.merges.push_back(std::move(*merged));
-  } else if (!loops.empty() && !backend_.keyframe_graph().contains(id)) {
-    fields.joining = loops;
-    waiting_for_node_.insert_or_assign(id, std::move(fields));
-  }
+  if (auto merged = enter_loops(s, fields, id, loops, outcome)) outcome.merges.push_back(std::move(*merged));
   if (!placement.previous) s.undetected_first = k.id;
   if (first)
     if (auto m = merge_first(s, *first)) outcome.merges.push_back(std::move(*m));
@@ -143,8 +138,8 @@ void Mapper::enter_loop(Session& s, const loop_closure::LoopClosure& loop, doubl
   s.last_match_time = time;
 }
 
-LocalGraphOutcome Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
-                                          const odometry::LocalGraph& graph) {
+std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id, std::int64_t keyframe_id,
+                                                     const odometry::LocalGraph& graph) {
   if (graph.empty()) throw MapperError("local graph of " + name(session_id, keyframe_id) + " is empty");
   const auto first = static_cast<std::int64_t>(graph.keyframe().frame_index);
   for (const auto& n : graph.nodes())
@@ -171,12 +166,7 @@ LocalGraphOutcome Mapper::add_local_graph(core::SessionId session_id, std::int64
     throw MapperError("local graph of " + name(session_id, keyframe_id) + ": " + e.what());
   }
   ++revision_;
-  LocalGraphOutcome outcome;
-  for (const auto& n : {graph.nodes().front(), graph.nodes().back()})
-    if (auto m = merge_once_in_graph(offset + static_cast<posegraph::NodeId>(n.frame_index)))
-      outcome.merges.push_back(std::move(*m));
-  outcome.joined = after_change();
-  return outcome;
+  return after_change();
 }
 
 std::vector<core::SessionId> Mapper::after_change() {

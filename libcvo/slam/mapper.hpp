@@ -9,8 +9,7 @@
 //                     Backend; new loops trigger a keyframe-graph optimisation and the detector's
 //                     poses follow it.
 //   add_local_graph   the graph of keyframe (session, id) -> Backend::add_local_graph (loops that
-//                     waited for its keyframe enter now, and are optimised as above; a keyframe
-//                     that came before its node, a session's first, may be merged now: revisits).
+//                     waited for its keyframe enter now, and are optimised as above).
 //   finish            the global optimisation (Backend::optimise_all).
 //   map               every session (placed or not, its correction), every keyframe's pose, every
 //                     loop: what CVO_MAP carries. O(N) in the keyframes.
@@ -67,11 +66,13 @@
 // same with or without k's images, so a store's merge record replays to the same map). Its pose stays X_c · T_c^k for
 // correction() and the session's correction, and map() leaves it out: the map's keyframes follow the area. Only a
 // keyframe already in the graph (its predecessor's local graph closed: cvo-run and the tracker send
-// that graph first) and not its piece's anchor is merged; a session's first keyframe, its piece's
-// anchor until a loop joins that piece to an earlier one (which frees it), may be merged through that
-// very loop, so a revisiting session's keyframes all follow the area. A wrong loop passes α rarely; a merge
-// holds k rigidly to c in the keyframe graph, and the final optimisation relaxes it as a robust
-// edge (backend.hpp).
+// that graph first) and not its piece's anchor is merged. A session's first keyframe proposes no
+// candidates when it comes (no predecessor normalises η): its loops are searched when its successor
+// comes (LoopDetector::detect_first, η normalised by the successor), when a join has usually freed
+// it from anchoring its piece, and entered only if one shows it covered, with its merge (so its merge
+// record holds all they change): a revisiting session's keyframes all follow the area. A wrong loop passes α rarely; a
+// merge holds k rigidly to c in the keyframe graph, and the final optimisation relaxes it as a robust edge
+// (backend.hpp).
 //
 // Everything that cannot be applied throws MapperError before anything changed, with a message
 // naming the session and keyframe; the mapper stays usable.
@@ -203,12 +204,6 @@ struct KeyframeOutcome {
   std::vector<KeyframeMerge> merges;
 };
 
-/// What one add_local_graph did.
-struct LocalGraphOutcome {
-  std::vector<core::SessionId> joined;  // sessions placed in the map by it (through loops that waited for it)
-  std::vector<KeyframeMerge> merges;    // a keyframe it brought into the graph, merged (see the header)
-};
-
 class Mapper {
  public:
   Mapper(loop_closure::Vocabulary vocabulary, const MapperParameters& parameters);
@@ -221,10 +216,10 @@ class Mapper {
 
   /// The closed local graph of keyframe (session, keyframe_id): its first node is that keyframe's
   /// frame when the keyframe is known. Returns the sessions it placed in the map (through loops
-  /// that waited for it) and the merge it allowed. Throws MapperError when it cannot be applied (as
-  /// Backend does; a graph whose first frame is not its keyframe's).
-  LocalGraphOutcome add_local_graph(core::SessionId session, std::int64_t keyframe_id,
-                                    const odometry::LocalGraph& graph);
+  /// that waited for it). Throws MapperError when it cannot be applied (as Backend does; a graph
+  /// whose first frame is not its keyframe's).
+  std::vector<core::SessionId> add_local_graph(core::SessionId session, std::int64_t keyframe_id,
+                                               const odometry::LocalGraph& graph);
 
   /// The global optimisation of every frame, in at most max_seconds (Backend::optimise_all).
   posegraph::OptimizationReport finish(double max_seconds = std::numeric_limits<double>::infinity());
@@ -328,8 +323,6 @@ class Mapper {
   std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
                                                               posegraph::NodeId keyframe, core::SessionId session);
   void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
-  // A keyframe whose loops came before its node (waiting_for_node_), merged if it is in the graph now.
-  std::optional<KeyframeMerge> merge_once_in_graph(posegraph::NodeId keyframe);
   // Enters a keyframe's verified loops, those that join pieces first; merges it into the keyframe
   // that covers it, if one does: that merge (`keyframe`'s fields, the covering keyframe's filled in).
   std::optional<KeyframeMerge> enter_loops(Session& s, KeyframeMerge keyframe, posegraph::NodeId node,
@@ -353,10 +346,6 @@ class Mapper {
   std::vector<core::SessionId> order_;
   std::map<posegraph::NodeId, std::pair<core::SessionId, std::int64_t>> keyframe_of_node_;
   std::vector<loop_closure::LoopClosure> loops_;
-  // Keyframes with verified loops that were not in the keyframe graph when they came, by node: the
-  // merge they may allow once they are, its keyframe's fields and every loop (in `joining`: all are
-  // entered before it). Left when the node comes.
-  std::map<posegraph::NodeId, KeyframeMerge> waiting_for_node_;
   std::size_t loops_tried_ = 0;
   std::uint64_t revision_ = 0;
   core::LocalizationParameters localization_;

@@ -91,22 +91,6 @@ std::optional<KeyframeMerge> Mapper::merge_first(Session& s, const FirstLoops& f
   return enter_loops(s, std::move(m), found.node, found.loops, ignored);
 }
 
-std::optional<KeyframeMerge> Mapper::merge_once_in_graph(posegraph::NodeId keyframe) {
-  const auto waiting = waiting_for_node_.find(keyframe);
-  if (waiting == waiting_for_node_.end() || !backend_.keyframe_graph().contains(keyframe)) return std::nullopt;
-  KeyframeMerge m = std::move(waiting->second);
-  waiting_for_node_.erase(waiting);
-  const auto covering = covering_loop(m.joining, keyframe, m.session);  // its loops are entered now
-  if (!covering) return std::nullopt;
-  const auto& loop = m.joining[covering->first];
-  std::tie(m.covering_session, m.covering_id) = keyframe_of_node_.at(loop.from);
-  m.relative = loop.measurement;
-  m.information = loop.information;
-  m.gamma = covering->second;
-  merge(m, keyframe, loop.from);
-  return m;
-}
-
 bool Mapper::apply_merge(const KeyframeMerge& m) {
   const std::string what = "merge of keyframe " + std::to_string(m.id) + " of session " +
                            core::session_name(m.session) + " into keyframe " + std::to_string(m.covering_id) +

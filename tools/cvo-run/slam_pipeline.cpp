@@ -75,8 +75,7 @@ void SlamPipeline::to_store(Write&& write) {
 
 void SlamPipeline::add_local_graph(core::SessionId session, const odometry::HandedLocalGraph& g) {
   to_store([&](StoreOutput& store) { store.local_graph(session, g.keyframe_id, *g.graph); });
-  const auto outcome = mapper_.add_local_graph(session, g.keyframe_id, *g.graph);
-  for (const auto& merge : outcome.merges) to_store([&](StoreOutput& store) { store.merge(merge); });
+  mapper_.add_local_graph(session, g.keyframe_id, *g.graph);
 }
 
 void SlamPipeline::finish() {
