@@ -48,6 +48,7 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
   if (keyframes_.contains(id))
     throw std::invalid_argument("LoopDetector::add_keyframe: keyframe " + std::to_string(id) + " is stored already");
   attempts_.clear();
+  confirmations_.clear();
   const OrbFeatures features = extract_orb(frame.bgr, parameters_.verification);
   LoopKeyframe keyframe = make_loop_keyframe(id, features, frame, cloud, placement.pose, parameters_);
   keyframe.piece = placement.piece;
@@ -68,6 +69,7 @@ std::vector<LoopClosure> LoopDetector::add_keyframe(const KeyframePlacement& pla
 
 std::vector<LoopClosure> LoopDetector::detect_first(std::int64_t first, std::int64_t next) {
   attempts_.clear();
+  confirmations_.clear();
   const auto& keyframe = keyframes_.at(first);
   if (!keyframes_.contains(next))
     throw std::out_of_range("LoopDetector::detect_first: no keyframe " + std::to_string(next));
@@ -89,6 +91,10 @@ std::vector<LoopClosure> LoopDetector::verify(const LoopKeyframe& keyframe,
     if (v.refinement.iterations > 0) ++refinements;
     v.attempt.eta = c.eta;
     attempts_.push_back(v.attempt);
+    if (v.confirmation) {
+      v.confirmation->eta = c.eta;
+      confirmations_.push_back(*v.confirmation);
+    }
     if (v.closure) {
       v.closure->eta = c.eta;
       loops.push_back(*v.closure);

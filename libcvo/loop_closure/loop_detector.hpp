@@ -117,6 +117,9 @@ class LoopDetector {
   void update_poses(const std::map<std::int64_t, PlacedPose>& poses);
 
   [[nodiscard]] const std::vector<LoopAttempt>& last_attempts() const { return attempts_; }
+  /// Of the last search's candidates, those the current estimate already explains
+  /// (LoopVerification::confirmation), best η first: no loops, but evidence of coverage.
+  [[nodiscard]] const std::vector<LoopClosure>& last_confirmations() const { return confirmations_; }
   [[nodiscard]] std::size_t size() const { return keyframes_.size(); }
   [[nodiscard]] bool contains(std::int64_t id) const { return keyframes_.contains(id); }
   [[nodiscard]] const LoopDetectorParameters& parameters() const { return parameters_; }
@@ -130,9 +133,10 @@ class LoopDetector {
   std::map<std::int64_t, LoopKeyframe> keyframes_;  // features, 3-D keypoints, cloud, pose
   std::optional<std::int64_t> previous_;            // the last keyframe added
   std::vector<LoopAttempt> attempts_;
+  std::vector<LoopClosure> confirmations_;
 
   // Steps 2-4 for `keyframe` against `candidates` (best η first), at most max_refinements CVO runs:
-  // the loops accepted; each attempt into attempts_.
+  // the loops accepted; each attempt into attempts_, each confirmation into confirmations_.
   std::vector<LoopClosure> verify(const LoopKeyframe& keyframe, const std::vector<LoopCandidate>& candidates,
                                   std::optional<std::int64_t> candidates_below);
 };

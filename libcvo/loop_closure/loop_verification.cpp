@@ -125,6 +125,9 @@ LoopVerification verify_loop(const LoopKeyframe& i, const LoopKeyframe& j, const
   v.attempt.rivals = ip.rivals();
   if (!ip.accepts()) {
     v.attempt.verdict = "alpha <= 0";
+    if (std::isfinite(ip.estimate) && ip.estimate >= ip.cvo)
+      v.confirmation =
+          LoopClosure{j.id, i.id, j.pose.inverse() * i.pose, information, 0.0, v.attempt.alpha, v.attempt.inliers};
     return v;
   }
 

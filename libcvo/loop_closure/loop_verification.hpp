@@ -131,8 +131,13 @@ struct AlphaInnerProducts {
 };
 
 struct LoopVerification {
-  LoopAttempt attempt;                          // eta is the caller's (0 here)
-  std::optional<LoopClosure> closure;           // when accepted (eta 0 here too)
+  LoopAttempt attempt;                 // eta is the caller's (0 here)
+  std::optional<LoopClosure> closure;  // when accepted (eta 0 here too)
+  // Refused at step 4 only because the current estimate explains the view at least as well as CVO
+  // (<f_Xi, T_rel^-1.f_Xj> >= <f_Xi, T_CVO^-1.f_Xj>, the two in one piece): no loop, as it adds
+  // nothing, but a view the map already holds where it is, with 3a-3b's evidence. Its measurement is
+  // the estimate's T_j^i, its information CVO's: what a revisit is merged by (slam/mapper.hpp).
+  std::optional<LoopClosure> confirmation;
   core::SE3 initial;                            // T_ji^0, RANSAC (identity when it failed)
   registration::RegistrationResult refinement;  // CVO's T_ij and Hessian (default when not run)
   AlphaInnerProducts inner_products;            // when CVO converged

@@ -58,11 +58,13 @@
 // when a verified loop c → k (bag of words, RANSAC, CVO, α: nothing new) shows that c would still
 // serve as k's keyframe: the tracker's own keyframe test γ (eq. 9) of k's cloud against c's at the
 // loop's pose is at or above the tracker's threshold γ_thres (keyframe.inner_product_ratio_threshold,
-// the same key; LoopDetector::coverage says how γ is normalised here). Of several such loops the
-// best γ wins. k is then merged into c (Backend::merge_keyframe): an alias X_k = X_c · T_c^k, not a
-// node of the keyframe graph, its edges moved onto c and fused with c's (keyframe_merge.hpp), its
-// other loops kept as loops of c; the loop detector forgets it (its cloud, features and bag of
-// words freed; its successor's η is normalised by c's vector instead, c then a candidate too: the
+// the same key; LoopDetector::coverage says how γ is normalised here). A candidate refused by α
+// only because k's current estimate explains the view at least as well as CVO (a confirmation,
+// loop_verification.hpp: the map holds k where it is already, the commonest case of a revisit) counts
+// the same at the estimate's pose, though it is no loop. Of several the best γ wins. k is then merged into c
+// (Backend::merge_keyframe): an alias X_k = X_c · T_c^k, not a node of the keyframe graph, its edges moved onto c and
+// fused with c's (keyframe_merge.hpp), its other loops kept as loops of c; the loop detector forgets it (its cloud,
+// features and bag of words freed; its successor's η is normalised by c's vector instead, c then a candidate too: the
 // same with or without k's images, so a store's merge record replays to the same map). Its pose stays X_c · T_c^k for
 // correction() and the session's correction, and map() leaves it out: the map's keyframes follow the area. Only a
 // keyframe already in the graph (its predecessor's local graph closed: cvo-run and the tracker send
@@ -323,18 +325,22 @@ class Mapper {
   std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
                                                               posegraph::NodeId keyframe, core::SessionId session);
   void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
+  // A keyframe's verified loops and the views the estimate confirms (LoopDetector::last_confirmations).
+  struct FoundLoops {
+    std::vector<loop_closure::LoopClosure> loops, confirmations;
+  };
   // Enters a keyframe's verified loops, those that join pieces first; merges it into the keyframe
-  // that covers it, if one does: that merge (`keyframe`'s fields, the covering keyframe's filled in).
+  // that covers it best (by a loop or a confirmation), if one does: that merge (`keyframe`'s fields,
+  // the covering keyframe's filled in).
   std::optional<KeyframeMerge> enter_loops(Session& s, KeyframeMerge keyframe, posegraph::NodeId node,
-                                           const std::vector<loop_closure::LoopClosure>& loops,
-                                           KeyframeOutcome& outcome);
+                                           const FoundLoops& found, KeyframeOutcome& outcome);
   // The session's first keyframe, once `next` (at node `next_node`, still in the loop detector: it
   // normalises η) follows it: its loops (LoopDetector::detect_first). merge_first enters them with
   // its merge only when one shows it covered, else none (so its merge record holds all they change).
   struct FirstLoops {
     std::int64_t id = 0;
     posegraph::NodeId node = 0;
-    std::vector<loop_closure::LoopClosure> loops;
+    FoundLoops found;
   };
   std::optional<FirstLoops> first_loops(Session& s, std::int64_t next, posegraph::NodeId next_node);
   std::optional<KeyframeMerge> merge_first(Session& s, const FirstLoops& found);

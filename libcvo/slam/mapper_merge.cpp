@@ -33,8 +33,8 @@ void Mapper::merge(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph
 }
 
 std::optional<KeyframeMerge> Mapper::enter_loops(Session& s, KeyframeMerge m, posegraph::NodeId node,
-                                                 const std::vector<loop_closure::LoopClosure>& loops,
-                                                 KeyframeOutcome& outcome) {
+                                                 const FoundLoops& found, KeyframeOutcome& outcome) {
+  const auto& loops = found.loops;
   std::vector<bool> entered(loops.size(), false);
   // Loops that join pieces first: then the keyframe is in the map and may be merged (see the header).
   for (std::size_t i = 0; i < loops.size(); ++i)
@@ -44,15 +44,18 @@ std::optional<KeyframeMerge> Mapper::enter_loops(Session& s, KeyframeMerge m, po
       m.joining.push_back(loops[i]);
       entered[i] = true;
     }
-  const auto covering = covering_loop(loops, node, m.session);
+  auto covering = covering_loop(loops, node, m.session);
+  const auto confirmed = covering_loop(found.confirmations, node, m.session);
+  const bool by_confirmation = confirmed && (!covering || confirmed->second > covering->second);
+  if (by_confirmation) covering = confirmed;
   if (covering) {
-    const auto& loop = loops[covering->first];
+    const auto& loop = by_confirmation ? found.confirmations[covering->first] : loops[covering->first];
     std::tie(m.covering_session, m.covering_id) = keyframe_of_node_.at(loop.from);
     m.relative = loop.measurement;
     m.information = loop.information;
     m.gamma = covering->second;
     merge(m, node, loop.from);
-    entered[covering->first] = true;  // the alias holds it (a joining loop: from now on)
+    if (!by_confirmation) entered[covering->first] = true;  // the alias holds it (a joining loop: from now on)
     s.last_match_time = m.timestamp;
   }
   for (std::size_t i = 0; i < loops.size(); ++i)
@@ -75,20 +78,23 @@ std::optional<Mapper::FirstLoops> Mapper::first_loops(Session& s, std::int64_t n
     return std::nullopt;
   auto loops = detector_.detect_first(node, next_node);
   loops_tried_ += detector_.last_attempts().size();
-  return FirstLoops{first, node, std::move(loops)};
+  return FirstLoops{first, node, {std::move(loops), detector_.last_confirmations()}};
 }
 
 std::optional<KeyframeMerge> Mapper::merge_first(Session& s, const FirstLoops& found) {
-  if (!covering_loop(found.loops, found.node, keyframe_of_node_.at(found.node).first)) return std::nullopt;
+  const core::SessionId session = keyframe_of_node_.at(found.node).first;
+  if (!covering_loop(found.found.loops, found.node, session) &&
+      !covering_loop(found.found.confirmations, found.node, session))
+    return std::nullopt;  // nothing entered
   const KeyframeRecord& record = s.keyframes.at(found.id);
   KeyframeMerge m;
-  m.session = keyframe_of_node_.at(found.node).first;
+  m.session = session;
   m.id = found.id;
   m.frame = record.frame;
   m.timestamp = record.timestamp;
   m.odometry = record.odometry;
   KeyframeOutcome ignored;  // its loops are the merge's
-  return enter_loops(s, std::move(m), found.node, found.loops, ignored);
+  return enter_loops(s, std::move(m), found.node, found.found, ignored);
 }
 
 bool Mapper::apply_merge(const KeyframeMerge& m) {
