@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "daemon/backendd/keyframe_store.hpp"
+#include "daemon/backendd/merge_record.hpp"
 #include "fuzz/auth_harness.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
@@ -116,6 +117,39 @@ int main(int argc, char** argv) try {
     cvo::daemon::backendd::KeyframeStore store(store_file, recovered, warning);
     store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
     store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph);
+  }
+  // A merge record, and a store with one after its keyframe (a revisit merged, issue 27).
+  cvo::slam::KeyframeMerge merge;
+  merge.session = keyframe.session;
+  merge.id = keyframe.id;
+  merge.frame = static_cast<std::int64_t>(keyframe.frame.index);
+  merge.timestamp = keyframe.frame.timestamp;
+  merge.odometry = keyframe.pose;
+  merge.covering_session = keyframe.session + 1;
+  merge.covering_id = 3;
+  merge.relative = cvo::core::SE3(Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ())),
+                                  Eigen::Vector3d(0.05, 0, 0.01));
+  merge.gamma = 0.93;
+  cvo::loop_closure::LoopClosure loop;
+  loop.from = 7;
+  loop.to = 12;
+  loop.measurement = merge.relative;
+  loop.eta = 1.5;
+  loop.alpha = 0.02;
+  loop.inliers = 40;
+  merge.joining = {loop};
+  merge.others = {loop, loop};
+  const auto merge_bytes = cvo::daemon::backendd::encode_merge(merge);
+  write(out / "merge_record/sample", merge_bytes);
+  const fs::path merged_store = out / "keyframe_store/with-merge";
+  fs::remove(merged_store);
+  {
+    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
+    std::string warning;
+    cvo::daemon::backendd::KeyframeStore store(merged_store, recovered, warning);
+    store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
+    store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph);
+    store.append(cvo::daemon::backendd::RecordKind::kMerge, merge_bytes);
   }
   const auto store_size = fs::file_size(store_file);
   fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
