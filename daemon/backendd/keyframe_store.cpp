@@ -230,15 +230,10 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
   const StoreScan s = scan_store(file_, data, size);
   if (size < kStoreMagic.size()) return create();
 
-  // Each record's place as the file will be: a clean copy leaves out the damaged stretches.
-  const auto place = [&](const IntactRecord& r) {
-    const auto at = after_removing(static_cast<off_t>(r.at), s.damaged, [](const SkippedStretch& d) {
-      return std::pair{static_cast<off_t>(d.at), d.bytes};
-    });
-    return RecordRef{at.value_or(0), r.bytes, 0};
-  };
+  const std::size_t first = recovered.size();
   for (const auto& r : s.records)
-    recovered.push_back({r.kind, {data + r.at + kRecordHeaderBytes, data + r.at + r.bytes}, place(r)});
+    recovered.push_back(
+        {r.kind, {data + r.at + kRecordHeaderBytes, data + r.at + r.bytes}, {static_cast<off_t>(r.at), r.bytes, 0}});
   records_ = s.records.size();
   end_ = static_cast<off_t>(size);
   if (s.clean()) return;
@@ -246,6 +241,12 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
   if (!s.damaged.empty()) {
     const auto copy = replace_with_clean_copy(file_, data, intact_ranges(s, size), st.st_mode);
     if (copy.fd >= 0) {
+      for (std::size_t i = first; i < recovered.size(); ++i) {  // the copy leaves out the damaged stretches
+        auto& where = recovered[i].where;
+        where.offset = after_removing(where.offset, s.damaged, [](const SkippedStretch& d) {
+                         return std::pair{static_cast<off_t>(d.at), d.bytes};
+                       }).value_or(0);
+      }
       ::close(fd_);
       fd_ = copy.fd;
       end_ = copy.size;
@@ -253,9 +254,6 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
                  " now holds the intact records";
       return;
     }
-    for (std::size_t i = 0; i < s.records.size(); ++i)  // each stays where it is
-      recovered[recovered.size() - s.records.size() + i].where = {static_cast<off_t>(s.records[i].at),
-                                                                  s.records[i].bytes, 0};
     warning += "; no clean copy could be written (" + copy.error + "): the damaged stretches stay in " +
                file_.string() + " and are skipped at every start";
   }

@@ -21,10 +21,11 @@
 // file, the store is compacted: its other records are copied in order to FILE.recovering, made durable
 // and renamed over FILE, as a damaged store's intact records are (the original is not kept), so the
 // file stays within 4/3 of its live records (each compaction copies at most three times the garbage
-// it drops: the disk's cost of a merged keyframe is bounded too). A RecordRef from before the last compaction is moved
-// with its record; one from before two is void. Garbage is counted in this run only: a restarted
-// store starts with none (its merged keyframes' records replay harmlessly, their merge records after
-// them, and the back end discards them again: each recovered record says where it lies).
+// it drops: the disk's cost of a merged keyframe is bounded too). A RecordRef from before the last
+// compaction is moved with its record; one from before two is void. Garbage is counted in this run
+// only: a restarted store starts with none (its merged keyframes' records replay harmlessly, their
+// merge records after them, and the back end discards them again: each recovered record says where
+// it lies).
 //
 // A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
 // write is cut back so no torn record stays in front of the next one, and the record is held in

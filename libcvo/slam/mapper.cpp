@@ -113,15 +113,10 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   KeyframeOutcome outcome;
   outcome.loops_tried = detector_.last_attempts().size();
   loops_tried_ += outcome.loops_tried;
-  KeyframeMerge fields;  // the keyframe's own, for a merge
-  fields.session = k.session;
-  fields.id = k.id;
-  fields.frame = frame;
-  fields.timestamp = k.frame.timestamp;
-  fields.odometry = k.odometry;
   const FoundLoops found{std::move(loops), detector_.last_confirmations()};
   const auto first = first_loops(s, k.id, id);  // before this keyframe may be merged
-  if (auto merged = enter_loops(s, fields, id, found, outcome)) outcome.merges.push_back(std::move(*merged));
+  if (auto merged = enter_loops(s, merge_of(k.session, k.id, s.keyframes.at(k.id)), id, found, outcome))
+    outcome.merges.push_back(std::move(*merged));
   if (!placement.previous) s.undetected_first = k.id;
   if (first)
     if (auto m = merge_first(s, *first)) outcome.merges.push_back(std::move(*m));

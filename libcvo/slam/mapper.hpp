@@ -325,6 +325,8 @@ class Mapper {
   std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
                                                               posegraph::NodeId keyframe, core::SessionId session);
   void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
+  // A merge of keyframe (session, id) with its own fields filled in, the covering keyframe's not yet.
+  [[nodiscard]] static KeyframeMerge merge_of(core::SessionId session, std::int64_t id, const KeyframeRecord& record);
   // A keyframe's verified loops and the views the estimate confirms (LoopDetector::last_confirmations).
   struct FoundLoops {
     std::vector<loop_closure::LoopClosure> loops, confirmations;

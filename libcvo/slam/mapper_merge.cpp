@@ -32,6 +32,16 @@ void Mapper::merge(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph
   ++revision_;
 }
 
+KeyframeMerge Mapper::merge_of(core::SessionId session, std::int64_t id, const KeyframeRecord& record) {
+  KeyframeMerge m;
+  m.session = session;
+  m.id = id;
+  m.frame = record.frame;
+  m.timestamp = record.timestamp;
+  m.odometry = record.odometry;
+  return m;
+}
+
 std::optional<KeyframeMerge> Mapper::enter_loops(Session& s, KeyframeMerge m, posegraph::NodeId node,
                                                  const FoundLoops& found, KeyframeOutcome& outcome) {
   const auto& loops = found.loops;
@@ -85,16 +95,9 @@ std::optional<KeyframeMerge> Mapper::merge_first(Session& s, const FirstLoops& f
   const core::SessionId session = keyframe_of_node_.at(found.node).first;
   if (!covering_loop(found.found.loops, found.node, session) &&
       !covering_loop(found.found.confirmations, found.node, session))
-    return std::nullopt;  // nothing entered
-  const KeyframeRecord& record = s.keyframes.at(found.id);
-  KeyframeMerge m;
-  m.session = session;
-  m.id = found.id;
-  m.frame = record.frame;
-  m.timestamp = record.timestamp;
-  m.odometry = record.odometry;
+    return std::nullopt;    // nothing entered
   KeyframeOutcome ignored;  // its loops are the merge's
-  return enter_loops(s, std::move(m), found.node, found.found, ignored);
+  return enter_loops(s, merge_of(session, found.id, s.keyframes.at(found.id)), found.node, found.found, ignored);
 }
 
 bool Mapper::apply_merge(const KeyframeMerge& m) {
