@@ -10,8 +10,8 @@
 //             same keyframes through an in-process slam::Mapper, split by what they cost: the ones
 //             that only looked for loops (bag of words, RANSAC, CVO, α) and the ones whose loop
 //             started an optimisation of the keyframe graph.
-//   revisits  the first route driven V times: store bytes and keyframes held after visits 1, 2, 5,
-//             V, and the growth against one visit.
+//   revisits  the first route driven V times: store bytes, the daemon's RSS and latency after visits 1, 2, 5,
+//             every 20th and V, and the store's growth against one visit.
 // Run (it enters a private network namespace itself; root, as the networked tests):
 //   build/release/bin/map_scale [--keyframes 100,1000,10000] [--visits 20] [--sequence DIR]...
 #include <unistd.h>
@@ -237,7 +237,7 @@ std::size_t revisits(const Options& options, const config::Config& config, const
   SessionDriver driver(config, probe, nullptr);
   std::printf(
       "\nrevisits of %s (%zu keyframes a visit):\n\n| visits | keyframes fed | store MB | store / one visit | "
-      "latency p50 ms | latency p99 ms |\n| --- | --- | --- | --- | --- | --- |\n",
+      "latency p50 ms | latency p99 ms | RSS MB |\n| --- | --- | --- | --- | --- | --- | --- |\n",
       route.name.c_str(), route.keyframes);
   double one_visit = 0;
   std::size_t missing = 0;
@@ -249,11 +249,12 @@ std::size_t revisits(const Options& options, const config::Config& config, const
       else
         ++missing;
     });
-    const double store = double(probe.snapshot().store_bytes);
+    const auto snapshot = probe.snapshot();
+    const double store = double(snapshot.store_bytes);
     if (v == 1) one_visit = store;
-    if (v == 1 || v == 2 || v == 5 || v == options.visits)
-      std::printf("| %zu | %zu | %.2f | %.2f | %.1f | %.1f |\n", v, v * route.keyframes, store / 1e6, store / one_visit,
-                  p(latency, 50), p(latency, 99));
+    if (v == 1 || v == 2 || v == 5 || v % 20 == 0 || v == options.visits)
+      std::printf("| %zu | %zu | %.2f | %.2f | %.1f | %.1f | %.1f |\n", v, v * route.keyframes, store / 1e6,
+                  store / one_visit, p(latency, 50), p(latency, 99), double(snapshot.rss_bytes) / 1e6);
     std::fflush(stdout);
   }
   probe.stop();

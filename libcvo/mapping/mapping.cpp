@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <set>
 
 #include "libcvo/core/pixel_rays.hpp"
 
@@ -115,8 +116,35 @@ Eigen::Matrix3d Mapping::level_of(const Keyframe& keyframe) const {
                         Eigen::Vector3d::UnitZ());
 }
 
+// Keyframes of the map's sessions that it no longer lists were merged into keyframes that cover
+// their view (slam/mapper.hpp: revisits): their clouds go, and their footprints leave the grid.
+// Returns whether the grid changed.
+bool Mapping::forget_merged(const slam::Map& map) {
+  std::set<core::SessionId> sessions;
+  for (const auto& s : map.sessions) sessions.insert(s.session);
+  std::set<KeyframeKey> listed;
+  for (const auto& k : map.keyframes) listed.insert({k.session, k.id});
+  bool changed = false;
+  for (auto it = keyframes_.begin(); it != keyframes_.end();) {
+    if (!sessions.contains(it->first.session) || listed.contains(it->first)) {
+      ++it;
+      continue;
+    }
+    if (const auto& k = *it->second; k.placed) {
+      counts_.remove(*k.footprint, *k.placed);
+      statistics_.cells_changed_last += counts_.cells_changed_last();
+      changed = true;
+    }
+    it = keyframes_.erase(it);
+    ++statistics_.forgotten;
+  }
+  return changed;
+}
+
 bool Mapping::place(const slam::Map& map) {
   const auto started = std::chrono::steady_clock::now();
+  statistics_.cells_changed_last = 0;
+  const bool forgot = forget_merged(map);
   std::vector<Keyframe*> in_map;
   for (const auto* k : placed_keyframes(map)) {
     const auto it = keyframes_.find({k->session, k->id});
@@ -139,8 +167,7 @@ bool Mapping::place(const slam::Map& map) {
     rebuild = true;
   }
   statistics_.replaced_last = statistics_.moved_last = 0;
-  statistics_.cells_changed_last = 0;
-  if (!frame_) return false;
+  if (!frame_) return forgot;
 
   const core::SE3 grid_T_map = frame_->map_T_grid.inverse();
   std::vector<std::pair<Keyframe*, FootprintPlacement>> moves;
@@ -175,7 +202,7 @@ bool Mapping::place(const slam::Map& map) {
   statistics_.rebuilt_last = rebuild;
   statistics_.place_ms_last =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
-  return rebuild || !moves.empty();
+  return forgot || rebuild || !moves.empty();
 }
 
 std::optional<MapGrid> Mapping::grid() const {

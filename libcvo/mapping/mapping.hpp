@@ -10,7 +10,10 @@
 //                 are placed, moved ones re-placed (occupancy.hpp: only their cells change), and
 //                 every one when the grid frame moved or most keyframes did. A keyframe moved
 //                 when some column of its footprint moved by a quarter cell or more; one that
-//                 moved less stays where it was placed.
+//                 moved less stays where it was placed. A keyframe of the map's sessions that the
+//                 map no longer lists (merged into one that covers its view: slam/mapper.hpp,
+//                 revisits) is forgotten, its footprint taken out of the grid: the local clouds
+//                 follow the area mapped, not the time spent in it.
 //   grid, cloud, octree   the products (occupancy.hpp, cloud.hpp, octree.hpp).
 //
 // Keyframes of sessions not yet in the map frame wait, local clouds made, until their session
@@ -57,6 +60,7 @@ struct MapGrid {
 
 struct MappingStatistics {
   std::size_t keyframes = 0;        // local clouds made
+  std::size_t forgotten = 0;        // of them, dropped: the map no longer lists their keyframes (merged)
   std::size_t placed = 0;           // footprints in the grid
   std::size_t local_map_bytes = 0;  // every keyframe's cloud and footprint
   std::size_t grid_bytes = 0;       // the counts behind the grid
@@ -98,6 +102,7 @@ class Mapping {
 
  private:
   struct Keyframe;
+  bool forget_merged(const slam::Map& map);
   [[nodiscard]] std::optional<GridFrame> decide_frame(const std::vector<Keyframe*>& in_map) const;
   [[nodiscard]] Eigen::Matrix3d level_of(const Keyframe& keyframe) const;
 

@@ -188,6 +188,33 @@ TEST(Mapping, PlacingTheSameMapAgainChangesNothing) {
   EXPECT_EQ(b.mapping.statistics().replaced_last, 0u);
 }
 
+TEST(Mapping, AKeyframeTheMapNoLongerListsIsForgottenAndLeavesTheGrid) {
+  auto b = build(turning(), 0, mounted());
+  const auto held = b.mapping.statistics().local_map_bytes;
+  auto merged = map_of(b.poses, 2);  // keyframe 5 merged into one that covers its view
+  merged.keyframes.erase(merged.keyframes.begin() + 5);
+  EXPECT_TRUE(b.mapping.place(merged));
+  const auto statistics = b.mapping.statistics();
+  EXPECT_EQ(statistics.forgotten, 1u);
+  EXPECT_EQ(statistics.placed, 7u);
+  EXPECT_LT(statistics.local_map_bytes, held) << "its cloud is freed";
+  EXPECT_FALSE(b.mapping.knows({1, 5}));
+  // The grid is the one the seven others make.
+  Mapping fresh(mounted());
+  const auto without = room(false);
+  for (std::size_t k = 0; k < b.poses.size(); ++k)
+    if (k != 5)
+      fresh.add_keyframe({1, static_cast<std::int64_t>(k)}, sim::render(without, testing::camera(), b.poses[k]));
+  fresh.place(merged);
+  EXPECT_EQ(b.mapping.grid()->grid, fresh.grid()->grid);
+  // Keyframes of a session the map does not name are not its to forget.
+  auto other = map_of(b.poses, 3);
+  other.sessions.front().session = 2;
+  other.keyframes.clear();
+  b.mapping.place(other);
+  EXPECT_EQ(b.mapping.statistics().forgotten, 1u);
+}
+
 // The grid frame's z in the world, and its origin's height above the floor.
 void expect_level_and_on_the_floor(const Built& b, double degrees, double metres) {
   const auto grid = b.mapping.grid();
