@@ -152,6 +152,7 @@ void Backend::join_pieces(const loop_closure::LoopClosure& loop) {
       move_to_side ? from * loop.measurement * to.inverse() : to * loop.measurement.inverse() * from.inverse();
   for (const auto& [id, node] : std::map<NodeId, posegraph::Node>(keyframes_.nodes()))
     if (piece(session_of(id)) == moved) keyframes_.set_pose(id, move * node.pose);
+  rebuild_incremental_ = true;  // its merged keyframes' nodes there stayed behind
   for (auto& [id, s] : sessions_)
     if (s.piece == moved) s.piece = keep;
   if (const auto& anchor = sessions_.at(moved).anchor) keyframes_.set_fixed(*anchor, false);
@@ -174,9 +175,21 @@ bool same_pose(const core::SE3& a, const core::SE3& b) {
 }
 }  // namespace
 
-// The keyframe graph only grows (nodes, edges appended); between optimisations join_pieces may
-// move nodes and release an anchor: those become set_pose / set_fixed (the next update rebuilds).
+// incremental_ holds the keyframe graph as factors (see the header): each factor that entered
+// keyframes_ (a new edge, or the contribution fused into an existing one: to first order the two
+// quadratics add up to the fused one) and, for a merged keyframe, its old factors on its own node
+// with a tie to the covering keyframe. It is built anew from keyframes_ when a join moved nodes
+// apart (aliases included) or it holds twice the factors keyframes_ has (merges and fusions add
+// factors the keyframe graph does not keep), so that it stays as small as the keyframe graph,
+// once per as many changes as the graph has edges.
 void Backend::sync_incremental() {
+  const std::size_t bound = 2 * keyframes_.edges().size() + kIncrementalSlack;
+  if (rebuild_incremental_ || incremental_factors_ + unsynced_.size() > bound) {
+    incremental_ = posegraph::IncrementalOptimizer(incremental_options(parameters_));
+    incremental_factors_ = 0;
+    unsynced_ = keyframes_.edges();
+    rebuild_incremental_ = false;
+  }
   for (const auto& [id, node] : keyframes_.nodes()) {
     if (!incremental_.contains(id)) {
       incremental_.add_node(id, node.pose, node.fixed);
@@ -185,8 +198,9 @@ void Backend::sync_incremental() {
     if (incremental_.fixed(id) != node.fixed) incremental_.set_fixed(id, node.fixed);
     if (!same_pose(incremental_.pose(id), node.pose)) incremental_.set_pose(id, node.pose);
   }
-  for (; synced_edges_ < keyframes_.edges().size(); ++synced_edges_)
-    incremental_.add_edge(keyframes_.edges()[synced_edges_]);
+  for (const auto& e : unsynced_) incremental_.add_edge(e);
+  incremental_factors_ += unsynced_.size();
+  unsynced_.clear();
 }
 
 posegraph::OptimizationReport Backend::optimise_keyframes() {

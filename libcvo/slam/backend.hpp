@@ -36,7 +36,12 @@
 //                    the factor it changes costs; the updates repeat until no node moves by more than
 //                    the relinearisation threshold (at most max_iterations). A rigid move of a piece
 //                    (a join, below) or a released anchor makes the next one a rebuild (the whole
-//                    graph, once). Frames follow their keyframe.
+//                    graph, once). Frames follow their keyframe. A merge (below) changes the graph's
+//                    structure, which factors cannot follow: the optimiser keeps the merged keyframe's
+//                    factors on its own node, tied to the covering keyframe with the loop's
+//                    information, and every fused edge's new contribution as a factor of its own
+//                    (to first order the same cost); it is built anew from the keyframe graph once it
+//                    holds twice the graph's edges, or after a join (sync_incremental).
 //  optimise_all      The final global optimisation: every frame a node, every local edge and
 //                    bridge (plain squares), every loop (robust), first keyframe fixed, from the
 //                    current poses. Its solution replaces the keyframe poses and every frame's
@@ -222,10 +227,14 @@ class Backend {
 
   BackendParameters parameters_;
   posegraph::PoseGraph keyframes_;
-  void sync_incremental();  // keyframes_'s new nodes and edges, moved poses, changed anchors into incremental_
+  void sync_incremental();  // keyframes_'s new nodes and factors, moved poses, changed anchors into incremental_
 
-  posegraph::IncrementalOptimizer incremental_;  // the keyframe graph's factor, kept between optimisations
-  std::size_t synced_edges_ = 0;                 // keyframes_.edges() already in incremental_
+  posegraph::IncrementalOptimizer incremental_;         // the keyframe graph's factor, kept between optimisations
+  std::vector<posegraph::Edge> unsynced_;               // factors for incremental_ since the last sync
+  std::size_t incremental_factors_ = 0;                 // factors incremental_ holds
+  bool rebuild_incremental_ = false;                    // a join moved nodes: build incremental_ anew
+  bool rerouting_ = false;                              // merge_keyframe moves k's edges: incremental_ has them on k
+  static constexpr std::size_t kIncrementalSlack = 64;  // factors beyond twice the graph's before a rebuild
   std::vector<StoredGraph> graphs_;
   std::map<posegraph::NodeId, std::size_t> graph_of_keyframe_;
   std::vector<posegraph::Edge> bridges_;

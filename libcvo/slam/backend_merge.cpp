@@ -29,6 +29,7 @@ posegraph::Edge Backend::resolved(const posegraph::Edge& edge) const {
 void Backend::add_graph_edge(const posegraph::Edge& edge) {
   const posegraph::Edge e = resolved(edge);
   if (e.from == e.to) return;  // k's own link to the keyframe it was merged into: the alias holds it
+  if (!rerouting_) unsynced_.push_back(e);
   const auto& edges = keyframes_.edges();
   for (std::size_t i = 0; i < edges.size(); ++i) {
     const auto& old = edges[i];
@@ -45,9 +46,14 @@ void Backend::merge_keyframe(NodeId alias, NodeId covering, const core::SE3& T, 
   if (!keyframes_.contains(alias) || keyframes_.node(alias).fixed)
     throw std::invalid_argument(name + ": not a free node of the keyframe graph");
   if (!T.is_finite()) throw std::invalid_argument(name + ": not finite");
+  sync_incremental();  // the incremental optimiser keeps k's factors on k (see sync_incremental)
   const auto edges = keyframes_.remove_node(alias);
-  aliases_.emplace(alias, StoredAlias{{alias, covering, T}, 0.5 * (information + information.transpose())});
+  const core::Matrix6d symmetric = 0.5 * (information + information.transpose());
+  aliases_.emplace(alias, StoredAlias{{alias, covering, T}, symmetric});
+  rerouting_ = true;
   for (const auto& e : edges) add_graph_edge(e);
+  rerouting_ = false;
+  unsynced_.push_back({covering, alias, T, symmetric, /*robust=*/false});  // held as the keyframe graph holds it
   ++revision_;
 }
 
