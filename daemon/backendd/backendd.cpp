@@ -572,6 +572,9 @@ void Backendd::process(QueuedRecord& queued) {
   };
   if (queued.arrived) localize_when_stored();
   process_record(queued);
+  // A service for months: merged keyframes older than their session's newest are forgotten
+  // (slam::Mapper::settle; their records stay in the store and replay to the same decisions).
+  if (!work_->mapper.localizing_only()) work_->mapper.settle();
   if (!queued.arrived && --replayed_pending_ == 0) {
     if (work_->merges) work_->merges->replay_done(waiting_in_store_ == 0);
     if (localization())

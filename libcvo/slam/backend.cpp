@@ -91,7 +91,7 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
   if (static_cast<NodeId>(graph.keyframe().frame_index) != keyframe_id)
     throw std::invalid_argument("backend: local graph starts at frame " + std::to_string(graph.keyframe().frame_index) +
                                 ", not at keyframe " + std::to_string(keyframe_id));
-  if (graph_of_keyframe_.contains(keyframe_id))
+  if (graphs_.contains(keyframe_id))
     throw std::invalid_argument("backend: keyframe " + std::to_string(keyframe_id) + "'s graph was added already");
   for (const auto& n : graph.nodes())
     if (const auto it = session_of_node_.find(static_cast<NodeId>(n.frame_index));
@@ -108,16 +108,20 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
 
   // The keyframe→next-keyframe edge (see the header).
   const LocalFrame& last = solution.frames.back();
-  if (solution.frames.size() > 1 && !holds(last.id)) {
+  std::optional<posegraph::Edge> keyframe_edge;
+  if (solution.frames.size() > 1)
+    keyframe_edge = {keyframe_id, last.id, last.relative, information_into(solution, keyframe_id, last.id), false};
+  if (keyframe_edge && !holds(last.id)) {
     keyframes_.add_node(last.id, pose_of(keyframe_id) * last.relative);
-    add_graph_edge({keyframe_id, last.id, last.relative, information_into(solution, keyframe_id, last.id), false});
+    add_graph_edge(*keyframe_edge);
     session_of_node_.emplace(last.id, session_id);
   }
   session.last_node = last.id;
   session.last_odometry = last.odometry;
 
-  graph_of_keyframe_.emplace(keyframe_id, graphs_.size());
-  graphs_.push_back({session_id, keyframe_id, std::move(solution)});
+  if (solution.frames.size() > 1) graph_ending_at_[last.id] = keyframe_id;
+  const auto stored =
+      graphs_.insert_or_assign(keyframe_id, StoredGraph{session_id, keyframe_id, std::move(solution), keyframe_edge});
   ++revision_;
 
   // Loops that waited for a keyframe of this graph.
@@ -125,7 +129,7 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
   waiting.swap(pending_);
   for (const auto& loop : waiting)
     if (!insert_loop(loop)) pending_.push_back(loop);
-  return graphs_.back().solution;
+  return stored.first->second.solution;
 }
 
 bool Backend::insert_loop(const loop_closure::LoopClosure& loop) {
@@ -234,10 +238,17 @@ posegraph::OptimizationReport Backend::optimise_all(double max_seconds) {
   posegraph::PoseGraph all;  // each piece held at its anchor, as in the keyframe graph
   for (const auto& [id, stamped] : frame_poses(std::nullopt))
     all.add_node(id, stamped.pose, keyframes_.contains(id) && keyframes_.node(id).fixed);
-  for (const auto& g : graphs_)
+  for (const auto& [id, node] : keyframes_.nodes())  // a node whose frames were settled
+    if (!all.contains(id)) all.add_node(id, node.pose, node.fixed);
+  for (const auto& [keyframe, g] : graphs_)
     for (const auto& e : g.solution.edges) all.add_edge(e);
-  for (const auto& e : bridges_) all.add_edge(e);
-  for (const auto& l : loops_) all.add_edge(l.edge);
+  const auto add = [&](const posegraph::Edge& e) {  // an end without frames: through its alias
+    const posegraph::Edge r = all.contains(e.from) && all.contains(e.to) ? e : resolved(e);
+    if (r.from != r.to) all.add_edge(r);
+  };
+  for (const auto& e : bridges_) add(e);
+  for (const auto& l : loops_) add(l.edge);
+  for (const auto& [ends, e] : settled_) all.add_edge(e);
   add_alias_edges(all);
   if (all.nodes().size() < 2) return {};
 
@@ -246,7 +257,7 @@ posegraph::OptimizationReport Backend::optimise_all(double max_seconds) {
   auto report = posegraph::optimize(all, options);
   for (const auto& [id, node] : keyframes_.nodes()) keyframes_.set_pose(id, all.node(id).pose);
   follow_aliases(all);
-  for (auto& g : graphs_) {
+  for (auto& [keyframe, g] : graphs_) {
     const core::SE3 keyframe_inverse = all.node(g.keyframe).pose.inverse();
     for (auto& f : g.solution.frames) f.relative = keyframe_inverse * all.node(f.id).pose;
   }
@@ -256,7 +267,7 @@ posegraph::OptimizationReport Backend::optimise_all(double max_seconds) {
 
 std::map<NodeId, core::StampedPose> Backend::frame_poses(std::optional<core::SessionId> session) const {
   std::map<NodeId, core::StampedPose> poses;
-  for (const auto& g : graphs_) {
+  for (const auto& [keyframe_id, g] : graphs_) {
     if (session && g.session != *session) continue;
     const core::SE3 keyframe = pose_of(g.keyframe);
     for (const auto& f : g.solution.frames)

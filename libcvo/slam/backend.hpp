@@ -38,8 +38,9 @@
 //                    (a join, below) or a released anchor makes the next one a rebuild (the whole
 //                    graph, once). Frames follow their keyframe. A merge (below) changes the graph's
 //                    structure, which factors cannot follow: the optimiser keeps the merged keyframe's
-//                    factors on its own node, tied to the covering keyframe with the loop's
-//                    information, and every fused edge's new contribution as a factor of its own
+//                    factors on its own node, tied to the covering keyframe (10^4 times the loop's
+//                    information: rigid, as the keyframe graph holds it), every fused edge's new
+//                    contribution as a factor of its own
 //                    (to first order the same cost); it is built anew from the keyframe graph once it
 //                    holds twice the graph's edges, or after a join (sync_incremental).
 //  optimise_all      The final global optimisation: every frame a node, every local edge and
@@ -65,8 +66,18 @@
 // between two nodes that already have one (same kind: plain or robust) is fused into it, so the
 // keyframe graph grows with the area a revisit covers, not with the time spent there. The final
 // global optimisation has every frame as a node, k included: there k is held to c by a robust edge
-// with the loop's information, and T follows its solution. The local graphs themselves (the frames)
-// are kept whole: they still grow with the time.
+// with the loop's information, and T follows its solution.
+//
+// Settling (backend_settle.cpp; a service that lives for months calls it, through
+// Mapper::settle): the local graph of a merged keyframe k adds nothing to the keyframe graph once
+// it is in (its edge was moved onto c and fused), only frames to the global optimisation, which
+// grow with the time spent. settle(k) forgets those frames and keeps the graph's keyframe edge,
+// resolved onto the covering keyframes and fused per pair, as a settled edge of the global
+// optimisation (the keyframe graph's edges are those very contributions fused with the rest); a
+// merged keyframe that no kept graph, bridge or session names any more is forgotten with its
+// loops (their edges settled as well). What stays grows with the area: the keyframe graph, the
+// settled edges between its nodes, the frames of unmerged keyframes' graphs. frame_trajectory()
+// leaves settled frames out.
 //
 // A frame's pose is its keyframe's optimised pose ∘ its locally optimised pose relative to that
 // keyframe (after optimise_all: the global solution); a keyframe-graph node's is its own. Node ids
@@ -77,6 +88,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 #include "libcvo/core/parameters.hpp"
@@ -189,7 +201,18 @@ class Backend {
   /// Keyframes merged so far.
   [[nodiscard]] std::size_t merged_keyframes() const { return aliases_.size(); }
   [[nodiscard]] bool merged(posegraph::NodeId node) const { return aliases_.contains(node); }
+  /// Local graphs held (settled ones are not).
   [[nodiscard]] std::size_t local_graphs() const { return graphs_.size(); }
+
+  /// Settles merged keyframe `keyframe` (see the header): its local graph's frames are forgotten
+  /// and the graph's keyframe edge kept for the global optimisation only (the keyframe graph has
+  /// it already); then the keyframe, and the graph's last frame if merged too, are forgotten
+  /// altogether when nothing holds them any more (no local graph has them as a frame, no bridge,
+  /// no session's anchor or last node): their aliases go, their loops' edges are settled as well.
+  /// A merged keyframe is forgotten only once its own graph was settled. Returns the nodes
+  /// forgotten; nullopt (nothing done) when `keyframe` is no merged keyframe whose local graph is
+  /// in and ends at a node the graph holds.
+  std::optional<std::vector<posegraph::NodeId>> settle(posegraph::NodeId keyframe);
   /// Increases whenever a pose keyframe_poses() or frame_trajectory() returns may have changed.
   [[nodiscard]] std::uint64_t revision() const { return revision_; }
   [[nodiscard]] const BackendParameters& parameters() const { return parameters_; }
@@ -199,6 +222,7 @@ class Backend {
     core::SessionId session = 0;
     posegraph::NodeId keyframe = 0;
     LocalSolution solution;
+    std::optional<posegraph::Edge> keyframe_edge;  // keyframe -> last frame, as the keyframe graph took it
   };
   struct SessionState {
     std::size_t ordinal = 0;                     // registration order: the earlier piece stays put
@@ -223,6 +247,8 @@ class Backend {
   void add_graph_edge(const posegraph::Edge& edge);
   [[nodiscard]] posegraph::Edge resolved(const posegraph::Edge& edge) const;
   void add_alias_edges(posegraph::PoseGraph& all) const;
+  void add_settled(const posegraph::Edge& edge);  // resolved, into settled_
+  bool forget_if_unused(posegraph::NodeId alias);
   void follow_aliases(const posegraph::PoseGraph& all);
 
   BackendParameters parameters_;
@@ -235,8 +261,11 @@ class Backend {
   bool rebuild_incremental_ = false;                    // a join moved nodes: build incremental_ anew
   bool rerouting_ = false;                              // merge_keyframe moves k's edges: incremental_ has them on k
   static constexpr std::size_t kIncrementalSlack = 64;  // factors beyond twice the graph's before a rebuild
-  std::vector<StoredGraph> graphs_;
-  std::map<posegraph::NodeId, std::size_t> graph_of_keyframe_;
+  static constexpr double kTieStiffness = 1e4;          // a merged keyframe's tie: times the loop's information
+  std::map<posegraph::NodeId, StoredGraph> graphs_;     // by keyframe
+  std::map<posegraph::NodeId, posegraph::NodeId> graph_ending_at_;  // last frame -> its graph's keyframe
+  // Settled contributions (settle()), between keyframe-graph nodes, fused per pair and kind.
+  std::map<std::tuple<posegraph::NodeId, posegraph::NodeId, bool>, posegraph::Edge> settled_;
   std::vector<posegraph::Edge> bridges_;
   std::vector<StoredLoop> loops_;
   std::vector<loop_closure::LoopClosure> pending_;
@@ -248,6 +277,7 @@ class Backend {
   struct StoredAlias {
     KeyframeAlias alias;
     core::Matrix6d information = core::Matrix6d::Identity();
+    bool settled = false;  // its own local graph was settled
   };
   std::map<posegraph::NodeId, StoredAlias> aliases_;  // by alias node
 };

@@ -53,7 +53,10 @@ void Backend::merge_keyframe(NodeId alias, NodeId covering, const core::SE3& T, 
   rerouting_ = true;
   for (const auto& e : edges) add_graph_edge(e);
   rerouting_ = false;
-  unsynced_.push_back({covering, alias, T, symmetric, /*robust=*/false});  // held as the keyframe graph holds it
+  // Held as the keyframe graph holds it, rigidly: a tie far stiffer than any measurement (a softer
+  // one, the loop's own information, lets k and c drift apart by the loop's uncertainty, and the
+  // estimates that later revisits are confirmed against with them).
+  unsynced_.push_back({covering, alias, T, kTieStiffness * symmetric, /*robust=*/false});
   ++revision_;
 }
 

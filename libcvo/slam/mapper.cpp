@@ -79,6 +79,8 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
       throw MapperError(name(k.session, k.id) + " is known with other content (frame " +
                         std::to_string(same->second.frame) + ", not " + std::to_string(frame) + ")");
     }
+    if (k.id <= it->second.settled_through)
+      throw MapperError(name(k.session, k.id) + " is older than its session's settled keyframes (settle())");
     // Keyframes may come late (a re-sent one), but ids and frames must keep one order.
     const auto after = keyframes.upper_bound(k.id);
     const bool below_ok = after == keyframes.begin() || std::prev(after)->second.frame < frame;
@@ -126,11 +128,11 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
 
 void Mapper::enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome) {
   backend_.add_loop(loop);
-  loops_.push_back(loop);
+  const std::size_t key = loops_accepted_++;
+  loops_.emplace(key, loop);
   outcome.loops.push_back(describe(loop));
   if (const MapLoop& m = outcome.loops.back(); m.from_session != m.to_session)
-    for (const core::SessionId end : {m.from_session, m.to_session})
-      sessions_.at(end).loops.push_back(loops_.size() - 1);
+    for (const core::SessionId end : {m.from_session, m.to_session}) sessions_.at(end).loops.push_back(key);
   s.last_match_time = time;
 }
 
@@ -150,6 +152,9 @@ std::vector<core::SessionId> Mapper::add_local_graph(core::SessionId session_id,
     if (auto v = visitors_.find(session_id); v != visitors_.end()) add_window_graph(v->second, keyframe_id, graph);
     return {};
   }
+  if (const auto it = sessions_.find(session_id);
+      it != sessions_.end() && keyframe_id <= it->second.settled_through && !knows(session_id, keyframe_id))
+    throw MapperError("local graph of " + name(session_id, keyframe_id) + ": the keyframe was settled and forgotten");
   if (map_below_ && !knows(session_id, keyframe_id))
     throw MapperError("local graph of " + name(session_id, keyframe_id) + " is new to the map, which is read only");
   // The Backend checks the rest before it changes anything; a session a refused graph introduced
@@ -243,7 +248,7 @@ MapSession Mapper::describe(core::SessionId id, const Session& s) const {
   entry.session = id;
   entry.placed = backend_.placed(id);
   entry.piece = backend_.piece(id);
-  entry.keyframes = s.keyframes.size();
+  entry.keyframes = s.keyframes.size() + s.forgotten;
   entry.joined_at_keyframe = s.joined_at_keyframe;
   entry.correction = backend_.odometry_correction(id);
   entry.state = s.lost         ? core::LocalizationState::kLost
@@ -300,7 +305,7 @@ SessionCorrection Mapper::correction(core::SessionId id, std::size_t max_loops) 
   const auto it = sessions_.find(id);
   if (it == sessions_.end()) return c;
   for (auto i = it->second.loops.rbegin(); i != it->second.loops.rend() && c.loops.size() < max_loops; ++i) {
-    const loop_closure::LoopClosure& loop = loops_[*i];
+    const loop_closure::LoopClosure& loop = loops_.at(*i);
     if (!backend_.holds(loop.from) || !backend_.holds(loop.to)) continue;  // waiting: not in the map yet
     const MapLoop m = describe(loop);
     const bool from_own = m.from_session == id;

@@ -72,7 +72,10 @@
 // candidates when it comes (no predecessor normalises η): its loops are searched when its successor
 // comes (LoopDetector::detect_first, η normalised by the successor), when a join has usually freed
 // it from anchoring its piece, and entered only if one shows it covered, with its merge (so its merge
-// record holds all they change): a revisiting session's keyframes all follow the area. A wrong loop passes α rarely; a
+// record holds all they change): a revisiting session's keyframes all follow the area. A service
+// that lives for months settles them (settle()): once merged keyframes are older than their
+// session's two newest, their frames, records and loops are forgotten (Backend::settle keeps what
+// they added to the global optimisation), so memory follows the area too. A wrong loop passes α rarely; a
 // merge holds k rigidly to c in the keyframe graph, and the final optimisation relaxes it as a robust edge
 // (backend.hpp).
 //
@@ -84,6 +87,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -254,7 +258,7 @@ class Mapper {
 
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
-  [[nodiscard]] std::size_t loops_accepted() const { return loops_.size(); }
+  [[nodiscard]] std::size_t loops_accepted() const { return loops_accepted_; }
   /// Keyframes merged into ones that cover them (see the header).
   [[nodiscard]] std::size_t merged_keyframes() const { return backend_.merged_keyframes(); }
   /// Applies a merge add_keyframe made before (a store's record): when keyframe (session, id) is
@@ -264,6 +268,16 @@ class Mapper {
   /// in the keyframe graph (the local graph ending at it applied) and free, the covering keyframe known and in the
   /// graph. Throws MapperError otherwise, nothing changed.
   bool apply_merge(const KeyframeMerge& merge);
+  /// Settles merged keyframes older than their session's two newest (Backend::settle: their local
+  /// graphs' frames go, and the keyframes once nothing names them: their records, loops and
+  /// aliases), so that a map revisited for months holds what grows with its area (see the header).
+  /// A service calls it after each keyframe or local graph; cvo-run, which writes every frame's
+  /// pose, does not. A keyframe or local graph of a session at or below its newest settled keyframe
+  /// that the mapper does not know is refused from then on (it was forgotten). Returns the keyframes
+  /// forgotten by this call.
+  std::size_t settle();
+  /// Keyframes settle() forgot so far.
+  [[nodiscard]] std::size_t forgotten_keyframes() const { return forgotten_keyframes_; }
   /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
   [[nodiscard]] std::size_t window_keyframes() const;
 
@@ -283,7 +297,10 @@ class Mapper {
     std::int64_t joined_at_keyframe = -1;
     bool lost = false;
     double last_match_time = -1;
-    std::vector<std::size_t> loops;  // indices in loops_ of its loops to other sessions, in order accepted
+    std::vector<std::size_t> loops;     // keys in loops_ of its loops to other sessions, in order accepted
+    std::set<std::int64_t> unsettled;   // merged keyframes not settled yet (settle())
+    std::int64_t settled_through = -1;  // its newest keyframe settled
+    std::size_t forgotten = 0;          // keyframes settle() forgot (MapSession::keyframes counts them)
     // Its first keyframe's id until its successor came: a first keyframe proposes no loop
     // candidates when it comes (no predecessor normalises η), its successor does (merge_first).
     std::optional<std::int64_t> undetected_first;
@@ -347,13 +364,16 @@ class Mapper {
   std::optional<FirstLoops> first_loops(Session& s, std::int64_t next, posegraph::NodeId next_node);
   std::optional<KeyframeMerge> merge_first(Session& s, const FirstLoops& found);
   void enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome);
+  void forget(posegraph::NodeId keyframe);  // a node Backend::settle forgot: its record and loops
 
   loop_closure::LoopDetector detector_;
   Backend backend_;
   std::map<core::SessionId, Session> sessions_;
   std::vector<core::SessionId> order_;
   std::map<posegraph::NodeId, std::pair<core::SessionId, std::int64_t>> keyframe_of_node_;
-  std::vector<loop_closure::LoopClosure> loops_;
+  std::map<std::size_t, loop_closure::LoopClosure> loops_;  // by the order accepted (settle() forgets some)
+  std::size_t loops_accepted_ = 0;
+  std::size_t forgotten_keyframes_ = 0;
   std::size_t loops_tried_ = 0;
   std::uint64_t revision_ = 0;
   core::LocalizationParameters localization_;

@@ -27,7 +27,9 @@ std::optional<std::pair<std::size_t, double>> Mapper::covering_loop(const std::v
 void Mapper::merge(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph::NodeId covering) {
   backend_.merge_keyframe(keyframe, covering, m.relative, m.information);
   if (detector_.contains(keyframe)) detector_.remove_keyframe(keyframe);  // a replayed merge's may be absent
-  sessions_.at(m.session).keyframes.at(m.id).merged = true;
+  auto& s = sessions_.at(m.session);
+  s.keyframes.at(m.id).merged = true;
+  s.unsettled.insert(m.id);
   marginals_.invalidate();
   ++revision_;
 }
