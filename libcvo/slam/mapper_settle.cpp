@@ -33,7 +33,7 @@ Settlement Mapper::settle() {
             out.keyframes.end() ||
         std::find_if(out.graphs.begin(), out.graphs.end(), [&](const auto& k) { return k.first == id; }) !=
             out.graphs.end())
-      out.tallies.push_back({id, s.forgotten_before + s.forgotten, s.settled_through});
+      out.tallies.push_back({id, s.forgotten, s.settled_through});
   if (!out.empty()) {
     ++revision_;
     marginals_.invalidate();
@@ -69,8 +69,7 @@ void Mapper::apply_tally(const SessionTally& tally) {
   const auto s = sessions_.find(tally.session);
   if (s == sessions_.end())
     throw MapperError("tally of session " + core::session_name(tally.session) + ": the session is unknown");
-  // Those it counts have no record left, so none is among those this run forgot: they add up.
-  s->second.forgotten_before = std::max(s->second.forgotten_before, tally.forgotten);
+  s->second.forgotten = std::max(s->second.forgotten, tally.forgotten);
   s->second.settled_through = std::max(s->second.settled_through, tally.settled_through);
   ++revision_;
 }
