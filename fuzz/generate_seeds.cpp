@@ -108,16 +108,21 @@ int main(int argc, char** argv) try {
 
   // A keyframe store as cvo-backendd leaves it, then the same cut short in its last record (what a
   // crash during a write leaves).
-  const fs::path store_file = out / "keyframe_store/two-records";
-  fs::create_directories(store_file.parent_path());
-  fs::remove(store_file);
-  {
+  using cvo::daemon::backendd::RecordKind;
+  // A new store at `file`: the keyframe, its local graph, then `more` (kind, payload) records.
+  const auto keyframe_store = [&](const fs::path& file,
+                                  const std::vector<std::pair<RecordKind, std::vector<std::uint8_t>>>& more) {
+    fs::create_directories(file.parent_path());
+    fs::remove(file);
     std::vector<cvo::daemon::backendd::StoredRecord> recovered;
     std::string warning;
-    cvo::daemon::backendd::KeyframeStore store(store_file, recovered, warning);
-    store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
-    store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph);
-  }
+    cvo::daemon::backendd::KeyframeStore store(file, recovered, warning);
+    store.append(RecordKind::kKeyframe, encode(keyframe_message));
+    store.append(RecordKind::kLocalGraph, graph);
+    for (const auto& [kind, payload] : more) store.append(kind, payload);
+  };
+  const fs::path store_file = out / "keyframe_store/two-records";
+  keyframe_store(store_file, {});
   // A merge record, and a store with one after its keyframe (a revisit merged, issue 27).
   cvo::slam::KeyframeMerge merge;
   merge.session = keyframe.session;
@@ -141,16 +146,7 @@ int main(int argc, char** argv) try {
   merge.others = {loop, loop};
   const auto merge_bytes = cvo::daemon::backendd::encode_merge(merge);
   write(out / "merge_record/sample", merge_bytes);
-  const fs::path merged_store = out / "keyframe_store/with-merge";
-  fs::remove(merged_store);
-  {
-    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
-    std::string warning;
-    cvo::daemon::backendd::KeyframeStore store(merged_store, recovered, warning);
-    store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
-    store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph);
-    store.append(cvo::daemon::backendd::RecordKind::kMerge, merge_bytes);
-  }
+  keyframe_store(out / "keyframe_store/with-merge", {{RecordKind::kMerge, merge_bytes}});
   const auto store_size = fs::file_size(store_file);
   fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
   fs::resize_file(out / "keyframe_store/torn", store_size - 17);

@@ -119,7 +119,7 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
   session.last_node = last.id;
   session.last_odometry = last.odometry;
 
-  if (solution.frames.size() > 1) graph_ending_at_[last.id] = keyframe_id;
+  if (keyframe_edge) graph_ending_at_[last.id] = keyframe_id;
   const auto stored =
       graphs_.insert_or_assign(keyframe_id, StoredGraph{session_id, keyframe_id, std::move(solution), keyframe_edge});
   ++revision_;

@@ -24,10 +24,8 @@ std::size_t Mapper::settle() {
         for (const posegraph::NodeId n : *forgotten) forget(n);
     }
   }
-  if (forgotten_keyframes_ != before) {
-    ++revision_;
-    marginals_.invalidate();
-  }
+  // The map's loops changed; the keyframe graph, and so its marginals, did not.
+  if (forgotten_keyframes_ != before) ++revision_;
   return forgotten_keyframes_ - before;
 }
 
