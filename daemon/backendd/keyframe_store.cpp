@@ -55,15 +55,24 @@ struct Range {
 };
 
 // The file's bytes outside every skipped stretch (after its magic): its intact records, in order.
+// What a clean copy leaves out: the damaged stretches and the garbage, by offset.
+std::vector<std::pair<off_t, std::size_t>> left_out(const StoreScan& s) {
+  std::vector<std::pair<off_t, std::size_t>> out;
+  for (const auto& d : s.damaged) out.emplace_back(static_cast<off_t>(d.at), d.bytes);
+  for (const auto& g : s.garbage) out.emplace_back(static_cast<off_t>(g.at), g.bytes);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<Range> intact_ranges(const StoreScan& s, std::size_t size) {
   std::vector<Range> out;
   std::size_t from = kStoreMagic.size();
   const auto add = [&](std::size_t to) {
     if (to > from) out.push_back({from, to - from});
   };
-  for (const auto& d : s.damaged) {
-    add(d.at);
-    from = d.at + d.bytes;
+  for (const auto& [at, bytes] : left_out(s)) {
+    add(static_cast<std::size_t>(at));
+    from = static_cast<std::size_t>(at) + bytes;
   }
   add(s.torn ? s.torn->at : size);
   return out;
@@ -234,22 +243,29 @@ void KeyframeStore::recover(std::vector<StoredRecord>& recovered, std::string& w
   for (const auto& r : s.records)
     recovered.push_back(
         {r.kind, {data + r.at + kRecordHeaderBytes, data + r.at + r.bytes}, {static_cast<off_t>(r.at), r.bytes, 0}});
-  records_ = s.records.size();
+  records_ = s.records.size() + s.garbage.size();
+  garbage_bytes_ = 0;
+  for (const auto& g : s.garbage) {
+    garbage_.emplace(static_cast<off_t>(g.at), g.bytes);
+    if (g.kind != RecordKind::kDiscarded) garbage_bytes_ += g.bytes;
+  }
   end_ = static_cast<off_t>(size);
   if (s.clean()) return;
   warning = describe_damage(file_, s, "as a crash during a write leaves it", "is cut off");
   if (!s.damaged.empty()) {
     const auto copy = replace_with_clean_copy(file_, data, intact_ranges(s, size), st.st_mode);
     if (copy.fd >= 0) {
-      for (std::size_t i = first; i < recovered.size(); ++i) {  // the copy leaves out the damaged stretches
+      const auto removed = left_out(s);
+      for (std::size_t i = first; i < recovered.size(); ++i) {  // the copy leaves out damage and garbage
         auto& where = recovered[i].where;
-        where.offset = after_removing(where.offset, s.damaged, [](const SkippedStretch& d) {
-                         return std::pair{static_cast<off_t>(d.at), d.bytes};
-                       }).value_or(0);
+        where.offset = after_removing(where.offset, removed, [](const auto& r) { return r; }).value_or(0);
       }
       ::close(fd_);
       fd_ = copy.fd;
       end_ = copy.size;
+      records_ = s.records.size();
+      garbage_.clear();
+      garbage_bytes_ = 0;
       warning += "; the damaged original is kept as " + copy.aside.string() + ", and " + file_.string() +
                  " now holds the intact records";
       return;
@@ -278,7 +294,12 @@ bool KeyframeStore::write_held() {
     fsync_folder(file_);
   }
   while (!held_.empty()) {
-    if (const int error = write_at_end(held_.front().data(), held_.front().size()); error != 0) return failed(error);
+    const auto& record = held_.front();
+    if (const int error = write_at_end(record.data(), record.size()); error != 0) return failed(error);
+    // Garbage itself, never copied; not counted towards a compaction (it is small, and what it
+    // names is).
+    if (record[4] == static_cast<std::uint8_t>(RecordKind::kDiscarded))
+      garbage_.emplace(end_ - static_cast<off_t>(record.size()), record.size());
     held_.pop_front();
     ++records_;
   }
@@ -333,6 +354,13 @@ bool KeyframeStore::discard(const RecordRef& given, bool may_compact) {
     return false;
   if (!garbage_.emplace(where->offset, where->bytes).second) return false;
   garbage_bytes_ += where->bytes;
+  // Its tombstone, so that a restart does not replay it (written, or held in order as any record).
+  held_.push_back(encode_record(
+      RecordKind::kDiscarded,
+      encode_discarded({{static_cast<std::uint64_t>(where->offset), static_cast<std::uint32_t>(where->bytes)}})));
+  if (!write_held() && held_.size() > held_max_) {
+    held_.pop_back();  // not kept: nothing is lost, the record only replays again after a restart
+  }
   if (!may_compact || !held_.empty() || 4 * garbage_bytes_ <= static_cast<std::size_t>(end_)) return false;
   return compact();
 }

@@ -22,10 +22,10 @@
 // and renamed over FILE, as a damaged store's intact records are (the original is not kept), so the
 // file stays within 4/3 of its live records (each compaction copies at most three times the garbage
 // it drops: the disk's cost of a merged keyframe is bounded too). A RecordRef from before the last
-// compaction is moved with its record; one from before two is void. Garbage is counted in this run
-// only: a restarted store starts with none (its merged keyframes' records replay harmlessly, their
-// merge records after them, and the back end discards them again: each recovered record says where
-// it lies).
+// compaction is moved with its record; one from before two is void. Each discard is durable: a
+// tombstone record (store_records.hpp: kDiscarded) names what it made garbage, so a restarted store
+// recovers neither (they count as its garbage, and a clean copy of a damaged store leaves them
+// out). A tombstone that cannot be written is dropped: its record merely replays after a restart.
 //
 // A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
 // write is cut back so no torn record stays in front of the next one, and the record is held in

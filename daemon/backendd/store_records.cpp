@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <set>
 
 #include "libcvo/io/input_error.hpp"
 
@@ -36,7 +37,34 @@ std::uint32_t checksum(std::uint8_t kind, const std::uint8_t* payload, std::size
 bool known_kind(std::uint8_t kind) {
   return kind == static_cast<std::uint8_t>(RecordKind::kKeyframe) ||
          kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph) ||
-         kind == static_cast<std::uint8_t>(RecordKind::kMerge);
+         kind == static_cast<std::uint8_t>(RecordKind::kMerge) ||
+         kind == static_cast<std::uint8_t>(RecordKind::kSettled) ||
+         kind == static_cast<std::uint8_t>(RecordKind::kDiscarded);
+}
+
+std::uint64_t get64(const std::uint8_t* p) {
+  std::uint64_t v = 0;
+  for (int i = 7; i >= 0; --i) v = (v << 8) | p[i];
+  return v;
+}
+
+// What the tombstones among `s.records` name, moved with the tombstones into s.garbage. A name
+// that is no intact record's start and size (it cannot be: the daemon names only its own) is
+// ignored.
+void set_garbage_aside(const std::uint8_t* data, StoreScan& s) {
+  std::set<std::pair<std::uint64_t, std::uint64_t>> named;
+  for (const auto& r : s.records) {
+    if (r.kind != RecordKind::kDiscarded) continue;
+    const std::uint8_t* p = data + r.at + kRecordHeaderBytes;
+    const std::size_t bytes = r.bytes - kRecordHeaderBytes;
+    const std::uint64_t n = bytes >= 4 ? get32(p) : 0;
+    if (bytes != 4 + 12 * n) continue;
+    for (std::uint64_t i = 0; i < n; ++i) named.insert({get64(p + 4 + 12 * i), get32(p + 12 + 12 * i)});
+  }
+  std::vector<IntactRecord> live;
+  for (const auto& r : s.records)
+    (r.kind == RecordKind::kDiscarded || named.contains({r.at, r.bytes}) ? s.garbage : live).push_back(r);
+  s.records = std::move(live);
 }
 
 // Where the next valid record starts after `from` (`size` when none does): the record magic with
@@ -115,7 +143,18 @@ StoreScan scan_store(const fs::path& file, const std::uint8_t* data, std::size_t
       s.damaged.push_back(std::move(stretch));
     at = next;
   }
+  set_garbage_aside(data, s);
   return s;
+}
+
+std::vector<std::uint8_t> encode_discarded(const std::vector<std::pair<std::uint64_t, std::uint32_t>>& records) {
+  std::vector<std::uint8_t> out(4 + 12 * records.size());
+  put32(out.data(), static_cast<std::uint32_t>(records.size()));
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    for (int b = 0; b < 8; ++b) out[4 + 12 * i + b] = static_cast<std::uint8_t>(records[i].first >> (8 * b));
+    put32(out.data() + 12 + 12 * i, records[i].second);
+  }
+  return out;
 }
 
 // Built with append(): GCC 12 warns falsely (-Wrestrict) on chains of operator+.

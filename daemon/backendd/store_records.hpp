@@ -7,12 +7,11 @@
 //     kind + payload bytes, then the payload: the message's LCM encoding (fingerprint included)
 // all little-endian.
 //
-// Scanning keeps every intact record. A damaged stretch (bad magic, kind, length or checksum) is
-// skipped and scanning resynchronises on the next valid record (magic, plausible header, length
-// within the file, checksum): damage costs only the records it touches. A last record cut short
-// by the end of the file (what a crash during a write leaves, or a write still under way when
-// another process reads) holds nothing intact and is told apart from damage. One scan serves the
-// daemon's recovery and a read-only reader alike.
+// Scanning keeps every intact record but the garbage (kDiscarded below). A damaged stretch (bad magic, kind, length or
+// checksum) is skipped and scanning resynchronises on the next valid record (magic, plausible header, length within the
+// file, checksum): damage costs only the records it touches. A last record cut short by the end of the file (what a
+// crash during a write leaves, or a write still under way when another process reads) holds nothing intact and is told
+// apart from damage. One scan serves the daemon's recovery and a read-only reader alike.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -24,7 +23,11 @@
 namespace cvo::daemon::backendd {
 
 // kMerge: a keyframe merged into one covering it (merge_record.hpp), after the keyframe's record.
-enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2, kMerge = 3 };
+// kSettled: what settled revisits left to a pair of keyframes (settled_record.hpp).
+// kDiscarded: records made garbage (keyframe_store.hpp: discard), named by where they lie in this
+// file; a scan leaves them out, and the tombstone itself is garbage too. Payload: u32 count, then
+// that many u64 offset, u32 bytes (little-endian).
+enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2, kMerge = 3, kSettled = 4, kDiscarded = 5 };
 
 inline constexpr std::array<std::uint8_t, 8> kStoreMagic{'C', 'V', 'O', 'K', 'F', 'S', '1', '\n'};
 inline constexpr std::size_t kRecordHeaderBytes = 16;  // before each payload
@@ -58,8 +61,12 @@ struct SkippedStretch {
   std::string why;
 };
 
+/// A kDiscarded record's payload naming records at (offset, bytes).
+std::vector<std::uint8_t> encode_discarded(const std::vector<std::pair<std::uint64_t, std::uint32_t>>& records);
+
 struct StoreScan {
-  std::vector<IntactRecord> records;    // in file order
+  std::vector<IntactRecord> records;    // in file order, the garbage left out
+  std::vector<IntactRecord> garbage;    // intact records a tombstone names, and the tombstones; in file order
   std::vector<SkippedStretch> damaged;  // in file order
   std::optional<SkippedStretch> torn;   // a last record cut short by the end of the file
   [[nodiscard]] bool clean() const { return damaged.empty() && !torn; }

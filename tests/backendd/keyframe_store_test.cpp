@@ -213,6 +213,54 @@ TEST(KeyframeStore, RecoveredRecordsSayWhereTheyLie) {
   EXPECT_EQ(store.records(), 2u);
 }
 
+// A discard is durable: after a restart the discarded record is not recovered (nor its tombstone),
+// read_store leaves it out too, it still counts towards the next compaction, and a clean copy of a
+// damaged store leaves it out.
+TEST(KeyframeStore, ADiscardedRecordStaysDiscardedAfterARestart) {
+  cvo::test::TempDir dir;
+  const auto file = dir.path() / "keyframes.store";
+  {
+    std::vector<StoredRecord> none;
+    std::string warning;
+    KeyframeStore store(file, none, warning);
+    std::vector<RecordRef> refs(6);
+    for (std::size_t i = 0; i < refs.size(); ++i)
+      ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(500, static_cast<std::uint8_t>(i)), &refs[i]),
+                Appended::kStored);
+    EXPECT_FALSE(store.discard(refs[1]));
+  }
+  EXPECT_EQ(read_store(file).scan.records.size(), 5u);
+  {
+    std::vector<StoredRecord> recovered;
+    std::string warning;
+    KeyframeStore store(file, recovered, warning);
+    EXPECT_TRUE(warning.empty()) << warning;
+    ASSERT_EQ(recovered.size(), 5u);
+    EXPECT_EQ(recovered[0].payload, payload(500, 0));
+    EXPECT_EQ(recovered[1].payload, payload(500, 2)) << "the discarded record is left out";
+    EXPECT_TRUE(store.discard(recovered[1].where)) << "with the one from before the restart: a quarter";
+    EXPECT_EQ(store.records(), 4u);
+  }
+  EXPECT_EQ(fs::file_size(file), kStoreMagic.size() + 4 * (kRecordHeaderBytes + 500)) << "no tombstone is copied";
+
+  // Damage in the last record: the clean copy holds the live records only.
+  {
+    std::vector<StoredRecord> recovered;
+    std::string warning;
+    KeyframeStore store(file, recovered, warning);
+    EXPECT_FALSE(store.discard(recovered[0].where));
+  }
+  auto bytes = bytes_of(file);  // the store is now 0 (discarded), 3, 4, 5 and a tombstone: 3 damaged
+  bytes[kStoreMagic.size() + (kRecordHeaderBytes + 500) + 100] ^= 0x40;
+  write_bytes(file, bytes);
+  std::string warning;
+  const auto records = reopen(file, warning);
+  EXPECT_TRUE(contains(warning, "damaged stretch")) << warning;
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(records[0].payload, payload(500, 4));
+  EXPECT_EQ(fs::file_size(file), kStoreMagic.size() + 2 * (kRecordHeaderBytes + 500));
+}
+
 // What append() stored can be read back where it says, while the store is open (how the back end
 // takes a record that waited in the store); a place that holds no record it wrote, or a record
 // damaged since, is refused with a reason.
@@ -262,7 +310,7 @@ TEST(KeyframeStore, DamageInAMiddleRecordCostsThatRecordAlone) {
       {"a payload bit", 16 + 100, 0x08, "checksum mismatch"},
       {"a checksum bit", 12, 0x01, "checksum mismatch"},
       {"the record magic", 0, 0x20, "bad record magic"},
-      {"the kind", 4, 0x04, "unknown record kind"},
+      {"the kind", 4, 0x08, "unknown record kind"},
       {"an impossible length", 11, 0xF0, "impossible record length"},
       {"a length beyond the file", 10, 0x01, "runs past the end of the file"},
       {"a length one off", 8, 0x01, "checksum mismatch"},
