@@ -147,6 +147,26 @@ int main(int argc, char** argv) try {
   const auto merge_bytes = cvo::daemon::backendd::encode_merge(merge);
   write(out / "merge_record/sample", merge_bytes);
   keyframe_store(out / "keyframe_store/with-merge", {{RecordKind::kMerge, merge_bytes}});
+  cvo::slam::SettledEdge settled;
+  settled.from_session = keyframe.session + 1;
+  settled.from_id = 3;
+  settled.to_session = keyframe.session + 1;
+  settled.to_id = 4;
+  settled.measurement = merge.relative;
+  const auto settled_bytes = cvo::daemon::backendd::encode_settled(settled);
+  write(out / "merge_record/settled", settled_bytes);
+  const fs::path settled_store = out / "keyframe_store/settled-and-discarded";
+  fs::remove(settled_store);
+  {
+    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
+    std::string warning;
+    cvo::daemon::backendd::KeyframeStore store(settled_store, recovered, warning);
+    cvo::daemon::backendd::RecordRef graph_at;
+    store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
+    store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph, &graph_at);
+    store.append(cvo::daemon::backendd::RecordKind::kSettled, settled_bytes);
+    store.discard(graph_at, /*may_compact=*/false);  // a tombstone naming the local graph
+  }
   const auto store_size = fs::file_size(store_file);
   fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
   fs::resize_file(out / "keyframe_store/torn", store_size - 17);

@@ -294,6 +294,16 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
       queue_.push({std::move(*merge), std::nullopt, record.where});
       continue;
     }
+    if (record.kind == RecordKind::kSettled) {  // likewise
+      auto edge = decode_settled(record.payload.data(), record.payload.size(), &why);
+      if (!edge) {
+        notes_.note_limited("stored skipped", "stored record skipped: " + why);
+        continue;
+      }
+      ++replayed_pending_;
+      queue_.push({*edge, std::nullopt, record.where});
+      continue;
+    }
     // A record of an older schema (another fingerprint or version), or a repeat, is skipped, said here.
     auto message = let_in_stored(door_, record.kind, record.payload.data(), record.payload.size(), &why);
     const std::int64_t sender = stored_sender(record.payload);
@@ -573,8 +583,10 @@ void Backendd::process(QueuedRecord& queued) {
   if (queued.arrived) localize_when_stored();
   process_record(queued);
   // A service for months: merged keyframes older than their session's newest are forgotten
-  // (slam::Mapper::settle; their records stay in the store and replay to the same decisions).
-  if (!work_->mapper.localizing_only()) work_->mapper.settle();
+  // (slam::Mapper::settle), and their records become settled records (store_merges.hpp).
+  if (!work_->mapper.localizing_only())
+    if (const auto settlement = work_->mapper.settle(); work_->merges && !settlement.empty())
+      work_->merges->settled(settlement, waiting_in_store_ == 0);
   if (!queued.arrived && --replayed_pending_ == 0) {
     if (work_->merges) work_->merges->replay_done(waiting_in_store_ == 0);
     if (localization())
@@ -593,7 +605,9 @@ void Backendd::process_record(QueuedRecord& queued) {
       publish_changes(lost->session, {}, false);
       return work_->schedule.lost(lost->session);
     }
-    if (const auto* merge = std::get_if<slam::KeyframeMerge>(&queued.content)) return apply_merge(*merge);
+    if (const auto* merge = std::get_if<slam::KeyframeMerge>(&queued.content))
+      return apply_merge(*merge, queued.stored);
+    if (const auto* edge = std::get_if<slam::SettledEdge>(&queued.content)) return apply_settled(*edge, queued.stored);
     std::string error;
     const auto value = value_of(queued, &error);
     if (!value) return notes_.note_limited("unreadable", error);
@@ -602,7 +616,7 @@ void Backendd::process_record(QueuedRecord& queued) {
     if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
       apply_keyframe(*keyframe, queued);
     else
-      apply_local_graph(std::get<LocalGraphRecord>(*value));
+      apply_local_graph(std::get<LocalGraphRecord>(*value), queued);
   } catch (const slam::MapperError& e) {
     notes_.note_limited("not applied", std::string("not applied: ") + e.what());
   } catch (const std::exception& e) {
@@ -682,14 +696,24 @@ void Backendd::store_merge(const slam::KeyframeMerge& merge, bool replayed) {
 
 // A stored merge record: the keyframe's own replay merged it already, or (its record compacted
 // away) it is registered from the merge alone.
-void Backendd::apply_merge(const slam::KeyframeMerge& merge) {
+void Backendd::apply_merge(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& stored) {
   work_->mapper.apply_merge(merge);
-  if (work_->merges) work_->merges->record_replayed(merge, waiting_in_store_ == 0);
+  if (work_->merges) work_->merges->record_replayed(merge, stored, waiting_in_store_ == 0);
   publish_changes(merge.session, {}, true);
 }
 
-void Backendd::apply_local_graph(const LocalGraphRecord& record) {
+// A stored settled record (store_merges.hpp): what settled revisits left to its pair of keyframes.
+void Backendd::apply_settled(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored) {
+  work_->mapper.apply_settled(edge);
+  if (work_->merges) work_->merges->settled_replayed(edge, stored, waiting_in_store_ == 0);
+  publish_changes(std::nullopt, {}, true);
+}
+
+void Backendd::apply_local_graph(const LocalGraphRecord& record, const QueuedRecord& queued) {
   const auto joined = apply(work_->mapper, record);
+  if (work_->merges)
+    work_->merges->local_graph(record.session, record.keyframe_id, queued.stored,
+                               work_->mapper.merged(record.session, record.keyframe_id));
   ++work_->local_graphs;
   publish_changes(record.session, joined, !joined.empty());
 }

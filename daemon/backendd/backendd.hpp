@@ -100,7 +100,7 @@ class Backendd {
   // store is not held decoded) or its merge; waiting in the store (the queue was full), only where
   // it lies (read back and decoded in its turn: what waits there is not held in memory at all).
   struct QueuedRecord {
-    std::variant<RecordValue, Identified, RecordRef, LostSession, slam::KeyframeMerge> content;
+    std::variant<RecordValue, Identified, RecordRef, LostSession, slam::KeyframeMerge, slam::SettledEdge> content;
     std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
     std::optional<RecordRef> stored{};  // where its record lies in the store (garbage once merged)
   };
@@ -124,10 +124,11 @@ class Backendd {
   void read_map_store();
   std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
   void apply_keyframe(const lcm::Keyframe& keyframe, const QueuedRecord& queued);
-  void apply_merge(const slam::KeyframeMerge& merge);
+  void apply_merge(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& stored);
+  void apply_settled(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored);
   // A keyframe the mapper merged: its merge into the store, its own record discarded (store_merges.hpp).
   void store_merge(const slam::KeyframeMerge& merge, bool replayed);
-  void apply_local_graph(const LocalGraphRecord& record);
+  void apply_local_graph(const LocalGraphRecord& record, const QueuedRecord& queued);
   // After a change that may have touched `touched` only (nullopt: every session): the corrections
   // that changed, the full map when due (map_schedule.hpp).
   void publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,

@@ -346,6 +346,11 @@ std::optional<RecordRef> KeyframeStore::now_at(const RecordRef& where) const {
   return RecordRef{*at, where.bytes, compactions_};
 }
 
+std::optional<RecordRef> KeyframeStore::relocated(const RecordRef& where) const {
+  const std::lock_guard lock(mutex_);
+  return now_at(where);
+}
+
 bool KeyframeStore::discard(const RecordRef& given, bool may_compact) {
   const std::lock_guard lock(mutex_);
   const auto where = now_at(given);

@@ -113,6 +113,8 @@ class KeyframeStore {
   /// was. A reference to no record of the store now (older than the last compaction's input, or
   /// garbage already) changes nothing.
   bool discard(const RecordRef& where, bool may_compact = true);
+  /// `where` as the store is now (moved by the last compaction); nullopt when it is void.
+  [[nodiscard]] std::optional<RecordRef> relocated(const RecordRef& where) const;
   /// Compactions so far.
   [[nodiscard]] std::size_t compactions() const { return compactions_; }
   /// Writes the held records, oldest first, as far as the store allows; true when none is left.

@@ -141,4 +141,39 @@ std::optional<slam::KeyframeMerge> decode_merge(const std::uint8_t* data, std::s
   return m;
 }
 
+std::vector<std::uint8_t> encode_settled(const slam::SettledEdge& e) {
+  Writer w;
+  w.put(kSettledRecordVersion);
+  w.put(e.from_session);
+  w.put(e.from_id);
+  w.put(e.to_session);
+  w.put(e.to_id);
+  w.put(static_cast<std::uint8_t>(e.robust ? 1 : 0));
+  w.pose(e.measurement);
+  w.information(e.information);
+  return std::move(w.bytes);
+}
+
+std::optional<slam::SettledEdge> decode_settled(const std::uint8_t* data, std::size_t size, std::string* error) {
+  Reader r(data, size);
+  if (r.get<std::uint8_t>() != kSettledRecordVersion) {
+    *error = "settled record: not version " + std::to_string(kSettledRecordVersion);
+    return std::nullopt;
+  }
+  slam::SettledEdge e;
+  e.from_session = r.get<core::SessionId>();
+  e.from_id = r.get<std::int64_t>();
+  e.to_session = r.get<core::SessionId>();
+  e.to_id = r.get<std::int64_t>();
+  const auto robust = r.get<std::uint8_t>();
+  e.robust = robust == 1;
+  e.measurement = r.pose();
+  e.information = r.information();
+  if (!r.ok || !r.at_end() || robust > 1) {
+    *error = !r.ok ? "settled record: cut short or not finite" : "settled record: bytes after its end or a bad flag";
+    return std::nullopt;
+  }
+  return e;
+}
+
 }  // namespace cvo::daemon::backendd

@@ -33,6 +33,7 @@ std::optional<Identified> let_in_stored(MessageDoor& door, RecordKind kind, cons
 Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const std::uint8_t* data, std::size_t size) {
   Replayed out;
   if (kind == RecordKind::kMerge) return replay_merge(mapper, data, size);
+  if (kind == RecordKind::kSettled) return replay_settled(mapper, data, size);
   const auto message = let_in_stored(door, kind, data, size, &out.why);
   if (!message) return out;
   auto value = usable(*message, &out.why, nullptr);
@@ -56,6 +57,18 @@ Replayed replay_merge(slam::Mapper& mapper, const std::uint8_t* data, std::size_
   if (!merge) return {"stored record skipped: " + error, std::nullopt};
   try {
     mapper.apply_merge(*merge);        // false: merged so by its keyframe's own replay already
+  } catch (const std::exception& e) {  // slam::MapperError: nothing changed
+    return {"not applied: " + std::string(e.what()), std::nullopt};
+  }
+  return {};
+}
+
+Replayed replay_settled(slam::Mapper& mapper, const std::uint8_t* data, std::size_t size) {
+  std::string error;
+  const auto edge = decode_settled(data, size, &error);
+  if (!edge) return {"stored record skipped: " + error, std::nullopt};
+  try {
+    mapper.apply_settled(*edge);
   } catch (const std::exception& e) {  // slam::MapperError: nothing changed
     return {"not applied: " + std::string(e.what()), std::nullopt};
   }

@@ -40,6 +40,8 @@ Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const 
 /// A merge record (merge_record.hpp) applied to the mapper (Mapper::apply_merge), not through the
 /// door: it names no message. A merge its keyframe's replay made already is used, changing nothing.
 Replayed replay_merge(slam::Mapper& mapper, const std::uint8_t* data, std::size_t size);
+/// A settled record (merge_record.hpp) applied likewise (Mapper::apply_settled).
+Replayed replay_settled(slam::Mapper& mapper, const std::uint8_t* data, std::size_t size);
 
 /// A keyframe into the mapper; throws slam::MapperError when it cannot be applied (nothing changed).
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& keyframe);

@@ -1,20 +1,51 @@
 #include "daemon/backendd/store_merges.hpp"
 
+#include <algorithm>
+
 #include "daemon/backendd/merge_record.hpp"
 
 namespace cvo::daemon::backendd {
 
+void StoreMerges::discard(const RecordRef& where, bool may_compact) {
+  if (!store_.discard(where, may_compact)) return;
+  ++compactions_;
+  follow_compaction();
+}
+
+void StoreMerges::follow_compaction() {
+  const auto follow = [&](auto& refs) {
+    for (auto it = refs.begin(); it != refs.end();) {
+      const auto now = store_.relocated(it->second);
+      if (!now) {
+        it = refs.erase(it);
+        continue;
+      }
+      (it++)->second = *now;
+    }
+  };
+  follow(merge_records_);
+  follow(graph_records_);
+  follow(settled_records_);
+  for (auto& [session, newest] : newest_)
+    for (auto& [id, ref] : newest)
+      if (ref) ref = store_.relocated(*ref);
+  for (auto& [key, waiting] : awaiting_)
+    if (waiting.second) waiting.second = store_.relocated(*waiting.second);
+}
+
 Appended StoreMerges::store(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& keyframe,
                             bool may_compact) {
-  const Appended appended = store_.append(RecordKind::kMerge, encode_merge(merge));
+  RecordRef where;
+  const Appended appended = store_.append(RecordKind::kMerge, encode_merge(merge), &where);
   if (appended == Appended::kNotDurable) return appended;  // held records are written before any newer one
-  if (keyframe && store_.discard(*keyframe, may_compact)) ++compactions_;
+  if (appended == Appended::kStored) merge_records_.insert_or_assign({merge.session, merge.id}, where);
+  if (keyframe) discard(*keyframe, may_compact);
   return appended;
 }
 
 void StoreMerges::keyframe(core::SessionId session, std::int64_t id, const std::optional<RecordRef>& stored) {
   auto& newest = newest_[session];
-  newest.insert_or_assign(id, stored);
+  newest.insert_or_assign(id, stored ? store_.relocated(*stored) : std::nullopt);
   while (newest.size() > 2) newest.erase(newest.begin());
 }
 
@@ -27,16 +58,64 @@ Appended StoreMerges::merged(const slam::KeyframeMerge& merge, bool replayed, bo
   return Appended::kStored;
 }
 
-void StoreMerges::record_replayed(const slam::KeyframeMerge& merge, bool may_compact) {
+void StoreMerges::record_replayed(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& stored,
+                                  bool may_compact) {
+  if (stored)
+    if (const auto now = store_.relocated(*stored)) merge_records_.insert_or_assign({merge.session, merge.id}, *now);
   const auto it = awaiting_.find({merge.session, merge.id});
   if (it == awaiting_.end()) return;  // its keyframe's record was compacted away before
-  if (const auto& keyframe = it->second.second; keyframe && store_.discard(*keyframe, may_compact)) ++compactions_;
+  const auto keyframe = it->second.second;
   awaiting_.erase(it);
+  if (keyframe) discard(*keyframe, may_compact);
 }
 
 void StoreMerges::replay_done(bool may_compact) {
-  for (const auto& [key, merge] : awaiting_) store(merge.first, merge.second, may_compact);
-  awaiting_.clear();
+  const auto waiting = std::exchange(awaiting_, {});
+  for (const auto& [key, merge] : waiting) store(merge.first, merge.second, may_compact);
+}
+
+void StoreMerges::local_graph(core::SessionId session, std::int64_t id, const std::optional<RecordRef>& stored,
+                              bool merged) {
+  if (!merged || !stored) return;
+  if (const auto now = store_.relocated(*stored)) graph_records_.insert_or_assign({session, id}, *now);
+}
+
+StoreMerges::EdgeKey StoreMerges::key_of(const slam::SettledEdge& e) {
+  const Key a{e.from_session, e.from_id}, b{e.to_session, e.to_id};
+  return {std::min(a, b), std::max(a, b), e.robust};
+}
+
+void StoreMerges::settled(const slam::Settlement& settlement, bool may_compact) {
+  std::vector<RecordRef> garbage;
+  for (const auto& edge : settlement.edges) {
+    RecordRef where;
+    const Appended appended = store_.append(RecordKind::kSettled, encode_settled(edge), &where);
+    if (appended == Appended::kNotDurable) return;  // nothing discarded: the records replay to this
+    if (appended != Appended::kStored) continue;    // held: written in order later, the old one stays too
+    const auto [it, added] = settled_records_.try_emplace(key_of(edge), where);
+    if (!added) garbage.push_back(std::exchange(it->second, where));
+  }
+  const auto take = [&](std::map<Key, RecordRef>& refs, const Key& key) {
+    if (const auto it = refs.find(key); it != refs.end()) {
+      garbage.push_back(it->second);
+      refs.erase(it);
+    }
+  };
+  for (const auto& key : settlement.graphs) take(graph_records_, key);
+  for (const auto& key : settlement.keyframes) take(merge_records_, key);
+  for (const auto& ref : garbage)
+    if (const auto now = store_.relocated(ref)) discard(*now, may_compact);
+}
+
+void StoreMerges::settled_replayed(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored,
+                                   bool may_compact) {
+  if (!stored) return;
+  const auto now = store_.relocated(*stored);
+  if (!now) return;
+  const auto [it, added] = settled_records_.try_emplace(key_of(edge), *now);
+  if (added) return;
+  const RecordRef older = std::exchange(it->second, *now);  // a stop came between the two writes
+  if (const auto old = store_.relocated(older)) discard(*old, may_compact);
 }
 
 }  // namespace cvo::daemon::backendd

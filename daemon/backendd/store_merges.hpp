@@ -4,13 +4,21 @@
 // after the keyframe's own record, which is then garbage (keyframe_store.hpp: discard, compaction),
 // so the store grows with the area explored, not with the time spent in it.
 //
+// Settled revisits (slam::Mapper::settle): a settled local graph's record and a forgotten
+// keyframe's merge record are garbage too, and each settled edge that changed is stored as a
+// settled record (merge_record.hpp) that replaces the pair's previous one. So what stays of a revisit
+// is what grows with the area: the kept keyframes' records, the settled edges between them, and a
+// few records where a revisit enters or leaves the mapped area.
+//
 // Replayed from the store, a merged keyframe is merged again by its own replay, and its merge record
-// follows it: that record, once seen, makes the keyframe's record garbage again (garbage is counted
-// per run). A merge the replay made whose record never came (a stop between the keyframe and its
-// merge) is stored at the end of the replay. Owned by the thread that applies records to the mapper.
+// follows it: that record, once seen, makes the keyframe's record garbage again. A merge the replay
+// made whose record never came (a stop between the keyframe and its merge) is stored at the end of
+// the replay. Every reference it holds follows the store's compactions. Owned by the thread that
+// applies records to the mapper.
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <tuple>
 #include <utility>
 
 #include "daemon/backendd/keyframe_store.hpp"
@@ -30,25 +38,41 @@ class StoreMerges {
   /// The mapper merged keyframe (merge.session, merge.id). Live: its merge is stored and the
   /// keyframe's record discarded (store_merge). Replayed: the merge's record is waited for.
   Appended merged(const slam::KeyframeMerge& merge, bool replayed, bool may_compact);
-  /// A merge record replayed from the store: the keyframe it names is garbage.
-  void record_replayed(const slam::KeyframeMerge& merge, bool may_compact);
+  /// A merge record replayed from the store, at `stored`: the keyframe it names is garbage.
+  void record_replayed(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& stored, bool may_compact);
   /// The replay is over: merges it made that have no record yet are stored now.
   void replay_done(bool may_compact);
+
+  /// The mapper took the local graph of keyframe (session, id), stored at `stored`: remembered when
+  /// the keyframe is merged (it may settle).
+  void local_graph(core::SessionId session, std::int64_t id, const std::optional<RecordRef>& stored, bool merged);
+  /// What slam::Mapper::settle did: its settled edges are stored, each replacing the record of its
+  /// pair, then the records it made garbage are discarded (none when a settled edge could not be
+  /// kept: the records replay to the same settlement).
+  void settled(const slam::Settlement& settlement, bool may_compact);
+  /// A settled record replayed from the store, at `stored`.
+  void settled_replayed(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored, bool may_compact);
 
   /// Compactions this made (the store counts them too).
   [[nodiscard]] std::int64_t compactions() const { return compactions_; }
 
  private:
+  using Key = std::pair<core::SessionId, std::int64_t>;
+  using EdgeKey = std::tuple<Key, Key, bool>;
+  static EdgeKey key_of(const slam::SettledEdge& edge);
   // Appends `merge`, then discards the keyframe's record at `keyframe` (when known) unless the merge
   // could not be kept (Appended::kNotDurable: the keyframe's record must stay).
   Appended store(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& keyframe, bool may_compact);
+  void discard(const RecordRef& where, bool may_compact);
+  void follow_compaction();  // every reference held, as the store is now
 
   KeyframeStore& store_;
   // Each session's two newest keyframes: where their records lie, by id.
   std::map<core::SessionId, std::map<std::int64_t, std::optional<RecordRef>>> newest_;
   // Replayed merged keyframes whose merge record has not come yet: where their record lies.
-  std::map<std::pair<core::SessionId, std::int64_t>, std::pair<slam::KeyframeMerge, std::optional<RecordRef>>>
-      awaiting_;
+  std::map<Key, std::pair<slam::KeyframeMerge, std::optional<RecordRef>>> awaiting_;
+  std::map<Key, RecordRef> merge_records_, graph_records_;  // of merged keyframes not forgotten yet
+  std::map<EdgeKey, RecordRef> settled_records_;
   std::int64_t compactions_ = 0;
 };
 

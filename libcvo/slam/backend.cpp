@@ -115,6 +115,8 @@ const LocalSolution& Backend::add_local_graph(core::SessionId session_id, NodeId
     keyframes_.add_node(last.id, pose_of(keyframe_id) * last.relative);
     add_graph_edge(*keyframe_edge);
     session_of_node_.emplace(last.id, session_id);
+  } else if (keyframe_edge && aliases_.contains(last.id) && !graph_ending_at_.contains(last.id)) {
+    add_graph_edge(*keyframe_edge);  // into a keyframe a store registered merged before its graph came
   }
   session.last_node = last.id;
   session.last_odometry = last.odometry;

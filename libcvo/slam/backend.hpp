@@ -85,6 +85,7 @@
 // the run.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -203,16 +204,31 @@ class Backend {
   [[nodiscard]] bool merged(posegraph::NodeId node) const { return aliases_.contains(node); }
   /// Local graphs held (settled ones are not).
   [[nodiscard]] std::size_t local_graphs() const { return graphs_.size(); }
+  /// Whether the local graph whose keyframe is `keyframe` is held.
+  [[nodiscard]] bool has_local_graph(posegraph::NodeId keyframe) const { return graphs_.contains(keyframe); }
 
   /// Settles merged keyframe `keyframe` (see the header): its local graph's frames are forgotten
   /// and the graph's keyframe edge kept for the global optimisation only (the keyframe graph has
   /// it already); then the keyframe, and the graph's last frame if merged too, are forgotten
   /// altogether when nothing holds them any more (no local graph has them as a frame, no bridge,
   /// no session's anchor or last node): their aliases go, their loops' edges are settled as well.
-  /// A merged keyframe is forgotten only once its own graph was settled. Returns the nodes
-  /// forgotten; nullopt (nothing done) when `keyframe` is no merged keyframe whose local graph is
-  /// in and ends at a node the graph holds.
-  std::optional<std::vector<posegraph::NodeId>> settle(posegraph::NodeId keyframe);
+  /// A merged keyframe is forgotten only once its own graph was settled. nullopt (nothing done)
+  /// when `keyframe` is no merged keyframe whose local graph is in and ends at another merged one.
+  struct Settled {
+    std::vector<posegraph::NodeId> forgotten;
+    std::vector<posegraph::Edge> edges;  // the settled edges it changed, as they are now
+  };
+  std::optional<Settled> settle(posegraph::NodeId keyframe);
+  /// A settled edge as settle() left it (a store's record of it, replayed): it becomes the settled
+  /// edge between its ends (resolved through aliases), and what it holds beyond the one there
+  /// already (information-weighted, keyframe_merge.hpp: increment) enters the keyframe graph.
+  /// Throws std::invalid_argument when an end is not held, or the edge is not one an edge may be.
+  void apply_settled(const posegraph::Edge& edge);
+  /// Registers `alias` as merged into `covering` when the keyframe graph never held it (a store
+  /// whose local graphs into and out of it were settled: its own graph follows, or none). Throws
+  /// std::invalid_argument when `alias` is held or `covering` is no node of the graph.
+  void add_alias(posegraph::NodeId alias, posegraph::NodeId covering, const core::SE3& T,
+                 const core::Matrix6d& information);
   /// Increases whenever a pose keyframe_poses() or frame_trajectory() returns may have changed.
   [[nodiscard]] std::uint64_t revision() const { return revision_; }
   [[nodiscard]] const BackendParameters& parameters() const { return parameters_; }
@@ -247,8 +263,8 @@ class Backend {
   void add_graph_edge(const posegraph::Edge& edge);
   [[nodiscard]] posegraph::Edge resolved(const posegraph::Edge& edge) const;
   void add_alias_edges(posegraph::PoseGraph& all) const;
-  void add_settled(const posegraph::Edge& edge);  // resolved, into settled_
-  bool forget_if_unused(posegraph::NodeId alias);
+  posegraph::Edge add_settled(const posegraph::Edge& edge);  // resolved, fused into settled_: the result
+  bool forget_if_unused(posegraph::NodeId alias, const std::function<void(const posegraph::Edge&)>& settle_edge);
   void follow_aliases(const posegraph::PoseGraph& all);
 
   BackendParameters parameters_;

@@ -46,4 +46,19 @@ posegraph::Edge fused(const posegraph::Edge& existing, const posegraph::Edge& ad
   return out;
 }
 
+std::optional<posegraph::Edge> increment(const posegraph::Edge& part, const posegraph::Edge& whole) {
+  if (part.from != whole.from || part.to != whole.to) throw std::invalid_argument("increment: other nodes");
+  const core::Matrix6d more =
+      0.5 * (whole.information - part.information + (whole.information - part.information).transpose());
+  const Eigen::LDLT<core::Matrix6d> ldlt(more);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive() ||
+      ldlt.vectorD().minCoeff() <= 1e-9 * whole.information.trace())
+    return std::nullopt;
+  const core::Vector6d delta = (part.measurement.inverse() * whole.measurement).log();
+  posegraph::Edge out = part;
+  out.measurement = part.measurement * core::SE3::exp(ldlt.solve(whole.information * delta));
+  out.information = more;
+  return out;
+}
+
 }  // namespace cvo::slam

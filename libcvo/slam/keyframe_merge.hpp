@@ -15,6 +15,8 @@
 // δ = log(Z₀⁻¹ Z₁), the information-weighted mean is Z = Z₀ · exp((Ω₀ + Ω₁)⁻¹ Ω₁ δ) and its
 // information Ω₀ + Ω₁ (the sum of the two quadratics to first order). So the graph keeps one edge per
 // pair of nodes it ever linked: its size follows the area, not the time spent in it.
+#include <optional>
+
 #include "libcvo/core/se3.hpp"
 #include "libcvo/posegraph/pose_graph.hpp"
 
@@ -33,5 +35,9 @@ struct KeyframeAlias {
 [[nodiscard]] posegraph::Edge reversed(const posegraph::Edge& edge);
 /// `added` fused into `existing` (same nodes, either direction): the result runs as `existing` does.
 [[nodiscard]] posegraph::Edge fused(const posegraph::Edge& existing, const posegraph::Edge& added);
+/// What `whole` (same nodes and direction) holds beyond `part`: the edge d with fused(part, d) =
+/// whole to first order, Ω_d = Ω_whole − Ω_part and, at Z_part, δ_d = Ω_d⁻¹ Ω_whole log(Z_part⁻¹ Z_whole).
+/// nullopt when Ω_d is not positive definite (whole holds nothing beyond part: a repeat).
+[[nodiscard]] std::optional<posegraph::Edge> increment(const posegraph::Edge& part, const posegraph::Edge& whole);
 
 }  // namespace cvo::slam

@@ -61,6 +61,13 @@ bool Mapper::knows(core::SessionId session, std::int64_t keyframe_id) const {
   return it != sessions_.end() && it->second.keyframes.contains(keyframe_id);
 }
 
+bool Mapper::merged(core::SessionId session, std::int64_t keyframe_id) const {
+  const auto it = sessions_.find(session);
+  if (it == sessions_.end()) return false;
+  const auto k = it->second.keyframes.find(keyframe_id);
+  return k != it->second.keyframes.end() && k->second.merged;
+}
+
 KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   const auto frame = static_cast<std::int64_t>(k.frame.index);
   if (frame >= kMaxFrame)

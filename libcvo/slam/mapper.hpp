@@ -199,6 +199,24 @@ struct KeyframeMerge {
   std::vector<loop_closure::LoopClosure> joining, others;
 };
 
+/// A settled edge (Backend::settle) between two keyframes, named as the tracker names them: what a
+/// store keeps of settled revisits.
+struct SettledEdge {
+  core::SessionId from_session = 0, to_session = 0;
+  std::int64_t from_id = 0, to_id = 0;
+  bool robust = false;    // of loops (a Cauchy kernel), else of local graphs
+  core::SE3 measurement;  // T_from^to
+  core::Matrix6d information = core::Matrix6d::Identity();
+};
+
+/// What one settle() did: the local graphs it settled and the keyframes it forgot (their records
+/// are garbage now), and the settled edges that changed, as they are now.
+struct Settlement {
+  std::vector<std::pair<core::SessionId, std::int64_t>> graphs, keyframes;
+  std::vector<SettledEdge> edges;
+  [[nodiscard]] bool empty() const { return graphs.empty() && keyframes.empty() && edges.empty(); }
+};
+
 /// What one add_keyframe did.
 struct KeyframeOutcome {
   bool duplicate = false;               // the same keyframe again: nothing done
@@ -255,6 +273,8 @@ class Mapper {
   [[nodiscard]] core::Trajectory frame_trajectory(core::SessionId session) const;
   [[nodiscard]] bool placed(core::SessionId session) const { return backend_.placed(session); }
   [[nodiscard]] bool knows(core::SessionId session, std::int64_t keyframe_id) const;
+  /// Keyframe (session, id) is known and merged into one covering it.
+  [[nodiscard]] bool merged(core::SessionId session, std::int64_t keyframe_id) const;
 
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
@@ -274,8 +294,12 @@ class Mapper {
   /// A service calls it after each keyframe or local graph; cvo-run, which writes every frame's
   /// pose, does not. A keyframe or local graph of a session at or below its newest settled keyframe
   /// that the mapper does not know is refused from then on (it was forgotten). Returns the keyframes
-  /// forgotten by this call.
-  std::size_t settle();
+  /// forgotten by this call. Only a merged keyframe's graph to another merged keyframe settles: a
+  /// graph into or out of the mapped area stays (it holds a kept keyframe's node for a replay).
+  Settlement settle();
+  /// A settled edge settle() reported (a store's record, replayed): Backend::apply_settled. Throws
+  /// MapperError when an end is not a keyframe the mapper knows in the keyframe graph.
+  void apply_settled(const SettledEdge& edge);
   /// Keyframes settle() forgot so far.
   [[nodiscard]] std::size_t forgotten_keyframes() const { return forgotten_keyframes_; }
   /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
@@ -342,6 +366,7 @@ class Mapper {
   std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
                                                               posegraph::NodeId keyframe, core::SessionId session);
   void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
+  bool merge_settled(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
   // A merge of keyframe (session, id) with its own fields filled in, the covering keyframe's not yet.
   [[nodiscard]] static KeyframeMerge merge_of(core::SessionId session, std::int64_t id, const KeyframeRecord& record);
   // A keyframe's verified loops and the views the estimate confirms (LoopDetector::last_confirmations).
@@ -364,7 +389,9 @@ class Mapper {
   std::optional<FirstLoops> first_loops(Session& s, std::int64_t next, posegraph::NodeId next_node);
   std::optional<KeyframeMerge> merge_first(Session& s, const FirstLoops& found);
   void enter_loop(Session& s, const loop_closure::LoopClosure& loop, double time, KeyframeOutcome& outcome);
-  void forget(posegraph::NodeId keyframe);  // a node Backend::settle forgot: its record and loops
+  // A node Backend::settle forgot: its record and loops; its (session, id).
+  std::optional<std::pair<core::SessionId, std::int64_t>> forget(posegraph::NodeId keyframe);
+  [[nodiscard]] SettledEdge named(const posegraph::Edge& edge) const;
 
   loop_closure::LoopDetector detector_;
   Backend backend_;

@@ -120,6 +120,7 @@ bool Mapper::apply_merge(const KeyframeMerge& m) {
   const auto keyframe = node(s->second, m.frame);
   const auto covering = node(c->second, c->second.keyframes.at(m.covering_id).frame);
   const auto& graph = backend_.keyframe_graph();
+  if (known == s->second.keyframes.end() && !backend_.holds(keyframe)) return merge_settled(m, keyframe, covering);
   // An anchor may be merged through a loop that joins its piece (which frees it) and is entered first.
   const bool freed_by_join = !m.joining.empty() && backend_.piece(m.session) != backend_.piece(m.covering_session);
   if (!graph.contains(keyframe) || (graph.node(keyframe).fixed && !freed_by_join) || !graph.contains(covering) ||
@@ -141,6 +142,31 @@ bool Mapper::apply_merge(const KeyframeMerge& m) {
   merge(m, keyframe, covering);
   s->second.last_match_time = m.timestamp;
   for (const auto& loop : m.others) enter_loop(s->second, loop, m.timestamp, outcome);
+  after_change();
+  return true;
+}
+
+// A merged keyframe whose local graph into it was settled (a store of settled revisits): an alias
+// that no graph node ever was; its own graph, if kept, follows. Its session had joined already (its
+// predecessor was merged), so it has no joining loops.
+bool Mapper::merge_settled(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph::NodeId covering) {
+  Session& s = sessions_.at(m.session);
+  if (!m.joining.empty() || !backend_.keyframe_graph().contains(covering))
+    throw MapperError("merge of keyframe " + std::to_string(m.id) + " of session " + core::session_name(m.session) +
+                      ": neither in the graph nor after a settled one");
+  try {
+    backend_.add_alias(keyframe, covering, m.relative, m.information);
+  } catch (const std::invalid_argument& e) {
+    throw MapperError(e.what());
+  }
+  s.keyframes.emplace(m.id, KeyframeRecord{m.frame, m.timestamp, m.odometry, true});
+  keyframe_of_node_.emplace(keyframe, std::pair{m.session, m.id});
+  s.unsettled.insert(m.id);
+  s.last_match_time = m.timestamp;
+  KeyframeOutcome outcome;
+  for (const auto& loop : m.others) enter_loop(s, loop, m.timestamp, outcome);
+  marginals_.invalidate();
+  ++revision_;
   after_change();
   return true;
 }

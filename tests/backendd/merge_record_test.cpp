@@ -1,4 +1,4 @@
-// The store's merge record (daemon/backendd/merge_record.hpp): what is written reads back whole,
+// The store's merge and settled records (daemon/backendd/merge_record.hpp): what is written reads back whole,
 // and bytes that are not one are refused with a reason.
 #include <gtest/gtest.h>
 
@@ -60,6 +60,35 @@ TEST(MergeRecord, BytesThatAreNotOneAreRefused) {
   auto other_version = bytes;
   other_version[0] = 9;
   EXPECT_FALSE(decode_merge(other_version.data(), other_version.size(), &error));
+  EXPECT_NE(error.find("version"), std::string::npos) << error;
+}
+
+TEST(SettledRecord, WhatIsWrittenReadsBackWholeAndOtherBytesAreRefused) {
+  slam::SettledEdge e;
+  e.from_session = 3;
+  e.from_id = 4;
+  e.to_session = 1;
+  e.to_id = 9;
+  e.robust = true;
+  e.measurement = core::SE3::exp((core::Vector6d() << 0.2, 0.0, -0.1, 0.0, 0.03, 0.0).finished());
+  e.information = 1e4 * core::Matrix6d::Identity();
+  const auto bytes = encode_settled(e);
+  std::string error;
+  const auto back = decode_settled(bytes.data(), bytes.size(), &error);
+  ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->from_id, 4);
+  EXPECT_EQ(back->to_session, 1);
+  EXPECT_TRUE(back->robust);
+  EXPECT_TRUE(back->information.isApprox(e.information));
+  EXPECT_EQ(encode_settled(*back), bytes);
+  EXPECT_FALSE(decode_settled(bytes.data(), bytes.size() - 1, &error));
+  EXPECT_NE(error.find("cut short"), std::string::npos) << error;
+  auto flag = bytes;
+  flag[1 + 4 * 8] = 2;  // the robust flag
+  EXPECT_FALSE(decode_settled(flag.data(), flag.size(), &error));
+  auto other_version = bytes;
+  other_version[0] = 9;
+  EXPECT_FALSE(decode_settled(other_version.data(), other_version.size(), &error));
   EXPECT_NE(error.find("version"), std::string::npos) << error;
 }
 

@@ -87,6 +87,21 @@ TEST(KeyframeMerge, AMergedKeyframeLeavesTheGraphAndKeepsItsPoseThroughTheOneCov
   EXPECT_THROW(backend.merge_keyframe(0, 2, T, information(10)), std::invalid_argument);  // 0 is the anchor
 }
 
+// A settled edge replayed over one that holds part of it adds what it holds beyond: the
+// increment, fused into the part, gives the whole; a repeat adds nothing.
+TEST(KeyframeMerge, AnIncrementFusedIntoThePartGivesTheWhole) {
+  const Edge part{0, 1, pose(0.1, 0, 0, 0, 0, 0.01), information(100)};
+  const Edge added{0, 1, pose(0.12, 0.01, 0, 0, 0.01, 0), information(300)};
+  const Edge whole = fused(part, added);
+  const auto more = increment(part, whole);
+  ASSERT_TRUE(more);
+  EXPECT_TRUE(more->information.isApprox(added.information, 1e-9));
+  const Edge again = fused(part, *more);
+  EXPECT_LT((again.measurement.translation() - whole.measurement.translation()).norm(), 1e-9);
+  EXPECT_LT(again.measurement.rotation().angularDistance(whole.measurement.rotation()), 1e-9);
+  EXPECT_FALSE(increment(whole, whole)) << "a repeat holds nothing more";
+}
+
 // A chain of keyframes 0.1 m apart whose odometry over-reads each step by 1 cm; keyframe 6 merged
 // into keyframe 2 (it sees 2's view from 0.4 m on) and a loop 9 -> 3 later: the incremental
 // optimisation of the keyframe graph lands where a batch optimisation of that graph does, however

