@@ -17,6 +17,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } else if (error.empty()) {
       cvo::fuzz::fail("a settled record refused without a reason");
     }
+    if (const auto tally = cvo::daemon::backendd::decode_tally(data, size, &error)) {
+      const auto bytes = cvo::daemon::backendd::encode_tally(*tally);
+      const auto again = cvo::daemon::backendd::decode_tally(bytes.data(), bytes.size(), &error);
+      if (!again || cvo::daemon::backendd::encode_tally(*again) != bytes)
+        cvo::fuzz::fail("a decoded tally record does not encode to the same bytes twice");
+    } else if (error.empty()) {
+      cvo::fuzz::fail("a tally record refused without a reason");
+    }
     const auto merge = cvo::daemon::backendd::decode_merge(data, size, &error);
     if (!merge) {
       if (error.empty()) cvo::fuzz::fail("a merge record refused without a reason");

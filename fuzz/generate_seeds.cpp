@@ -146,7 +146,21 @@ int main(int argc, char** argv) try {
   merge.others = {loop, loop};
   const auto merge_bytes = cvo::daemon::backendd::encode_merge(merge);
   write(out / "merge_record/sample", merge_bytes);
-  keyframe_store(out / "keyframe_store/with-merge", {{RecordKind::kMerge, merge_bytes}});
+  using cvo::daemon::backendd::RecordKind;
+  // A new store at `file` holding a keyframe, its local graph and `last`; true: the graph discarded.
+  const auto keyframe_store = [&](const fs::path& file, RecordKind kind, const std::vector<std::uint8_t>& last,
+                                  bool discard_graph) {
+    fs::remove(file);
+    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
+    std::string warning;
+    cvo::daemon::backendd::KeyframeStore store(file, recovered, warning);
+    cvo::daemon::backendd::RecordRef graph_at;
+    store.append(RecordKind::kKeyframe, encode(keyframe_message));
+    store.append(RecordKind::kLocalGraph, graph, &graph_at);
+    store.append(kind, last);
+    if (discard_graph) store.discard(graph_at, /*may_compact=*/false);  // a tombstone naming it
+  };
+  keyframe_store(out / "keyframe_store/with-merge", RecordKind::kMerge, merge_bytes, false);
   cvo::slam::SettledEdge settled;
   settled.from_session = keyframe.session + 1;
   settled.from_id = 3;
@@ -155,18 +169,7 @@ int main(int argc, char** argv) try {
   settled.measurement = merge.relative;
   const auto settled_bytes = cvo::daemon::backendd::encode_settled(settled);
   write(out / "merge_record/settled", settled_bytes);
-  const fs::path settled_store = out / "keyframe_store/settled-and-discarded";
-  fs::remove(settled_store);
-  {
-    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
-    std::string warning;
-    cvo::daemon::backendd::KeyframeStore store(settled_store, recovered, warning);
-    cvo::daemon::backendd::RecordRef graph_at;
-    store.append(cvo::daemon::backendd::RecordKind::kKeyframe, encode(keyframe_message));
-    store.append(cvo::daemon::backendd::RecordKind::kLocalGraph, graph, &graph_at);
-    store.append(cvo::daemon::backendd::RecordKind::kSettled, settled_bytes);
-    store.discard(graph_at, /*may_compact=*/false);  // a tombstone naming the local graph
-  }
+  keyframe_store(out / "keyframe_store/settled-and-discarded", RecordKind::kSettled, settled_bytes, true);
   const auto store_size = fs::file_size(store_file);
   fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
   fs::resize_file(out / "keyframe_store/torn", store_size - 17);

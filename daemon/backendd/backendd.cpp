@@ -294,6 +294,16 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
       queue_.push({std::move(*merge), std::nullopt, record.where});
       continue;
     }
+    if (record.kind == RecordKind::kTally) {  // likewise
+      auto tally = decode_tally(record.payload.data(), record.payload.size(), &why);
+      if (!tally) {
+        notes_.note_limited("stored skipped", "stored record skipped: " + why);
+        continue;
+      }
+      ++replayed_pending_;
+      queue_.push({*tally, std::nullopt, record.where});
+      continue;
+    }
     if (record.kind == RecordKind::kSettled) {  // likewise
       auto edge = decode_settled(record.payload.data(), record.payload.size(), &why);
       if (!edge) {
@@ -608,6 +618,11 @@ void Backendd::process_record(QueuedRecord& queued) {
     if (const auto* merge = std::get_if<slam::KeyframeMerge>(&queued.content))
       return apply_merge(*merge, queued.stored);
     if (const auto* edge = std::get_if<slam::SettledEdge>(&queued.content)) return apply_settled(*edge, queued.stored);
+    if (const auto* tally = std::get_if<slam::SessionTally>(&queued.content)) {
+      work_->mapper.apply_tally(*tally);
+      if (work_->merges) work_->merges->tally_replayed(*tally, queued.stored, waiting_in_store_ == 0);
+      return publish_changes(tally->session, {}, false);
+    }
     std::string error;
     const auto value = value_of(queued, &error);
     if (!value) return notes_.note_limited("unreadable", error);

@@ -100,7 +100,9 @@ class Backendd {
   // store is not held decoded) or its merge; waiting in the store (the queue was full), only where
   // it lies (read back and decoded in its turn: what waits there is not held in memory at all).
   struct QueuedRecord {
-    std::variant<RecordValue, Identified, RecordRef, LostSession, slam::KeyframeMerge, slam::SettledEdge> content;
+    std::variant<RecordValue, Identified, RecordRef, LostSession, slam::KeyframeMerge, slam::SettledEdge,
+                 slam::SessionTally>
+        content;
     std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
     std::optional<RecordRef> stored{};  // where its record lies in the store (garbage once merged)
   };

@@ -176,4 +176,30 @@ std::optional<slam::SettledEdge> decode_settled(const std::uint8_t* data, std::s
   return e;
 }
 
+std::vector<std::uint8_t> encode_tally(const slam::SessionTally& t) {
+  Writer w;
+  w.put(kTallyRecordVersion);
+  w.put(t.session);
+  w.put(static_cast<std::uint64_t>(t.forgotten));
+  w.put(t.settled_through);
+  return std::move(w.bytes);
+}
+
+std::optional<slam::SessionTally> decode_tally(const std::uint8_t* data, std::size_t size, std::string* error) {
+  Reader r(data, size);
+  if (r.get<std::uint8_t>() != kTallyRecordVersion) {
+    *error = "tally record: not version " + std::to_string(kTallyRecordVersion);
+    return std::nullopt;
+  }
+  slam::SessionTally t;
+  t.session = r.get<core::SessionId>();
+  t.forgotten = static_cast<std::size_t>(r.get<std::uint64_t>());
+  t.settled_through = r.get<std::int64_t>();
+  if (!r.ok || !r.at_end()) {
+    *error = r.ok ? "tally record: bytes after its end" : "tally record: cut short";
+    return std::nullopt;
+  }
+  return t;
+}
+
 }  // namespace cvo::daemon::backendd

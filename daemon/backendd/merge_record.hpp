@@ -32,6 +32,13 @@ std::vector<std::uint8_t> encode_settled(const slam::SettledEdge& edge);
 /// nullopt with *error when the bytes are not a settled record of this version.
 std::optional<slam::SettledEdge> decode_settled(const std::uint8_t* data, std::size_t size, std::string* error);
 
+// The tally record (RecordKind::kTally): a session's slam::SessionTally, replacing the session's
+// previous one. Payload, little-endian: u8 version (1), i64 session, u64 forgotten, i64 settled
+// through.
+inline constexpr std::uint8_t kTallyRecordVersion = 1;
+std::vector<std::uint8_t> encode_tally(const slam::SessionTally& tally);
+std::optional<slam::SessionTally> decode_tally(const std::uint8_t* data, std::size_t size, std::string* error);
+
 std::vector<std::uint8_t> encode_merge(const slam::KeyframeMerge& merge);
 /// nullopt with *error when the bytes are not a merge record of this version (short, long, a
 /// count beyond the bytes, a non-finite number).

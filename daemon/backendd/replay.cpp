@@ -34,6 +34,16 @@ Replayed replay(MessageDoor& door, slam::Mapper& mapper, RecordKind kind, const 
   Replayed out;
   if (kind == RecordKind::kMerge) return replay_merge(mapper, data, size);
   if (kind == RecordKind::kSettled) return replay_settled(mapper, data, size);
+  if (kind == RecordKind::kTally) {
+    const auto tally = decode_tally(data, size, &out.why);
+    if (!tally) return {"stored record skipped: " + out.why, std::nullopt};
+    try {
+      mapper.apply_tally(*tally);
+    } catch (const std::exception& e) {
+      return {"not applied: " + std::string(e.what()), std::nullopt};
+    }
+    return {};
+  }
   const auto message = let_in_stored(door, kind, data, size, &out.why);
   if (!message) return out;
   auto value = usable(*message, &out.why, nullptr);

@@ -26,6 +26,7 @@ void StoreMerges::follow_compaction() {
   follow(merge_records_);
   follow(graph_records_);
   follow(settled_records_);
+  follow(tally_records_);
   for (auto& [session, newest] : newest_)
     for (auto& [id, ref] : newest)
       if (ref) ref = store_.relocated(*ref);
@@ -95,6 +96,14 @@ void StoreMerges::settled(const slam::Settlement& settlement, bool may_compact) 
     const auto [it, added] = settled_records_.try_emplace(key_of(edge), where);
     if (!added) garbage.push_back(std::exchange(it->second, where));
   }
+  for (const auto& tally : settlement.tallies) {
+    RecordRef where;
+    const Appended appended = store_.append(RecordKind::kTally, encode_tally(tally), &where);
+    if (appended == Appended::kNotDurable) return;
+    if (appended != Appended::kStored) continue;
+    const auto [it, added] = tally_records_.try_emplace(tally.session, where);
+    if (!added) garbage.push_back(std::exchange(it->second, where));
+  }
   const auto take = [&](std::map<Key, RecordRef>& refs, const Key& key) {
     if (const auto it = refs.find(key); it != refs.end()) {
       garbage.push_back(it->second);
@@ -115,6 +124,17 @@ void StoreMerges::settled_replayed(const slam::SettledEdge& edge, const std::opt
   const auto [it, added] = settled_records_.try_emplace(key_of(edge), *now);
   if (added) return;
   const RecordRef older = std::exchange(it->second, *now);  // a stop came between the two writes
+  if (const auto old = store_.relocated(older)) discard(*old, may_compact);
+}
+
+void StoreMerges::tally_replayed(const slam::SessionTally& tally, const std::optional<RecordRef>& stored,
+                                 bool may_compact) {
+  if (!stored) return;
+  const auto now = store_.relocated(*stored);
+  if (!now) return;
+  const auto [it, added] = tally_records_.try_emplace(tally.session, *now);
+  if (added) return;
+  const RecordRef older = std::exchange(it->second, *now);
   if (const auto old = store_.relocated(older)) discard(*old, may_compact);
 }
 

@@ -6,7 +6,8 @@
 //
 // Settled revisits (slam::Mapper::settle): a settled local graph's record and a forgotten
 // keyframe's merge record are garbage too, and each settled edge that changed is stored as a
-// settled record (merge_record.hpp) that replaces the pair's previous one. So what stays of a revisit
+// settled record (merge_record.hpp) that replaces the pair's previous one, and each session whose
+// tally changed (slam::SessionTally: the keyframes it forgot) as a tally record likewise. So what stays of a revisit
 // is what grows with the area: the kept keyframes' records, the settled edges between them, and a
 // few records where a revisit enters or leaves the mapped area.
 //
@@ -52,6 +53,8 @@ class StoreMerges {
   void settled(const slam::Settlement& settlement, bool may_compact);
   /// A settled record replayed from the store, at `stored`.
   void settled_replayed(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored, bool may_compact);
+  /// A tally record replayed from the store, at `stored`.
+  void tally_replayed(const slam::SessionTally& tally, const std::optional<RecordRef>& stored, bool may_compact);
 
   /// Compactions this made (the store counts them too).
   [[nodiscard]] std::int64_t compactions() const { return compactions_; }
@@ -73,6 +76,7 @@ class StoreMerges {
   std::map<Key, std::pair<slam::KeyframeMerge, std::optional<RecordRef>>> awaiting_;
   std::map<Key, RecordRef> merge_records_, graph_records_;  // of merged keyframes not forgotten yet
   std::map<EdgeKey, RecordRef> settled_records_;
+  std::map<core::SessionId, RecordRef> tally_records_;
   std::int64_t compactions_ = 0;
 };
 

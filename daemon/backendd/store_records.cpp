@@ -39,7 +39,8 @@ bool known_kind(std::uint8_t kind) {
          kind == static_cast<std::uint8_t>(RecordKind::kLocalGraph) ||
          kind == static_cast<std::uint8_t>(RecordKind::kMerge) ||
          kind == static_cast<std::uint8_t>(RecordKind::kSettled) ||
-         kind == static_cast<std::uint8_t>(RecordKind::kDiscarded);
+         kind == static_cast<std::uint8_t>(RecordKind::kDiscarded) ||
+         kind == static_cast<std::uint8_t>(RecordKind::kTally);
 }
 
 std::uint64_t get64(const std::uint8_t* p) {

@@ -23,11 +23,19 @@
 namespace cvo::daemon::backendd {
 
 // kMerge: a keyframe merged into one covering it (merge_record.hpp), after the keyframe's record.
-// kSettled: what settled revisits left to a pair of keyframes (settled_record.hpp).
+// kSettled: what settled revisits left to a pair of keyframes (merge_record.hpp).
+// kTally: a session's tally of settled revisits (merge_record.hpp), replacing its previous one.
 // kDiscarded: records made garbage (keyframe_store.hpp: discard), named by where they lie in this
 // file; a scan leaves them out, and the tombstone itself is garbage too. Payload: u32 count, then
 // that many u64 offset, u32 bytes (little-endian).
-enum class RecordKind : std::uint8_t { kKeyframe = 1, kLocalGraph = 2, kMerge = 3, kSettled = 4, kDiscarded = 5 };
+enum class RecordKind : std::uint8_t {
+  kKeyframe = 1,
+  kLocalGraph = 2,
+  kMerge = 3,
+  kSettled = 4,
+  kDiscarded = 5,
+  kTally = 6
+};
 
 inline constexpr std::array<std::uint8_t, 8> kStoreMagic{'C', 'V', 'O', 'K', 'F', 'S', '1', '\n'};
 inline constexpr std::size_t kRecordHeaderBytes = 16;  // before each payload

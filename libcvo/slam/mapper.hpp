@@ -209,11 +209,20 @@ struct SettledEdge {
   core::Matrix6d information = core::Matrix6d::Identity();
 };
 
+/// What settle() keeps of a session beyond its keyframes: how many it forgot (MapSession::keyframes
+/// counts them) and its newest keyframe settled. A store keeps the newest.
+struct SessionTally {
+  core::SessionId session = 0;
+  std::size_t forgotten = 0;
+  std::int64_t settled_through = -1;
+};
+
 /// What one settle() did: the local graphs it settled and the keyframes it forgot (their records
-/// are garbage now), and the settled edges that changed, as they are now.
+/// are garbage now), and the settled edges and sessions' tallies that changed, as they are now.
 struct Settlement {
   std::vector<std::pair<core::SessionId, std::int64_t>> graphs, keyframes;
   std::vector<SettledEdge> edges;
+  std::vector<SessionTally> tallies;
   [[nodiscard]] bool empty() const { return graphs.empty() && keyframes.empty() && edges.empty(); }
 };
 
@@ -300,6 +309,9 @@ class Mapper {
   /// A settled edge settle() reported (a store's record, replayed): Backend::apply_settled. Throws
   /// MapperError when an end is not a keyframe the mapper knows in the keyframe graph.
   void apply_settled(const SettledEdge& edge);
+  /// A session's tally settle() reported (a store's record, replayed): it holds at least that.
+  /// Throws MapperError for a session not seen.
+  void apply_tally(const SessionTally& tally);
   /// Keyframes settle() forgot so far.
   [[nodiscard]] std::size_t forgotten_keyframes() const { return forgotten_keyframes_; }
   /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).

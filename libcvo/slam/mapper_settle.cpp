@@ -28,6 +28,12 @@ Settlement Mapper::settle() {
         if (const auto name = forget(n)) out.keyframes.push_back(*name);
     }
   }
+  for (auto& [id, s] : sessions_)  // forget() may count a keyframe of another session
+    if (std::find_if(out.keyframes.begin(), out.keyframes.end(), [&](const auto& k) { return k.first == id; }) !=
+            out.keyframes.end() ||
+        std::find_if(out.graphs.begin(), out.graphs.end(), [&](const auto& k) { return k.first == id; }) !=
+            out.graphs.end())
+      out.tallies.push_back({id, s.forgotten, s.settled_through});
   // The map's loops changed; the keyframe graph, and so its marginals, did not.
   if (!out.empty()) ++revision_;
   return out;
@@ -55,6 +61,15 @@ void Mapper::apply_settled(const SettledEdge& e) {
   }
   ++revision_;
   marginals_.invalidate();
+}
+
+void Mapper::apply_tally(const SessionTally& tally) {
+  const auto s = sessions_.find(tally.session);
+  if (s == sessions_.end())
+    throw MapperError("tally of session " + core::session_name(tally.session) + ": the session is unknown");
+  s->second.forgotten = std::max(s->second.forgotten, tally.forgotten);
+  s->second.settled_through = std::max(s->second.settled_through, tally.settled_through);
+  ++revision_;
 }
 
 std::optional<std::pair<core::SessionId, std::int64_t>> Mapper::forget(posegraph::NodeId keyframe) {

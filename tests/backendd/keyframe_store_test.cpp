@@ -34,6 +34,15 @@ std::vector<std::uint8_t> payload(int n, std::uint8_t seed) {
   return p;
 }
 
+// `n` keyframe records of `bytes` bytes each appended, and where each lies.
+std::vector<RecordRef> append_keyframes(KeyframeStore& store, int n, int bytes) {
+  std::vector<RecordRef> refs(static_cast<std::size_t>(n));
+  for (std::size_t i = 0; i < refs.size(); ++i)
+    EXPECT_EQ(store.append(RecordKind::kKeyframe, payload(bytes, static_cast<std::uint8_t>(i)), &refs[i]),
+              Appended::kStored);
+  return refs;
+}
+
 std::vector<StoredRecord> reopen(const fs::path& file, std::string& warning) {
   std::vector<StoredRecord> records;
   KeyframeStore store(file, records, warning);
@@ -169,10 +178,7 @@ TEST(KeyframeStore, NoCompactionWhileTheCallerSaysNoAndReferencesOutliveOneCompa
   std::vector<StoredRecord> none;
   std::string warning;
   KeyframeStore store(file, none, warning);
-  std::vector<RecordRef> refs(6);
-  for (std::size_t i = 0; i < refs.size(); ++i)
-    ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(1000, static_cast<std::uint8_t>(i)), &refs[i]),
-              Appended::kStored);
+  const auto refs = append_keyframes(store, 6, 1000);
   for (const std::size_t i : {0u, 1u, 2u}) EXPECT_FALSE(store.discard(refs[i], /*may_compact=*/false));
   EXPECT_EQ(store.compactions(), 0u);
   std::string error;
@@ -223,10 +229,7 @@ TEST(KeyframeStore, ADiscardedRecordStaysDiscardedAfterARestart) {
     std::vector<StoredRecord> none;
     std::string warning;
     KeyframeStore store(file, none, warning);
-    std::vector<RecordRef> refs(6);
-    for (std::size_t i = 0; i < refs.size(); ++i)
-      ASSERT_EQ(store.append(RecordKind::kKeyframe, payload(500, static_cast<std::uint8_t>(i)), &refs[i]),
-                Appended::kStored);
+    const auto refs = append_keyframes(store, 6, 500);
     EXPECT_FALSE(store.discard(refs[1]));
   }
   EXPECT_EQ(read_store(file).scan.records.size(), 5u);

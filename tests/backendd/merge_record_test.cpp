@@ -92,5 +92,21 @@ TEST(SettledRecord, WhatIsWrittenReadsBackWholeAndOtherBytesAreRefused) {
   EXPECT_NE(error.find("version"), std::string::npos) << error;
 }
 
+TEST(TallyRecord, WhatIsWrittenReadsBackWholeAndOtherBytesAreRefused) {
+  const slam::SessionTally t{5, 42, 117};
+  const auto bytes = encode_tally(t);
+  std::string error;
+  const auto back = decode_tally(bytes.data(), bytes.size(), &error);
+  ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->session, 5);
+  EXPECT_EQ(back->forgotten, 42u);
+  EXPECT_EQ(back->settled_through, 117);
+  EXPECT_FALSE(decode_tally(bytes.data(), bytes.size() - 1, &error));
+  EXPECT_NE(error.find("cut short"), std::string::npos) << error;
+  auto longer = bytes;
+  longer.push_back(1);
+  EXPECT_FALSE(decode_tally(longer.data(), longer.size(), &error));
+}
+
 }  // namespace
 }  // namespace cvo::daemon::backendd
