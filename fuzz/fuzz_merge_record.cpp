@@ -9,22 +9,19 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   cvo::fuzz::expect_refusal_or_success([&] {
     std::string error;
-    if (const auto settled = cvo::daemon::backendd::decode_settled(data, size, &error)) {  // the other record here
-      const auto bytes = cvo::daemon::backendd::encode_settled(*settled);
-      const auto again = cvo::daemon::backendd::decode_settled(bytes.data(), bytes.size(), &error);
-      if (!again || cvo::daemon::backendd::encode_settled(*again) != bytes)
-        cvo::fuzz::fail("a decoded settled record does not encode to the same bytes twice");
-    } else if (error.empty()) {
-      cvo::fuzz::fail("a settled record refused without a reason");
-    }
-    if (const auto tally = cvo::daemon::backendd::decode_tally(data, size, &error)) {
-      const auto bytes = cvo::daemon::backendd::encode_tally(*tally);
-      const auto again = cvo::daemon::backendd::decode_tally(bytes.data(), bytes.size(), &error);
-      if (!again || cvo::daemon::backendd::encode_tally(*again) != bytes)
-        cvo::fuzz::fail("a decoded tally record does not encode to the same bytes twice");
-    } else if (error.empty()) {
-      cvo::fuzz::fail("a tally record refused without a reason");
-    }
+    // The other records of revisits: refused with a reason, or stable through encode and decode.
+    const auto stable = [&](const char* what, auto decode, auto encode) {
+      if (const auto value = decode(data, size, &error)) {
+        const auto bytes = encode(*value);
+        const auto again = decode(bytes.data(), bytes.size(), &error);
+        if (!again || encode(*again) != bytes)
+          cvo::fuzz::fail(std::string("a decoded ") + what + " record does not encode to the same bytes twice");
+      } else if (error.empty()) {
+        cvo::fuzz::fail(std::string("a ") + what + " record refused without a reason");
+      }
+    };
+    stable("settled", cvo::daemon::backendd::decode_settled, cvo::daemon::backendd::encode_settled);
+    stable("tally", cvo::daemon::backendd::decode_tally, cvo::daemon::backendd::encode_tally);
     const auto merge = cvo::daemon::backendd::decode_merge(data, size, &error);
     if (!merge) {
       if (error.empty()) cvo::fuzz::fail("a merge record refused without a reason");

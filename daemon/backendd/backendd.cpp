@@ -284,34 +284,24 @@ int Backendd::run() {
 void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
   for (auto& record : recovered) {
     std::string why;
-    if (record.kind == RecordKind::kMerge) {  // names no message: it does not pass the door
-      auto merge = decode_merge(record.payload.data(), record.payload.size(), &why);
-      if (!merge) {
-        notes_.note_limited("stored skipped", "stored record skipped: " + why);
-        continue;
-      }
+    // The back end's own records name no message: they do not pass the door.
+    const auto queue_decoded = [&](auto decoded) {
+      if (!decoded) return notes_.note_limited("stored skipped", "stored record skipped: " + why);
       ++replayed_pending_;
-      queue_.push({std::move(*merge), std::nullopt, record.where});
+      queue_.push({std::move(*decoded), std::nullopt, record.where});
+    };
+    const auto* payload = record.payload.data();
+    const auto size = record.payload.size();
+    if (record.kind == RecordKind::kMerge) {
+      queue_decoded(decode_merge(payload, size, &why));
       continue;
     }
-    if (record.kind == RecordKind::kTally) {  // likewise
-      auto tally = decode_tally(record.payload.data(), record.payload.size(), &why);
-      if (!tally) {
-        notes_.note_limited("stored skipped", "stored record skipped: " + why);
-        continue;
-      }
-      ++replayed_pending_;
-      queue_.push({*tally, std::nullopt, record.where});
+    if (record.kind == RecordKind::kSettled) {
+      queue_decoded(decode_settled(payload, size, &why));
       continue;
     }
-    if (record.kind == RecordKind::kSettled) {  // likewise
-      auto edge = decode_settled(record.payload.data(), record.payload.size(), &why);
-      if (!edge) {
-        notes_.note_limited("stored skipped", "stored record skipped: " + why);
-        continue;
-      }
-      ++replayed_pending_;
-      queue_.push({*edge, std::nullopt, record.where});
+    if (record.kind == RecordKind::kTally) {
+      queue_decoded(decode_tally(payload, size, &why));
       continue;
     }
     // A record of an older schema (another fingerprint or version), or a repeat, is skipped, said here.

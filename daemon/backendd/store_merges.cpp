@@ -88,22 +88,24 @@ StoreMerges::EdgeKey StoreMerges::key_of(const slam::SettledEdge& e) {
 
 void StoreMerges::settled(const slam::Settlement& settlement, bool may_compact) {
   std::vector<RecordRef> garbage;
-  for (const auto& edge : settlement.edges) {
-    RecordRef where;
-    const Appended appended = store_.append(RecordKind::kSettled, encode_settled(edge), &where);
-    if (appended == Appended::kNotDurable) return;  // nothing discarded: the records replay to this
-    if (appended != Appended::kStored) continue;    // held: written in order later, the old one stays too
-    const auto [it, added] = settled_records_.try_emplace(key_of(edge), where);
-    if (!added) garbage.push_back(std::exchange(it->second, where));
-  }
-  for (const auto& tally : settlement.tallies) {
-    RecordRef where;
-    const Appended appended = store_.append(RecordKind::kTally, encode_tally(tally), &where);
-    if (appended == Appended::kNotDurable) return;
-    if (appended != Appended::kStored) continue;
-    const auto [it, added] = tally_records_.try_emplace(tally.session, where);
-    if (!added) garbage.push_back(std::exchange(it->second, where));
-  }
+  // Each stored, replacing its key's record; false: one could not be kept (nothing is discarded
+  // then: the records replay to this settlement). Held ones are written in order later; the record
+  // they replace stays too.
+  const auto store_each = [&](const auto& values, RecordKind kind, auto encode, auto& refs, auto key) {
+    for (const auto& value : values) {
+      RecordRef where;
+      const Appended appended = store_.append(kind, encode(value), &where);
+      if (appended == Appended::kNotDurable) return false;
+      if (appended != Appended::kStored) continue;
+      const auto [it, added] = refs.try_emplace(key(value), where);
+      if (!added) garbage.push_back(std::exchange(it->second, where));
+    }
+    return true;
+  };
+  if (!store_each(settlement.edges, RecordKind::kSettled, encode_settled, settled_records_, key_of) ||
+      !store_each(settlement.tallies, RecordKind::kTally, encode_tally, tally_records_,
+                  [](const slam::SessionTally& t) { return t.session; }))
+    return;
   const auto take = [&](std::map<Key, RecordRef>& refs, const Key& key) {
     if (const auto it = refs.find(key); it != refs.end()) {
       garbage.push_back(it->second);
@@ -116,26 +118,26 @@ void StoreMerges::settled(const slam::Settlement& settlement, bool may_compact) 
     if (const auto now = store_.relocated(ref)) discard(*now, may_compact);
 }
 
+// The record of `key` replayed at `stored`: remembered; one before it for the same key (a stop
+// came between the two writes) is garbage.
+template <class Refs, class RefKey>
+void StoreMerges::replayed(Refs& refs, const RefKey& key, const std::optional<RecordRef>& stored, bool may_compact) {
+  const auto now = stored ? store_.relocated(*stored) : std::nullopt;
+  if (!now) return;
+  const auto [it, added] = refs.try_emplace(key, *now);
+  if (added) return;
+  const RecordRef older = std::exchange(it->second, *now);
+  if (const auto old = store_.relocated(older)) discard(*old, may_compact);
+}
+
 void StoreMerges::settled_replayed(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored,
                                    bool may_compact) {
-  if (!stored) return;
-  const auto now = store_.relocated(*stored);
-  if (!now) return;
-  const auto [it, added] = settled_records_.try_emplace(key_of(edge), *now);
-  if (added) return;
-  const RecordRef older = std::exchange(it->second, *now);  // a stop came between the two writes
-  if (const auto old = store_.relocated(older)) discard(*old, may_compact);
+  replayed(settled_records_, key_of(edge), stored, may_compact);
 }
 
 void StoreMerges::tally_replayed(const slam::SessionTally& tally, const std::optional<RecordRef>& stored,
                                  bool may_compact) {
-  if (!stored) return;
-  const auto now = store_.relocated(*stored);
-  if (!now) return;
-  const auto [it, added] = tally_records_.try_emplace(tally.session, *now);
-  if (added) return;
-  const RecordRef older = std::exchange(it->second, *now);
-  if (const auto old = store_.relocated(older)) discard(*old, may_compact);
+  replayed(tally_records_, tally.session, stored, may_compact);
 }
 
 }  // namespace cvo::daemon::backendd

@@ -68,6 +68,8 @@ class StoreMerges {
   Appended store(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& keyframe, bool may_compact);
   void discard(const RecordRef& where, bool may_compact);
   void follow_compaction();  // every reference held, as the store is now
+  template <class Refs, class RefKey>
+  void replayed(Refs& refs, const RefKey& key, const std::optional<RecordRef>& stored, bool may_compact);
 
   KeyframeStore& store_;
   // Each session's two newest keyframes: where their records lie, by id.
