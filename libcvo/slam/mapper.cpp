@@ -255,7 +255,7 @@ MapSession Mapper::describe(core::SessionId id, const Session& s) const {
   entry.session = id;
   entry.placed = backend_.placed(id);
   entry.piece = backend_.piece(id);
-  entry.keyframes = s.keyframes.size() + s.forgotten;
+  entry.keyframes = s.keyframes.size() + s.forgotten_before + s.forgotten;
   entry.joined_at_keyframe = s.joined_at_keyframe;
   entry.correction = backend_.odometry_correction(id);
   entry.state = s.lost         ? core::LocalizationState::kLost

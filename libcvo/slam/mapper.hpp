@@ -337,6 +337,7 @@ class Mapper {
     std::set<std::int64_t> unsettled;   // merged keyframes not settled yet (settle())
     std::int64_t settled_through = -1;  // its newest keyframe settled
     std::size_t forgotten = 0;          // keyframes settle() forgot (MapSession::keyframes counts them)
+    std::size_t forgotten_before = 0;   // by an earlier run: a stored tally's (no record of them is left)
     // Its first keyframe's id until its successor came: a first keyframe proposes no loop
     // candidates when it comes (no predecessor normalises η), its successor does (merge_first).
     std::optional<std::int64_t> undetected_first;

@@ -33,7 +33,7 @@ Settlement Mapper::settle() {
             out.keyframes.end() ||
         std::find_if(out.graphs.begin(), out.graphs.end(), [&](const auto& k) { return k.first == id; }) !=
             out.graphs.end())
-      out.tallies.push_back({id, s.forgotten, s.settled_through});
+      out.tallies.push_back({id, s.forgotten_before + s.forgotten, s.settled_through});
   // The map's loops changed; the keyframe graph, and so its marginals, did not.
   if (!out.empty()) ++revision_;
   return out;
@@ -67,7 +67,8 @@ void Mapper::apply_tally(const SessionTally& tally) {
   const auto s = sessions_.find(tally.session);
   if (s == sessions_.end())
     throw MapperError("tally of session " + core::session_name(tally.session) + ": the session is unknown");
-  s->second.forgotten = std::max(s->second.forgotten, tally.forgotten);
+  // Those it counts have no record left, so none is among those this run forgot: they add up.
+  s->second.forgotten_before = std::max(s->second.forgotten_before, tally.forgotten);
   s->second.settled_through = std::max(s->second.settled_through, tally.settled_through);
   ++revision_;
 }
