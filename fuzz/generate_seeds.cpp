@@ -109,17 +109,21 @@ int main(int argc, char** argv) try {
   // A keyframe store as cvo-backendd leaves it, then the same cut short in its last record (what a
   // crash during a write leaves).
   using cvo::daemon::backendd::RecordKind;
-  // A new store at `file`: the keyframe, its local graph, then `more` (kind, payload) records.
+  // A new store at `file`: the keyframe, its local graph, then `more` (kind, payload) records;
+  // `discard_graph`: then a tombstone naming the local graph (a settled revisit's).
   const auto keyframe_store = [&](const fs::path& file,
-                                  const std::vector<std::pair<RecordKind, std::vector<std::uint8_t>>>& more) {
+                                  const std::vector<std::pair<RecordKind, std::vector<std::uint8_t>>>& more,
+                                  bool discard_graph = false) {
     fs::create_directories(file.parent_path());
     fs::remove(file);
     std::vector<cvo::daemon::backendd::StoredRecord> recovered;
     std::string warning;
     cvo::daemon::backendd::KeyframeStore store(file, recovered, warning);
+    cvo::daemon::backendd::RecordRef graph_at;
     store.append(RecordKind::kKeyframe, encode(keyframe_message));
-    store.append(RecordKind::kLocalGraph, graph);
+    store.append(RecordKind::kLocalGraph, graph, &graph_at);
     for (const auto& [kind, payload] : more) store.append(kind, payload);
+    if (discard_graph) store.discard(graph_at, /*may_compact=*/false);
   };
   const fs::path store_file = out / "keyframe_store/two-records";
   keyframe_store(store_file, {});
@@ -146,21 +150,7 @@ int main(int argc, char** argv) try {
   merge.others = {loop, loop};
   const auto merge_bytes = cvo::daemon::backendd::encode_merge(merge);
   write(out / "merge_record/sample", merge_bytes);
-  using cvo::daemon::backendd::RecordKind;
-  // A new store at `file` holding a keyframe, its local graph and `last`; true: the graph discarded.
-  const auto keyframe_store = [&](const fs::path& file, RecordKind kind, const std::vector<std::uint8_t>& last,
-                                  bool discard_graph) {
-    fs::remove(file);
-    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
-    std::string warning;
-    cvo::daemon::backendd::KeyframeStore store(file, recovered, warning);
-    cvo::daemon::backendd::RecordRef graph_at;
-    store.append(RecordKind::kKeyframe, encode(keyframe_message));
-    store.append(RecordKind::kLocalGraph, graph, &graph_at);
-    store.append(kind, last);
-    if (discard_graph) store.discard(graph_at, /*may_compact=*/false);  // a tombstone naming it
-  };
-  keyframe_store(out / "keyframe_store/with-merge", RecordKind::kMerge, merge_bytes, false);
+  keyframe_store(out / "keyframe_store/with-merge", {{RecordKind::kMerge, merge_bytes}});
   cvo::slam::SettledEdge settled;
   settled.from_session = keyframe.session + 1;
   settled.from_id = 3;
@@ -169,7 +159,7 @@ int main(int argc, char** argv) try {
   settled.measurement = merge.relative;
   const auto settled_bytes = cvo::daemon::backendd::encode_settled(settled);
   write(out / "merge_record/settled", settled_bytes);
-  keyframe_store(out / "keyframe_store/settled-and-discarded", RecordKind::kSettled, settled_bytes, true);
+  keyframe_store(out / "keyframe_store/settled-and-discarded", {{RecordKind::kSettled, settled_bytes}}, true);
   const auto store_size = fs::file_size(store_file);
   fs::copy_file(store_file, out / "keyframe_store/torn", fs::copy_options::overwrite_existing);
   fs::resize_file(out / "keyframe_store/torn", store_size - 17);
