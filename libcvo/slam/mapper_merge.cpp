@@ -122,7 +122,14 @@ bool Mapper::apply_merge(const KeyframeMerge& m) {
   const auto& graph = backend_.keyframe_graph();
   if (known == s->second.keyframes.end() && !backend_.holds(keyframe)) return merge_settled(m, keyframe, covering);
   // An anchor may be merged through a loop that joins its piece (which frees it) and is entered first.
-  const bool freed_by_join = !m.joining.empty() && backend_.piece(m.session) != backend_.piece(m.covering_session);
+  // A session's first keyframe, merged once its successor's loops had joined the session: replayed
+  // without its record, the successor finds none (its predecessor, η's normaliser, is not in the
+  // detector), so the merge's own verified loop joins in their place.
+  std::vector<loop_closure::LoopClosure> joining = m.joining;
+  const bool apart = backend_.piece(m.session) != backend_.piece(m.covering_session);
+  if (known == s->second.keyframes.end() && joining.empty() && apart && graph.contains(keyframe))
+    joining.push_back({covering, keyframe, m.relative, m.information, 0, 0, 0});
+  const bool freed_by_join = !joining.empty() && apart;
   if (!graph.contains(keyframe) || (graph.node(keyframe).fixed && !freed_by_join) || !graph.contains(covering) ||
       keyframe == covering)
     throw MapperError(what + ": not two keyframes of the graph, the first free");
@@ -138,7 +145,7 @@ bool Mapper::apply_merge(const KeyframeMerge& m) {
   }
   if (s->second.undetected_first == m.id) s->second.undetected_first.reset();
   KeyframeOutcome outcome;
-  for (const auto& loop : m.joining) enter_loop(s->second, loop, m.timestamp, outcome);
+  for (const auto& loop : joining) enter_loop(s->second, loop, m.timestamp, outcome);
   merge(m, keyframe, covering);
   s->second.last_match_time = m.timestamp;
   for (const auto& loop : m.others) enter_loop(s->second, loop, m.timestamp, outcome);
