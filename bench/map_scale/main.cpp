@@ -51,19 +51,26 @@ struct Options {
   std::vector<fs::path> sequences;
   std::vector<std::string> settings;
   bool mapper = true;
+  fs::path keep;  // "": a temporary scratch folder
 };
 
-// A folder of its own, removed with everything in it.
+// A folder of its own, removed with everything in it; or `keep`, made if need be and kept (the
+// daemons' logs and stores, to look into after the run).
 class ScratchDir {
  public:
-  ScratchDir() {
+  explicit ScratchDir(const fs::path& keep) : keep_(!keep.empty()) {
+    if (keep_) {
+      fs::create_directories(keep);
+      path_ = keep;
+      return;
+    }
     std::string name = (fs::temp_directory_path() / "map_scale_XXXXXX").string();
     if (!mkdtemp(name.data())) throw std::runtime_error("map_scale: cannot make a temporary folder");
     path_ = name;
   }
   ~ScratchDir() {
     std::error_code ec;
-    fs::remove_all(path_, ec);
+    if (!keep_) fs::remove_all(path_, ec);
   }
   ScratchDir(const ScratchDir&) = delete;
   ScratchDir& operator=(const ScratchDir&) = delete;
@@ -71,6 +78,7 @@ class ScratchDir {
 
  private:
   fs::path path_;
+  bool keep_ = false;
 };
 
 std::vector<Route> routes(const Options& options, const config::Config& config, const fs::path& scratch) {
@@ -265,7 +273,7 @@ std::size_t revisits(const Options& options, const config::Config& config, const
 int run(const Options& options) {
   config::Config config;
   for (const auto& s : options.settings) config::apply_override(config, s);
-  const ScratchDir scratch;
+  const ScratchDir scratch(options.keep);
   const auto all = routes(options, config, scratch.path());
   std::size_t missing = 0;
   if (!options.sizes.empty()) missing += growth(options, config, all, scratch.path());
@@ -300,6 +308,7 @@ int main(int argc, char** argv) {
   app.add_option("--keyframes", o.sizes, "map sizes to report at (keyframes fed; empty: none)")->delimiter(',');
   app.add_option("--visits", o.visits, "visits of the first route in the revisit run (0: none)");
   app.add_option("--sequence", o.sequences, "TUM folders to drive (default: the sample, a rendered orbit, fr1/rpy)");
+  app.add_option("--keep", o.keep, "scratch folder to use and keep (the daemons' logs and stores)");
   app.add_flag("!--no-mapper", o.mapper, "skip the in-process mapper's loop-search / optimisation split");
   cvo::program::add_set_option(app, o.settings, "backendd.map_period_s=5");
   return cvo::program::cli_main(app, argc, argv, [&] { return cvo::bench::run(o); });

@@ -6,6 +6,8 @@
 //                [--publish-url URL] [--exit-on-eof]
 //   exit status 0 after SIGTERM/SIGINT/SIGHUP (or the end of a file:// input with --exit-on-eof); 1 when the
 //   configuration, the store or the vocabulary is unusable (the message says which); 2 on a usage error.
+#include <malloc.h>
+
 #include <csignal>
 #include <iostream>
 #include <optional>
@@ -74,6 +76,12 @@ int run(const Arguments& args) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A keyframe's images and clouds (hundreds of kB each) come and go with every record. glibc's
+  // threshold for mapping a block of its own rises past them after the first is freed, and from then
+  // on they are cut from the heap and leave it fragmented: the resident size grows with the hours
+  // while the heap in use does not (bench/odometry-tuning.md, "The back end as the map grows"). A
+  // fixed threshold keeps them mapped, so each goes back to the system when freed.
+  mallopt(M_MMAP_THRESHOLD, 128 * 1024);
   Arguments args;
   CLI::App app(kDescription, "cvo-backendd");
   program::describe(app, "cvo-backendd [--config FILE] [--lcm-url URL] [--store FILE] [options]");
