@@ -165,8 +165,12 @@ std::string join_text(const slam::Map& map, core::SessionId session, std::option
     if (std::isnan(first)) first = k.timestamp;  // by id: the session's first keyframe
     if (k.id == at) joined = k.timestamp;
   }
+  // A revisit's keyframes may all be merged into the map's already: then the map lists none of its.
+  const std::string sensor_time = std::isnan(joined - first)
+                                      ? "its keyframes merged into the map's"
+                                      : fixed(joined - first, 2) + " s of sensor time after its first keyframe";
   std::string out = "session " + core::session_name(session) + " joined the map at its keyframe " + std::to_string(at) +
-                    " (" + fixed(joined - first, 2) + " s of sensor time after its first keyframe, ";
+                    " (" + sensor_time + ", ";
   if (!first_arrival) return out + "its first keyframe replayed from the store)";
   return out + fixed(std::chrono::duration<double>(Clock::now() - *first_arrival).count(), 2) +
          " s after its first keyframe arrived)";

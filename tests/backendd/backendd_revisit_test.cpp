@@ -129,6 +129,9 @@ TEST(BackenddRevisit, ASecondVisitIsMergedIntoTheFirstAndARestartReplaysTheSameM
   // file (so the file is within 4/3 of what lives): below 1.4 times one visit (without merges: 2).
   EXPECT_LT(fs::file_size(two_store), fs::file_size(one_store) * 7 / 5);
   EXPECT_NE(two.notes.find("store compacted"), std::string::npos) << two.notes;
+  // Its join is told though the map lists none of the second visit's keyframes (all merged).
+  EXPECT_NE(two.notes.find("joined the map at its keyframe"), std::string::npos) << two.notes;
+  EXPECT_EQ(two.notes.find("nan s"), std::string::npos) << two.notes;
 
   // Restarted on that store (nothing new comes): the same keyframes, at the same poses.
   const std::vector<std::uint8_t> nothing{0};
