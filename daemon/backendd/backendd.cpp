@@ -736,9 +736,17 @@ void Backendd::publish_changes(std::optional<core::SessionId> touched, const std
     w.replay_joined.insert(w.replay_joined.end(), joined.begin(), joined.end());
     return;
   }
-  const bool every = !touched || w.mapper.optimisations() != w.optimisations;
+  // After the store's replay every session's correction (their trackers may be live, not heard yet);
+  // after an optimisation the live ones' (map_schedule.hpp); else the touched session's.
+  const bool optimised = w.mapper.optimisations() != w.optimisations;
   w.optimisations = w.mapper.optimisations();
-  publish_corrections(every ? w.mapper.sessions() : std::vector<core::SessionId>{*touched}, false);
+  std::vector<core::SessionId> offered;
+  if (!touched)
+    offered = w.mapper.sessions();
+  else if (optimised)
+    offered = w.schedule.live(w.mapper.sessions(), Clock::now());
+  if (touched && std::find(offered.begin(), offered.end(), *touched) == offered.end()) offered.push_back(*touched);
+  publish_corrections(offered, false);
   if (w.schedule.map_due(Clock::now(), !joined.empty())) publish_map(joined, w.schedule.loop_waiting());
 }
 

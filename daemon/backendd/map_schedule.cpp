@@ -26,6 +26,14 @@ std::vector<std::int64_t> MapSchedule::resends_due(Clock::time_point now) {
   return due;
 }
 
+std::vector<std::int64_t> MapSchedule::live(const std::vector<std::int64_t>& sessions, Clock::time_point now) const {
+  std::vector<std::int64_t> out;
+  for (const std::int64_t session : sessions)
+    if (const auto it = live_.find(session); it != live_.end() && now - it->second <= periods_.live)
+      out.push_back(session);
+  return out;
+}
+
 bool MapSchedule::map_due(Clock::time_point now, bool join) const {
   if (!map_changed_) return false;
   if (join || !map_sent_ || periods_.map.count() <= 0) return true;

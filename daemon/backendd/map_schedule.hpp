@@ -5,7 +5,8 @@
 //   - a session's correction after a change when its entry (map_session_t as encoded: correction,
 //     state, placement, covariance and its keyframe, last match, ...) differs from the one sent
 //     last for it, or none was; the daemon offers only the sessions a change may have touched
-//     (its record's; every session after an optimisation), so a keyframe costs O(1);
+//     (its record's; every live session after an optimisation), so a keyframe costs O(1);
+//   - after an optimisation, the live sessions' corrections only (see live());
 //   - a live session's correction again once `resend` has passed since its last, so that one lost
 //     on UDP, or missed by a tracker that started listening late, comes again; live: a CVO_POSE or a
 //     record of it within `live`, and not lost;
@@ -47,6 +48,10 @@ class MapSchedule {
   void lost(std::int64_t session);
   /// The live sessions whose correction went out `resend` ago or longer; forgets those no longer live.
   std::vector<std::int64_t> resends_due(Clock::time_point now);
+  /// Of `sessions`, those live at `now`. An optimisation moves every session, but only the live
+  /// ones have a tracker that takes a correction: the others' entries go on the full map, so a map of
+  /// many sessions costs O(live sessions) per loop, not O(sessions).
+  [[nodiscard]] std::vector<std::int64_t> live(const std::vector<std::int64_t>& sessions, Clock::time_point now) const;
 
   /// The map changed; `loop`: a loop closure moved it.
   void changed(bool loop = false) {

@@ -40,6 +40,17 @@ TEST(MapSchedule, ALiveSessionsCorrectionGoesAgainOnceAPeriod) {
   EXPECT_TRUE(schedule.resends_due(t0 + 12s).empty()) << "a lost session's tracker has moved on";
 }
 
+TEST(MapSchedule, AfterAnOptimisationOnlyTheLiveSessionsAreOffered) {
+  MapSchedule schedule({5s, 1s, 10s});
+  schedule.seen(7, t0);
+  schedule.seen(8, t0 + 5s);
+  const std::vector<std::int64_t> sessions{7, 8, 9};  // 9: never heard of (a stored session's)
+  EXPECT_EQ(schedule.live(sessions, t0 + 10s), (std::vector<std::int64_t>{7, 8}));
+  EXPECT_EQ(schedule.live(sessions, t0 + 12s), std::vector<std::int64_t>{8}) << "7 silent for 12 s";
+  schedule.lost(8);
+  EXPECT_TRUE(schedule.live(sessions, t0 + 12s).empty()) << "a lost session's tracker has moved on";
+}
+
 TEST(MapSchedule, TheFullMapGoesAtOnceAfterAJoinElseAtMostOnceAPeriod) {
   MapSchedule schedule({5s, 1s, 10s, 1s});
   EXPECT_FALSE(schedule.map_due(t0, true)) << "nothing changed";
