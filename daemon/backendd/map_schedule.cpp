@@ -18,7 +18,7 @@ void MapSchedule::seen(std::int64_t session, Clock::time_point now) { live_[sess
 void MapSchedule::lost(std::int64_t session) { live_.erase(session); }
 
 std::vector<std::int64_t> MapSchedule::resends_due(Clock::time_point now) {
-  std::erase_if(live_, [&](const auto& entry) { return now - entry.second > periods_.live; });
+  std::erase_if(live_, [&](const auto& entry) { return !live_at(entry.second, now); });
   std::vector<std::int64_t> due;
   for (const auto& [session, seen] : live_)
     if (const auto it = sent_.find(session); it != sent_.end() && now - it->second.at >= periods_.resend)
@@ -29,8 +29,7 @@ std::vector<std::int64_t> MapSchedule::resends_due(Clock::time_point now) {
 std::vector<std::int64_t> MapSchedule::live(const std::vector<std::int64_t>& sessions, Clock::time_point now) const {
   std::vector<std::int64_t> out;
   for (const std::int64_t session : sessions)
-    if (const auto it = live_.find(session); it != live_.end() && now - it->second <= periods_.live)
-      out.push_back(session);
+    if (const auto it = live_.find(session); it != live_.end() && live_at(it->second, now)) out.push_back(session);
   return out;
 }
 

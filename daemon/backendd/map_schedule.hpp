@@ -6,7 +6,6 @@
 //     state, placement, covariance and its keyframe, last match, ...) differs from the one sent
 //     last for it, or none was; the daemon offers only the sessions a change may have touched
 //     (its record's; every live session after an optimisation), so a keyframe costs O(1);
-//   - after an optimisation, the live sessions' corrections only (see live());
 //   - a live session's correction again once `resend` has passed since its last, so that one lost
 //     on UDP, or missed by a tracker that started listening late, comes again; live: a CVO_POSE or a
 //     record of it within `live`, and not lost;
@@ -70,6 +69,9 @@ class MapSchedule {
     std::vector<std::uint8_t> entry;
     Clock::time_point at;
   };
+  [[nodiscard]] bool live_at(Clock::time_point seen, Clock::time_point now) const {
+    return now - seen <= periods_.live;
+  }
   Periods periods_;
   std::map<std::int64_t, Sent> sent_;
   std::map<std::int64_t, Clock::time_point> live_;  // when last seen
