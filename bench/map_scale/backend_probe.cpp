@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 BackendProbe::BackendProbe(const fs::path& backendd, const fs::path& dir, const std::vector<std::string>& settings)
     : store_(dir / "map.store"), out_(testing::kPrivateLcmUrl), in_(testing::kPrivateLcmUrl) {
   if (!out_.good() || !in_.good()) throw std::runtime_error("map_scale: LCM is not available on the private bus");
-  in_.subscribe("CVO_MAP_CORRECTION|CVO_MAP|CVO_STATUS", &BackendProbe::handle, this);
+  in_.subscribe("CVO_(MAP_CORRECTION|MAP|STATUS|KEYFRAME|POSE)", &BackendProbe::handle, this);
   receiver_ = std::thread([this] { receive(); });
   std::vector<std::string> args{"--lcm-url", testing::kPrivateLcmUrl, "--store", store_.string()};
   for (const auto& s : settings) args.insert(args.end(), {"--set", s});
@@ -56,8 +56,13 @@ void BackendProbe::handle(const ::lcm::ReceiveBuffer* buffer, const std::string&
     cvo_lcm::status_t status;
     if (status.decode(buffer->data, 0, buffer->data_size) > 0 && daemon_ && status.pid == daemon_->pid()) {
       listening_ = true;
+      published_.waiting = status.queue_depth;
       changed_.notify_all();
     }
+    return;
+  }
+  if (channel == "CVO_KEYFRAME" || channel == "CVO_POSE") {
+    ++(channel == "CVO_POSE" ? published_.tracker_poses : published_.tracker_keyframes);
     return;
   }
   if (channel == "CVO_MAP") {

@@ -5,8 +5,8 @@
 // end's update for the last one came back, so its queue never hides its cost), and measured
 // from outside, once its first CVO_STATUS said it listens: a keyframe's latency is from its publication to the first
 // CVO_MAP_CORRECTION of its session that counts it (map_session_t.keyframes); every CVO_MAP_CORRECTION and CVO_MAP it
-// publishes is counted with its bytes; its resident memory is the kernel's (VmRSS), its store's
-// size the file's.
+// publishes is counted with its bytes (and a tracker's CVO_KEYFRAME and CVO_POSE, where one runs); its resident memory
+// is the kernel's (VmRSS), its store's size the file's.
 #include <sys/types.h>
 
 #include <condition_variable>
@@ -29,9 +29,11 @@ class DaemonProcess;
 namespace cvo::bench {
 
 struct Published {
-  std::size_t corrections = 0, correction_bytes = 0;  // CVO_MAP_CORRECTION
-  std::size_t maps = 0, map_bytes = 0;                // CVO_MAP
-  std::size_t last_map_keyframes = 0;                 // keyframes in the newest CVO_MAP
+  std::size_t corrections = 0, correction_bytes = 0;     // CVO_MAP_CORRECTION
+  std::size_t maps = 0, map_bytes = 0;                   // CVO_MAP
+  std::size_t last_map_keyframes = 0;                    // keyframes in the newest CVO_MAP
+  std::int32_t waiting = 0;                              // records waiting: its newest CVO_STATUS queue_depth
+  std::size_t tracker_keyframes = 0, tracker_poses = 0;  // CVO_KEYFRAME, CVO_POSE heard from a tracker
 };
 
 struct Snapshot {

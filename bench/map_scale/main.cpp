@@ -12,8 +12,11 @@
 //             started an optimisation of the keyframe graph.
 //   revisits  the first route driven V times: store bytes, the daemon's RSS and latency after visits 1, 2, 5,
 //             every 20th and V, and the store's growth against one visit.
+//   room      one tracker session revisiting one room without pause, through the real cvo-trackerd
+//             (room.hpp): store, RSS and records waiting minute by minute, and the stop timed.
 // Run (it enters a private network namespace itself; root, as the networked tests):
 //   build/release/bin/map_scale [--keyframes 100,1000,10000] [--visits 20] [--sequence DIR]...
+//   build/release/bin/map_scale --keyframes 10 --visits 0 --room-minutes 60 [--room-sequence DIR] [--room-unpaced]
 #include <unistd.h>
 
 #include <algorithm>
@@ -38,6 +41,7 @@
 #include "libcvo/registration/point_selection.hpp"
 #include "libcvo/slam/mapper.hpp"
 #include "program/cli.hpp"
+#include "room.hpp"
 #include "route.hpp"
 #include "tests/support/loop_orbit.hpp"
 
@@ -51,7 +55,10 @@ struct Options {
   std::vector<fs::path> sequences;
   std::vector<std::string> settings;
   bool mapper = true;
-  fs::path keep;  // "": a temporary scratch folder
+  double room_minutes = 0;
+  bool room_paced = true;
+  fs::path room_sequence;  // "": fr1/rpy of ../shared, else the sample
+  fs::path keep;           // "": a temporary scratch folder
 };
 
 // A folder of its own, removed with everything in it; or `keep`, made if need be and kept (the
@@ -270,15 +277,28 @@ std::size_t revisits(const Options& options, const config::Config& config, const
   return missing;
 }
 
-int run(const Options& options) {
+fs::path room_sequence(const Options& options) {
+  if (!options.room_sequence.empty()) return options.room_sequence;
+  const fs::path shared = fs::path(CVO_SHARED_DATA_DIR) / "tum" / "fr1_rpy";
+  return fs::exists(shared / "rgb.txt") ? shared : fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
+}
+
+int run(Options options) {
+  std::erase(options.sizes, std::size_t{0});
   config::Config config;
   for (const auto& s : options.settings) config::apply_override(config, s);
   const ScratchDir scratch(options.keep);
-  const auto all = routes(options, config, scratch.path());
   std::size_t missing = 0;
-  if (!options.sizes.empty()) missing += growth(options, config, all, scratch.path());
-  if (options.visits > 0) missing += revisits(options, config, all.front(), scratch.path());
-  if (missing) std::fprintf(stderr, "map_scale: %zu keyframes had no map update within 60 s\n", missing);
+  if (!options.sizes.empty() || options.visits > 0) {
+    const auto all = routes(options, config, scratch.path());
+    if (!options.sizes.empty()) missing += growth(options, config, all, scratch.path());
+    if (options.visits > 0) missing += revisits(options, config, all.front(), scratch.path());
+  }
+  if (options.room_minutes > 0)
+    missing +=
+        room({room_sequence(options), options.room_minutes, options.room_paced, options.settings}, scratch.path());
+  if (missing)
+    std::fprintf(stderr, "map_scale: %zu keyframes had no map update within 60 s, or records waited\n", missing);
   return missing ? 1 : 0;
 }
 
@@ -305,9 +325,13 @@ int main(int argc, char** argv) {
   cvo::program::describe(app, "map_scale [--keyframes N,N,...] [--visits V] [--sequence DIR]... [--set key=value]...",
                          "The back end (cvo-backendd) as the map grows and as one route is revisited: a table.");
   cvo::bench::Options o;
-  app.add_option("--keyframes", o.sizes, "map sizes to report at (keyframes fed; empty: none)")->delimiter(',');
+  app.add_option("--keyframes", o.sizes, "map sizes to report at (keyframes fed; 0: none)")->delimiter(',');
   app.add_option("--visits", o.visits, "visits of the first route in the revisit run (0: none)");
   app.add_option("--sequence", o.sequences, "TUM folders to drive (default: the sample, a rendered orbit, fr1/rpy)");
+  app.add_option("--room-minutes", o.room_minutes, "room run: minutes of frames at 30 Hz (0: none)");
+  app.add_option("--room-sequence", o.room_sequence,
+                 "room run: the TUM folder played back and forth (default: fr1/rpy)");
+  app.add_flag("!--room-unpaced", o.room_paced, "room run: frames as fast as the tracker takes them");
   app.add_option("--keep", o.keep, "scratch folder to use and keep (the daemons' logs and stores)");
   app.add_flag("!--no-mapper", o.mapper, "skip the in-process mapper's loop-search / optimisation split");
   cvo::program::add_set_option(app, o.settings, "backendd.map_period_s=5");
