@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "libcvo/core/units.hpp"
+#include "libcvo/odometry/motion_redundancy.hpp"
 #include "libcvo/odometry/variance_factor.hpp"
 #include "libcvo/registration/edge_covariance.hpp"
 
@@ -93,6 +94,7 @@ void KeyframeOdometry::start_over() {
   reason_ = KeyframeReason::kNone;
   covariance_chain_ = PoseCovarianceChain{};
   variance_factor_ = VarianceFactor{};
+  motion_redundancy_ = MotionRedundancy{};
 }
 
 void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose,
@@ -351,6 +353,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
   reason_ = KeyframeReason::kNone;
   gamma_ = 0;
   graph_closed_ = false;
+  add_stamp(motion_redundancy_.jitter, frame.timestamp);
   const core::SE3 predicted = have_frame_ ? last_pose_ * velocity_ : parameters_.initial_pose;
 
   const auto selection_start = Clock::now();
@@ -365,6 +368,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.odometry_covariance = track_unmeasured(covariance_chain_, false, false).odometry;
     result.pose = last_pose_ = predicted;
     result.motion = velocity_;
+    motion_redundancy_.history = 0;  // no measured increment: the third differences start again
     have_frame_ = true;
     have_previous_ = false;
     hand_out(frame, result);
@@ -385,6 +389,8 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.keyframe = true;
     result.motion = first ? core::SE3() : velocity_;
   }
+  result.relative_covariance = publish_relative(motion_redundancy_, result.motion,
+                                                frame.timestamp - previous_timestamp_, result.relative_covariance);
 
   result.pose = last_pose_ = pose;
   hand_out(frame, result);

@@ -52,6 +52,7 @@
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
 #include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/odometry/motion_redundancy.hpp"
 #include "libcvo/odometry/pose_covariance.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/odometry/variance_factor.hpp"
@@ -111,8 +112,9 @@ struct TrackStep : TrackResult {
   // and tracks the next frame as the first of a new one, which the back end localizes afresh.
   bool lost = false;
   // Covariance of the published relative pose T_{n-1}^n = P_{n-1}⁻¹ P_n, right perturbation
-  // (T = T̄ exp(ξ)), [rho; phi] as core::SE3 (pose_covariance.hpp has the maths); none for a frame
-  // without a measured motion (the first frame, a restart, a failure).
+  // (T = T̄ exp(ξ)), [rho; phi] as core::SE3 (pose_covariance.hpp has the maths), completed with
+  // what the smooth motion and the stamps reveal (motion_redundancy.hpp); none for a frame without
+  // a measured motion (the first frame, a restart, a failure).
   std::optional<core::Matrix6d> relative_covariance;
   // Covariance of the published odometry pose P_n, right perturbation, accumulated along the
   // keyframe chain since the session's first frame (zero there); carried unchanged by a failure.
@@ -188,7 +190,8 @@ class KeyframeOdometry {
   double compensation_dt_ = 0;       // colour-stamp seconds it spans; 0: none yet
   core::SE3 last_pose_;              // the last published pose (tracked or predicted)
   PoseCovarianceChain covariance_chain_;
-  VarianceFactor variance_factor_;  // of this session's registrations (variance_factor.hpp)
+  VarianceFactor variance_factor_;      // of this session's registrations (variance_factor.hpp)
+  MotionRedundancy motion_redundancy_;  // of its published increments (motion_redundancy.hpp)
 
   // The previous frame (n-1), sharing the caller's images: the keyframe when one is made at n-1.
   core::RgbdFrame previous_images_;
