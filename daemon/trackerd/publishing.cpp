@@ -250,6 +250,7 @@ void Publishing::publish_status(std::int8_t state_override) {
   const auto& c = shared_.counters;
   lcm::ProcessStatus s;
   s.process = "cvo-trackerd";
+  s.robot = robot_name(shared_.config.trackerd.robot);
   s.session = session_;
   s.rate_hz = elapsed > 0 ? static_cast<double>(published_ - published_at_last_status_) / elapsed : 0;
   const auto l = latency_.summary();

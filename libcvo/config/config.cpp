@@ -274,6 +274,8 @@ const std::vector<Field>& table() {
           "second's worth) is refused: a back end revises its map at a bounded rate"),
       row("trackerd.map_pose_until_localized", &Config::trackerd, &TrackerdParameters::map_pose_until_localized, kAny,
           "map pose published before the back end localizes the session: odometry or none"),
+      row("trackerd.robot", &Config::trackerd, &TrackerdParameters::robot, kAny,
+          "the robot this tracker speaks for, in its messages; $HOSTNAME: the host's name"),
       row("backendd.lcm_url", &Config::backendd, &BackenddParameters::lcm_url, kAny,
           "LCM provider keyframes and local graphs come from, and CVO_MAP goes to"),
       row("backendd.store", &Config::backendd, &BackenddParameters::store, kAny,
@@ -456,6 +458,16 @@ std::vector<std::string> top_level_names() {
 }
 
 // Constraints between keys, which no single row can check.
+// A robot's name as a host name is spelt (RFC 1123's characters, and '_'): it names the robot in
+// messages, logs and cvo-log's output, where spaces and control characters would not survive.
+bool is_robot_name(const std::string& name) {
+  if (name == kHostName) return true;
+  return name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char ch) {
+           return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' ||
+                  ch == '-' || ch == '_';
+         });
+}
+
 void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.selection.min_depth_m >= c.selection.max_depth_m)
     throw ConfigError(source, "selection.min_depth_m (" + shortest(c.selection.min_depth_m) +
@@ -471,6 +483,9 @@ void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.trackerd.map_pose_until_localized != "odometry" && c.trackerd.map_pose_until_localized != "none")
     throw ConfigError(source, "trackerd.map_pose_until_localized (" + c.trackerd.map_pose_until_localized +
                                   ") must be odometry or none");
+  if (!is_robot_name(c.trackerd.robot))
+    throw ConfigError(source, "trackerd.robot (" + c.trackerd.robot +
+                                  ") must be $HOSTNAME or at most 64 letters, digits, '.', '-' or '_' (a host name's)");
   if (c.backendd.mode != "mapping" && c.backendd.mode != "localization")
     throw ConfigError(source, "backendd.mode (" + c.backendd.mode + ") must be mapping or localization");
   if (c.cvo.ell_min > c.cvo.ell_init)

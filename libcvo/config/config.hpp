@@ -26,6 +26,10 @@ namespace cvo::config {
 
 /// cvo-trackerd's own settings (daemon/trackerd): where frames come from, where results go, and how
 /// the realtime tracking thread runs. The tracker's maths is configured by the sections above.
+/// trackerd.robot's value that names the robot by its host's name (not a name: '$' is no host
+/// name's character).
+inline constexpr std::string_view kHostName = "$HOSTNAME";
+
 struct TrackerdParameters {
   std::string source = "openni2:any";
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
@@ -62,6 +66,8 @@ struct TrackerdParameters {
   // (a pose in the session's own frame, as before any map), or none (map_pose left out: a consumer
   // that needs the map frame waits).
   std::string map_pose_until_localized = "odometry";
+  // The robot this tracker speaks for, in its messages (CVO_STATUS); kHostName: the host's name.
+  std::string robot = std::string(kHostName);
 };
 
 /// cvo-backendd's own settings (daemon/backendd).

@@ -80,6 +80,7 @@ cvo_lcm::status_t status_message(const ProcessStatus& s) {
   m.sender = s.sender;
   m.process = s.process;
   m.detail = s.detail;
+  m.robot = s.robot;
   return m;
 }
 

@@ -73,6 +73,7 @@ struct ProcessStatus {
   std::int8_t bus = cvo_lcm::status_t::BUS_OPEN;  // BUS_AUTHENTICATED when it signs and verifies
   std::int64_t sender = 0;                        // its auth_t sender id
   std::string detail;
+  std::string robot;  // the tracker's robot, the back end's host
 };
 
 cvo_lcm::status_t status_message(const ProcessStatus& status);

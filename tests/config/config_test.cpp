@@ -111,6 +111,14 @@ TEST(Config, DuplicatesInconsistenciesAndSyntaxErrors) {
   expect_error("cvo:\n  ell_init: [0.1\n", 3, "YAML:");
 }
 
+TEST(Config, ARobotIsNamedAsAHostIsOrByItsHost) {
+  EXPECT_EQ(Config{}.trackerd.robot, kHostName);
+  EXPECT_EQ(parse_config("trackerd: {robot: hall-a_2.east}\n").trackerd.robot, "hall-a_2.east");
+  expect_error("trackerd: {robot: \"hall a\"}\n", 0,
+               "trackerd.robot (hall a) must be $HOSTNAME or at most 64 letters, digits, '.', '-' or '_'");
+  expect_error("trackerd: {robot: " + std::string(65, 'r') + "}\n", 0, "trackerd.robot (");
+}
+
 TEST(Config, LoadsFilesWithPathAndLineInErrors) {
   const test::TempDir dir("cvo_config");
   const auto good = dir.write("good.yaml", "pose_graph:\n  cauchy_delta: 1.5\n");
@@ -190,7 +198,7 @@ TEST(Config, DumpRoundTripsEveryKey) {
     const auto member = key.substr(key.find('.') + 1);
     EXPECT_NE(text.find(member + ": "), std::string::npos) << key << " missing from\n" << text;
   }
-  EXPECT_EQ(config_keys().size(), 92u) << "a new parameter? add a row to the table and regenerate default.yaml";
+  EXPECT_EQ(config_keys().size(), 93u) << "a new parameter? add a row to the table and regenerate default.yaml";
 }
 
 // The values the code was tuned with are keys too (issue 15): the trackers' capacities, KF-CVO's

@@ -130,6 +130,7 @@ TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
       {"drivers/usb_cameras.hpp", "source"},                     // where a camera's USB ids are published
       {"drivers/usb_cameras.hpp", "mode"},                       // a device node's permission bits
       {"tools/cvo-run/report.hpp", "mode"},                      // the odometry mode run, not the back end's
+      {"libcvo/lcm/tracker_messages.hpp", "robot"},              // the resolved name a status carries
   };
   std::set<std::string> names;
   for (const auto& key : config_keys()) names.insert(key.substr(key.find('.') + 1));

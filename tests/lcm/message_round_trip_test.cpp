@@ -96,6 +96,7 @@ TEST(MessageRoundTrip, SpotChecksOfDecodedFields) {
   const auto status = decode<cvo_lcm::status_t>(bytes.data(), static_cast<int>(bytes.size()), nullptr);
   ASSERT_TRUE(status);
   EXPECT_EQ(status->process, "cvo-trackerd");
+  EXPECT_EQ(status->robot, "robot-7");
   EXPECT_EQ(status->bad_messages[cvo_lcm::status_t::BAD_FINGERPRINT], 11);
   const auto kf_bytes = encode(test::sample_keyframe());
   const auto kf = decode<cvo_lcm::keyframe_t>(kf_bytes.data(), static_cast<int>(kf_bytes.size()), nullptr);

@@ -213,6 +213,7 @@ inline cvo_lcm::status_t sample_status() {
   m.keyframes_lost = 1;
   m.process = "cvo-trackerd";
   m.detail = "camera re-opened after unplug";
+  m.robot = "robot-7";
   return m;
 }
 

@@ -106,6 +106,7 @@ TEST(TrackerMessages, StatusMessageHoldsEveryCounter) {
   s.keyframes_recovered = expected.keyframes_recovered;
   s.keyframes_lost = expected.keyframes_lost;
   s.detail = expected.detail;
+  s.robot = expected.robot;
   EXPECT_EQ(encode(status_message(s)), encode(expected)) << "every field, the last bad kind included";
 }
 

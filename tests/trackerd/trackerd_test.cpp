@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -94,7 +95,8 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   cvo::test::TempDir dir;
   const auto out = dir.path() / "out.lcmlog";
   DaemonProcess d(kTrackerd,
-                  with(base_args(out), {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic"}),
+                  with(base_args(out), {"--source", "tum:" + kClip.string(), "--exit-on-eof", "--deterministic",
+                                        "--set", "trackerd.robot=hall-a"}),
                   dir.path() / "stderr.txt");
   const auto code = d.wait_for(120s);
   ASSERT_TRUE(code) << "still running";
@@ -141,6 +143,7 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   const auto& last = log.statuses.back();
   EXPECT_EQ(last.state, +cvo_lcm::status_t::STATE_STOPPING);
   EXPECT_EQ(last.process, "cvo-trackerd");
+  EXPECT_EQ(last.robot, "hall-a") << "trackerd.robot";
   EXPECT_EQ(last.allocations_after_warmup, 0);
   EXPECT_EQ(last.dropped_frames, 0) << "deterministic mode never drops";
   EXPECT_GT(last.latency_median_ms, 0);
@@ -287,6 +290,9 @@ TEST(Trackerd, BadMessagesAreCountedAndSkipped) {
   EXPECT_EQ(log.poses.size(), 15u) << "12 good frames and 3 without depth";
   ASSERT_FALSE(log.statuses.empty());
   const auto& s = log.statuses.back();
+  char host[256] = {};
+  ASSERT_EQ(gethostname(host, sizeof host - 1), 0);
+  EXPECT_EQ(s.robot, host) << "trackerd.robot's default, $HOSTNAME: the host's name";
   EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_TOO_SHORT], 1);
   EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_FINGERPRINT], 1);
   EXPECT_EQ(s.bad_messages[cvo_lcm::status_t::BAD_BODY], 2);
@@ -772,6 +778,62 @@ TEST(CvoLog, StatusJsonKeepsTheFieldTypes) {
                           "  detail: a \"quoted\" note\n"),
             std::string::npos)
       << text.out;
+}
+
+// Three robots' trackers, one of them in two sessions, and a back end: cvo-log status shows every
+// robot's every process and session (keyed by process alone it showed one tracker), and --json
+// lists them under "senders" while each process's key keeps its last status.
+TEST(CvoLog, StatusShowsEveryRobotAndSession) {
+  cvo::test::TempDir dir;
+  const auto log_path = dir.path() / "fleet.lcmlog";
+  {
+    ::lcm::LogFile log(log_path.string(), "w");
+    std::int64_t t = 1000;
+    const auto status = [&](const std::string& process, const std::string& robot, std::int64_t session) {
+      cvo_lcm::status_t s{};
+      s.version = cvo_lcm::status_t::SCHEMA_VERSION;
+      s.process = process;
+      s.robot = robot;
+      s.session = session;
+      s.utime = t;
+      ASSERT_EQ(cvo::testing::write_event(log, "CVO_STATUS", lcm::encode(s), t += 1000), 0);
+    };
+    status("cvo-trackerd", "hall-a", 0x11);
+    status("cvo-trackerd", "hall-b", 0x22);
+    status("cvo-trackerd", "dock-1", 0x33);
+    status("cvo-trackerd", "hall-a", 0x44);  // hall-a's tracker restarted: a new session
+    status("cvo-backendd", "server", 0);
+    status("cvo-trackerd", "hall-b", 0x22);  // a later status of a known sender replaces its last
+  }
+  const auto text = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(log_path), dir.path());
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  for (const auto& [robot, session] : std::vector<std::pair<std::string, std::int64_t>>{
+           {"hall-a", 0x11}, {"hall-a", 0x44}, {"hall-b", 0x22}, {"dock-1", 0x33}, {"server", 0}})
+    EXPECT_NE(text.out.find("  session: " + hex(session) + "\n  robot: " + robot + "\n"), std::string::npos)
+        << robot << "\n"
+        << text.out;
+  const auto blocks = [&](const std::string& header) {
+    std::size_t n = 0;
+    for (auto at = text.out.find(header); at != std::string::npos; at = text.out.find(header, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(blocks("cvo-trackerd:\n"), 4u) << text.out;
+  EXPECT_EQ(blocks("cvo-backendd:\n"), 1u) << text.out;
+
+  const auto r = cvo::testing::run_tool("cvo-log", "status " + cvo::testing::quoted(log_path) + " --json", dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto json = nlohmann::ordered_json::parse(r.out, nullptr, false);
+  ASSERT_TRUE(json.contains("senders")) << r.out;
+  EXPECT_EQ(json["cvo-trackerd"]["robot"], "hall-b") << "the process's key keeps its last status";
+  EXPECT_EQ(json["cvo-backendd"]["robot"], "server");
+  const auto& senders = json["senders"];
+  ASSERT_EQ(senders.size(), 5u) << r.out;
+  std::set<std::string> seen;
+  for (const auto& s : senders) {
+    EXPECT_EQ(s.begin().key(), "process");
+    seen.insert(s["robot"].get<std::string>() + "/" + std::to_string(s["session"].get<std::int64_t>()));
+  }
+  EXPECT_EQ(seen, (std::set<std::string>{"dock-1/51", "hall-a/17", "hall-a/68", "hall-b/34", "server/0"}));
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <tuple>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -39,8 +40,9 @@ poses   writes the CVO_POSE messages of LOG as a TUM trajectory (odometry poses;
 map     writes the last CVO_MAP of LOG as a TUM trajectory of keyframe poses, stamped with the
         keyframes' colour timestamps: every keyframe of every session placed in the map, in one
         file sorted by time. Sessions the map has not placed are left out and named on stderr.
-status  prints the last CVO_STATUS of each process in LOG, with its session (--json: one object
-        keyed by process, with the status_t field names).
+status  prints the last CVO_STATUS of every robot's every process and session in LOG (--json:
+        one object keyed by process, the last of each, with the status_t field names; and under
+        "senders" every robot's, process's and session's last, each with its "process").
 Bad events are reported and skipped.
 )";
 
@@ -146,6 +148,7 @@ int write_map(const Arguments& a) {
 program::Json status_json(const cvo_lcm::status_t& s) {
   program::Json o;
   o["session"] = s.session;
+  o["robot"] = s.robot;
   o["utime"] = s.utime;
   o["pid"] = s.pid;
   o["state"] = int{s.state};  // an int8_t, a number rather than a character
@@ -186,23 +189,34 @@ void print_status_text(const std::string& process, const program::Json& status) 
   }
 }
 
+// A sender of CVO_STATUS: several trackers run the same program, on several robots, in sessions.
+using Sender = std::tuple<std::string, std::string, std::int64_t>;  // robot, process, session
+
 int print_statuses(const Arguments& a) {
   int bad = 0;
-  std::map<std::string, cvo_lcm::status_t> last;
+  std::map<std::string, cvo_lcm::status_t> last;  // of each process, as before robots were named
+  std::map<Sender, cvo_lcm::status_t> senders;
   for_each_event(a.log, [&](const ::lcm::LogEvent& e) {
     if (e.channel != "CVO_STATUS") return;
     std::string error;
-    if (auto m = cvo::lcm::decode<cvo_lcm::status_t>(e.data, e.datalen, &error))
-      last[m->process] = std::move(*m);
-    else
-      skipped(a, e, error, bad);
+    auto m = cvo::lcm::decode<cvo_lcm::status_t>(e.data, e.datalen, &error);
+    if (!m) return skipped(a, e, error, bad);
+    senders[Sender{m->robot, m->process, m->session}] = *m;
+    last[m->process] = std::move(*m);
   });
   if (last.empty()) throw io::InputError(a.log, "no CVO_STATUS messages");
+  if (!a.json) {
+    for (const auto& [sender, s] : senders) print_status_text(std::get<1>(sender), status_json(s));
+    return 0;
+  }
   program::Json statuses;
   for (const auto& [process, s] : last) statuses[process] = status_json(s);
-  if (!a.json) {
-    for (const auto& [process, status] : statuses.items()) print_status_text(process, status);
-    return 0;
+  auto& every = statuses["senders"] = program::Json::array();
+  for (const auto& [sender, s] : senders) {
+    program::Json one;
+    one["process"] = s.process;
+    one.update(status_json(s));  // the process first, the detail last as in each one above
+    every.push_back(std::move(one));
   }
   // On one line, as scripts grep it.
   std::cout << program::to_line(statuses);
