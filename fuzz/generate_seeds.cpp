@@ -93,6 +93,7 @@ int main(int argc, char** argv) try {
   cvo::lcm::Keyframe keyframe;
   keyframe.session = 0x5e5510'0000'0001;
   keyframe.id = 2;
+  keyframe.robot = "hall-a";
   keyframe.frame = frame;
   for (int p = 0; p < 3; ++p) keyframe.cloud.push_back({0.1f * p, -0.1f * p, 1.0f + p}, cvo::registration::Feature{});
   const auto keyframe_message = checked(cvo::lcm::to_message(keyframe, {Colour::kJpeg, Depth::kPng}, &error), error);

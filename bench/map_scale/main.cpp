@@ -118,6 +118,8 @@ class SessionDriver {
     bool optimised = false;
   };
 
+  static constexpr const char* kRobot = "map-scale";  // the robot its messages name
+
   // Drives `route` as session `session`, images perturbed by `seed`; calls `each` per keyframe.
   template <class Each>
   void drive(const Route& route, std::int64_t session, std::uint64_t seed, Each&& each) {
@@ -130,13 +132,17 @@ class SessionDriver {
 
  private:
   void graph(std::int64_t session, const RouteGraph& g) {
-    probe_.publish_graph(lcm::encode(lcm::to_message(g.graph, session, g.keyframe_id, core::wall_utime())));
+    probe_.publish_graph(lcm::encode(lcm::to_message(g.graph, session, g.keyframe_id, core::wall_utime(), kRobot)));
     if (mapper_) mapper_->add_local_graph(session, g.keyframe_id, g.graph);
   }
 
   KeyframeCost keyframe(std::int64_t session, const RouteKeyframe& k, std::uint64_t seed, std::size_t held) {
-    lcm::Keyframe message{session, k.id, perturbed(k.frame, seed ^ static_cast<std::uint64_t>(k.id) << 20), k.pose,
-                          registration::PointCloud(config_.odometry.max_points)};
+    lcm::Keyframe message{session,
+                          k.id,
+                          perturbed(k.frame, seed ^ static_cast<std::uint64_t>(k.id) << 20),
+                          k.pose,
+                          registration::PointCloud(config_.odometry.max_points),
+                          kRobot};
     registration::PointSelector selector(k.frame.bgr.cols, k.frame.bgr.rows, config_.selection);
     selector.select(message.frame, message.cloud);
     std::string error;
@@ -147,7 +153,7 @@ class SessionDriver {
     if (mapper_) {
       const auto optimisations = mapper_->optimisations();
       const auto start = core::SteadyClock::now();
-      mapper_->add_keyframe({session, k.id, message.frame, k.pose, message.cloud});
+      mapper_->add_keyframe({session, k.id, message.frame, k.pose, message.cloud, kRobot});
       cost.mapper_ms = core::ms_since(start);
       cost.optimised = mapper_->optimisations() != optimisations;
     }

@@ -839,8 +839,8 @@ void Backendd::publish_status(std::int8_t state) {
   const auto now = Clock::now();
   lcm::ProcessStatus s;
   s.process = kProcess;
-  s.robot = robot_name(config::kHostName);  // its host
-  s.session = 0;                            // the back end is no tracker session
+  s.robot = config::robot_name(config::kHostName);  // its host
+  s.session = 0;                                    // the back end is no tracker session
   // A store that does not keep every record is the daemon's degraded state (the stop says itself).
   const auto store = store_ ? store_->health() : StoreHealth{};
   s.state = store.degraded() && state != cvo_lcm::status_t::STATE_STOPPING ? cvo_lcm::status_t::STATE_DEGRADED : state;

@@ -86,7 +86,7 @@ Replayed replay_settled(slam::Mapper& mapper, const std::uint8_t* data, std::siz
 }
 
 slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& k) {
-  return mapper.add_keyframe({k.session, k.id, k.frame, k.pose, k.cloud});
+  return mapper.add_keyframe({k.session, k.id, k.frame, k.pose, k.cloud, k.robot});
 }
 
 std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord& record) {

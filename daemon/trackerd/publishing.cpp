@@ -17,6 +17,7 @@
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/status.hpp"
 #include "libcvo/auth/lcm_publish.hpp"
+#include "libcvo/config/config.hpp"
 #include "libcvo/core/session.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/lcm/decode.hpp"
@@ -70,6 +71,7 @@ Publishing::Publishing(Shared& shared)
       verifier_(shared.bus.verifier(shared.config.trackerd.lcm_url)),
       receives_(!shared.config.trackerd.lcm_url.starts_with("file://")),
       encoding_{*lcm::parse_colour_encoding(shared.config.trackerd.keyframe_colour_encoding), lcm::DepthEncoding::kPng},
+      robot_(config::robot_name(shared.config.trackerd.robot)),
       resend_budget_(shared.config.trackerd.resend_bytes_per_s),
       session_(shared.session.load()) {}
 
@@ -148,7 +150,7 @@ void Publishing::publish(const Event& event) {
   if (event.has_pose && event.pose.keyframe_id >= 0) history().made(event.session, event.pose.keyframe_id);
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = outbox.graph(event.graph_slot);
-    auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime()));
+    auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime(), robot_));
     auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_LOCAL_GRAPH", bytes);
     history().keep_graph(event.session, g.keyframe_id, bytes);
   }
@@ -158,7 +160,7 @@ void Publishing::publish(const Event& event) {
     history().never_sent(event.session, event.pose.keyframe_id);
   if (event.has_pose) {
     const double latency_ms = core::ms_since(event.pose.received);
-    const cvo_lcm::pose_t m = lcm::pose_message(event.session, event.pose, latency_ms);
+    const cvo_lcm::pose_t m = lcm::pose_message(event.session, robot_, event.pose, latency_ms);
     auth::publish(lcm_, shared_.bus.signer(), "CVO_POSE", m);
     latency_.add(m.latency_ms);
     if (m.latency_ms > shared_.config.trackerd.deadline_ms) ++deadline_misses_;
@@ -183,7 +185,7 @@ void Publishing::remember_keyframe(std::int64_t id, const core::SE3& odometry_po
 void Publishing::publish_keyframe(const Event& event) {
   const auto& k = shared_.out.outbox->keyframe(event.keyframe_slot);
   std::string error;
-  const lcm::Keyframe keyframe{event.session, k.id, k.frame, k.pose, k.cloud};
+  const lcm::Keyframe keyframe{event.session, k.id, k.frame, k.pose, k.cloud, robot_};
   const auto message = lcm::to_message(keyframe, encoding_, &error);
   if (!message) {
     ++unsent_;
@@ -250,7 +252,7 @@ void Publishing::publish_status(std::int8_t state_override) {
   const auto& c = shared_.counters;
   lcm::ProcessStatus s;
   s.process = "cvo-trackerd";
-  s.robot = robot_name(shared_.config.trackerd.robot);
+  s.robot = robot_;
   s.session = session_;
   s.rate_hz = elapsed > 0 ? static_cast<double>(published_ - published_at_last_status_) / elapsed : 0;
   const auto l = latency_.summary();

@@ -51,6 +51,7 @@ class Publishing {
   std::vector<std::uint8_t> resend_;  // a kept message, signed afresh for its re-send
   const bool receives_;               // a file:// output is a log being written: nothing comes back on it
   const lcm::RgbdEncoding encoding_;
+  const std::string robot_;                   // trackerd.robot, named in every message
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again
   lcm::AppliedCorrection applied_;            // the last correction applied (either channel)

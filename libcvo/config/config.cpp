@@ -13,8 +13,10 @@
 #include <utility>
 #include <variant>
 
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include "libcvo/core/session.hpp"
 #include "libcvo/io/numbers.hpp"
 
 namespace cvo::config {
@@ -458,16 +460,6 @@ std::vector<std::string> top_level_names() {
 }
 
 // Constraints between keys, which no single row can check.
-// A robot's name as a host name is spelt (RFC 1123's characters, and '_'): it names the robot in
-// messages, logs and cvo-log's output, where spaces and control characters would not survive.
-bool is_robot_name(const std::string& name) {
-  if (name == kHostName) return true;
-  return name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char ch) {
-           return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' ||
-                  ch == '-' || ch == '_';
-         });
-}
-
 void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.selection.min_depth_m >= c.selection.max_depth_m)
     throw ConfigError(source, "selection.min_depth_m (" + shortest(c.selection.min_depth_m) +
@@ -483,9 +475,9 @@ void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.trackerd.map_pose_until_localized != "odometry" && c.trackerd.map_pose_until_localized != "none")
     throw ConfigError(source, "trackerd.map_pose_until_localized (" + c.trackerd.map_pose_until_localized +
                                   ") must be odometry or none");
-  if (!is_robot_name(c.trackerd.robot))
-    throw ConfigError(source, "trackerd.robot (" + c.trackerd.robot +
-                                  ") must be $HOSTNAME or at most 64 letters, digits, '.', '-' or '_' (a host name's)");
+  if (c.trackerd.robot != kHostName && !core::is_robot_name(c.trackerd.robot))
+    throw ConfigError(source, "trackerd.robot (" + c.trackerd.robot + ") must be $HOSTNAME or " +
+                                  std::string(core::kRobotNameRule) + " (a host name's)");
   if (c.backendd.mode != "mapping" && c.backendd.mode != "localization")
     throw ConfigError(source, "backendd.mode (" + c.backendd.mode + ") must be mapping or localization");
   if (c.cvo.ell_min > c.cvo.ell_init)
@@ -643,6 +635,13 @@ std::string dump_config(const Config& config) {
     out.append(entries[i]).append(width + 2 - entries[i].size(), ' ').append("# ").append(comment).append("\n");
   }
   return out;
+}
+
+std::string robot_name(std::string_view configured) {
+  if (configured != kHostName) return std::string(configured);
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0 || !core::is_robot_name(host)) return "localhost";
+  return host;
 }
 
 }  // namespace cvo::config

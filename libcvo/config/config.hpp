@@ -156,4 +156,8 @@ std::string dump_config(const Config& config);
 /// Every full key ("selection.target_points", ..., "camera") in table order.
 std::vector<std::string> config_keys();
 
+/// The robot a process speaks for: `configured` (trackerd.robot), or this machine's host name when
+/// that is kHostName ("localhost" when the host has none or one that is no robot name).
+std::string robot_name(std::string_view configured);
+
 }  // namespace cvo::config

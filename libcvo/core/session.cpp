@@ -1,5 +1,6 @@
 #include "libcvo/core/session.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace cvo::core {
@@ -8,6 +9,13 @@ std::string session_name(SessionId session) {
   char text[19];
   std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(session));
   return text;
+}
+
+bool is_robot_name(std::string_view name) {
+  return !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char ch) {
+    return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' || ch == '-' ||
+           ch == '_';
+  });
 }
 
 const char* to_string(LocalizationState state) {

@@ -6,6 +6,7 @@
 // back end all name sessions, and the tracker must not link the back end to do so.
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 namespace cvo::core {
 
@@ -13,6 +14,12 @@ using SessionId = std::int64_t;
 
 /// How logs and messages name a session: its 64 bits in hex, "0x0123456789abcdef".
 std::string session_name(SessionId session);
+
+/// A robot's name, as trackerd.robot and every tracker message carry it: 1 to 64 letters, digits,
+/// '.', '-' or '_' (a host name's characters, RFC 1123, and '_'), since it names the robot in
+/// messages, logs and cvo-log's output, where spaces and control characters would not survive.
+bool is_robot_name(std::string_view name);
+inline constexpr std::string_view kRobotNameRule = "1 to 64 letters, digits, '.', '-' or '_'";  // for messages
 
 /// Where a session stands in the map (CVO_POSE, CVO_MAP): not placed yet, placed (its map poses
 /// are map poses), or its odometry failed (a new session follows; this one is over).

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iterator>
 
+#include "libcvo/core/session.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
@@ -50,6 +51,7 @@ std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const Rg
   m.depth = std::move(frame->depth);
   m.colour_size = static_cast<std::int32_t>(m.colour.size());
   m.depth_size = static_cast<std::int32_t>(m.depth.size());
+  m.robot = keyframe.robot;
   return m;
 }
 
@@ -61,6 +63,9 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   if (m.version != cvo_lcm::keyframe_t::SCHEMA_VERSION)
     return fail(error, "schema version " + std::to_string(m.version));
   if (m.id < 0) return fail(error, "negative keyframe id " + std::to_string(m.id));
+  if (!core::is_robot_name(m.robot))
+    return fail(error, "robot of " + std::to_string(m.robot.size()) + " bytes is no robot name (" +
+                           std::string(core::kRobotNameRule) + ")");
   std::string why;
   const auto pose = from_message(m.pose, &why);
   if (!pose) {
@@ -103,8 +108,9 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
     if (m.xyz[i].size() != 3 || m.labels[i].size() != registration::kFeatureDim)
       return fail(error, "point " + std::to_string(i) + " has the wrong number of coordinates or label channels");
 
-  Keyframe k{m.session, m.id, std::move(*images), *pose,
-             registration::PointCloud(static_cast<std::size_t>(m.num_points))};
+  Keyframe k{
+      m.session, m.id, std::move(*images), *pose, registration::PointCloud(static_cast<std::size_t>(m.num_points)),
+      m.robot};
   for (std::int32_t i = 0; i < m.num_points; ++i) {
     const auto& p = m.xyz[static_cast<std::size_t>(i)];
     registration::Feature f{};

@@ -16,20 +16,21 @@
 namespace cvo::lcm {
 
 struct Keyframe {
-  std::int64_t session = 0;        // the tracker session (proto/pose_t.lcm)
-  std::int64_t id = 0;             // increasing within the session
-  core::RgbdFrame frame;           // the frame it was made from (index, stamps, images, intrinsics)
-  core::SE3 pose;                  // T_odom_camera
-  registration::PointCloud cloud;  // in the keyframe's camera frame
+  std::int64_t session = 0;           // the tracker session (proto/pose_t.lcm)
+  std::int64_t id = 0;                // increasing within the session
+  core::RgbdFrame frame;              // the frame it was made from (index, stamps, images, intrinsics)
+  core::SE3 pose;                     // T_odom_camera
+  registration::PointCloud cloud;     // in the keyframe's camera frame
+  std::string robot = std::string();  // the tracker's robot (proto/pose_t.lcm, core::is_robot_name)
 };
 
 /// Fails (nullopt, *error) as rgbd_conversion's to_message does.
 std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const RgbdEncoding& encoding,
                                               std::string* error);
 
-/// Fails on another schema version, a bad pose, non-finite points, or images that do not decode;
-/// *failure (when given) says which kind (not finite: a NaN or infinite pose or point; image format
-/// or image size: an image refused before decoding, as rgbd_conversion's from_message does).
+/// Fails on another schema version, a robot name that is none (core::is_robot_name), a bad pose, non-finite points, or
+/// images that do not decode; *failure (when given) says which kind (not finite: a NaN or infinite pose or point; image
+/// format or image size: an image refused before decoding, as rgbd_conversion's from_message does).
 std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& message, std::string* error,
                                      ContentFailure* failure = nullptr);
 

@@ -5,6 +5,7 @@
 #include <iterator>
 
 #include "libcvo/core/information.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
@@ -63,8 +64,9 @@ std::optional<Refusal> add_edge(const cvo_lcm::graph_edge_t& e, odometry::LocalG
 }  // namespace
 
 cvo_lcm::local_graph_t to_message(const odometry::LocalGraph& graph, std::int64_t session, std::int64_t keyframe_id,
-                                  std::int64_t utime) {
+                                  std::int64_t utime, std::string_view robot) {
   cvo_lcm::local_graph_t m{};
+  m.robot = robot;
   m.version = cvo_lcm::local_graph_t::SCHEMA_VERSION;
   m.session = session;
   m.keyframe_id = keyframe_id;
@@ -92,6 +94,10 @@ std::optional<odometry::LocalGraph> from_message(const cvo_lcm::local_graph_t& m
   };
   if (m.version != cvo_lcm::local_graph_t::SCHEMA_VERSION)
     return refuse({ContentFailure::kContent, "schema version " + std::to_string(m.version)});
+  if (!core::is_robot_name(m.robot))
+    return refuse({ContentFailure::kContent, "robot of " + std::to_string(m.robot.size()) +
+                                                 " bytes is no robot name (" + std::string(core::kRobotNameRule) +
+                                                 ")"});
   if (m.num_nodes < 1) return refuse({ContentFailure::kContent, "no nodes (a local graph has at least its keyframe)"});
   // Capacity num_nodes: add_edge() then refuses a third edge per node, as the tracker never makes one.
   odometry::LocalGraph graph(static_cast<std::size_t>(m.num_nodes));

@@ -2,14 +2,18 @@
 
 #include "cvo_lcm/pose_t.hpp"
 #include "libcvo/core/information.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
 
 namespace cvo::lcm {
 namespace {
 
-// "" when the entry is usable, else why not, after `prefix`.
-std::string session_error(const std::string& prefix, const cvo_lcm::map_session_t& s) {
+// "" when the entry and its robot ("": not known) are usable, else why not, after `prefix`.
+std::string session_error(const std::string& prefix, const cvo_lcm::map_session_t& s, const std::string& robot) {
   const std::string session = prefix + "session " + std::to_string(s.session) + ": ";
+  if (!robot.empty() && !core::is_robot_name(robot))
+    return session + "robot of " + std::to_string(robot.size()) + " bytes is no robot name (" +
+           std::string(core::kRobotNameRule) + ")";
   std::string why;
   if (!from_message(s.correction, &why)) return session + why;
   if (s.state < cvo_lcm::pose_t::STATE_LOCALIZING || s.state > cvo_lcm::pose_t::STATE_LOST)
@@ -27,8 +31,10 @@ std::string map_error(const cvo_lcm::map_t& m) {
   const std::string prefix = "cvo_lcm.map_t: ";
   if (m.version != cvo_lcm::map_t::SCHEMA_VERSION) return prefix + "schema version " + std::to_string(m.version);
   std::string why;
-  for (const auto& s : m.sessions)
-    if (std::string bad = session_error(prefix, s); !bad.empty()) return bad;
+  if (m.robots.size() != m.sessions.size())
+    return prefix + std::to_string(m.robots.size()) + " robots for " + std::to_string(m.sessions.size()) + " sessions";
+  for (std::size_t i = 0; i < m.sessions.size(); ++i)
+    if (std::string bad = session_error(prefix, m.sessions[i], m.robots[i]); !bad.empty()) return bad;
   for (const auto& k : m.keyframes)
     if (!from_message(k.pose, &why))
       return prefix + "keyframe " + std::to_string(k.id) + " of session " + std::to_string(k.session) + ": " + why;
@@ -45,7 +51,7 @@ std::string correction_error(const cvo_lcm::map_correction_t& m) {
   if (m.num_loops > cvo_lcm::map_correction_t::MAX_LOOPS)
     return prefix + std::to_string(m.num_loops) + " loops, more than " +
            std::to_string(cvo_lcm::map_correction_t::MAX_LOOPS);
-  if (std::string bad = session_error(prefix, m.session); !bad.empty()) return bad;
+  if (std::string bad = session_error(prefix, m.session, m.robot); !bad.empty()) return bad;
   std::string why;
   for (const auto& l : m.loops) {
     const std::string loop = prefix + "loop of keyframe " + std::to_string(l.keyframe) + " to keyframe " +

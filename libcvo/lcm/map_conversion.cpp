@@ -47,7 +47,10 @@ cvo_lcm::map_t to_message(const slam::Map& map, std::int64_t utime, std::int64_t
   m.utime = utime;
   m.epoch = epoch;
   m.revision = static_cast<std::int64_t>(map.revision);
-  for (const auto& s : map.sessions) m.sessions.push_back(to_message(s));
+  for (const auto& s : map.sessions) {
+    m.sessions.push_back(to_message(s));
+    m.robots.push_back(s.robot);
+  }
   for (const auto& k : map.keyframes)
     m.keyframes.push_back({k.session, k.id, to_utime(k.timestamp), to_message(k.pose)});
   for (const auto& l : map.loops) {
@@ -74,7 +77,10 @@ std::optional<slam::Map> from_message(const cvo_lcm::map_t& m, std::string* erro
   // Every pose below converts: map_error checked each.
   slam::Map map;
   map.revision = static_cast<std::uint64_t>(m.revision);
-  for (const auto& s : m.sessions) map.sessions.push_back(from_checked_message(s));
+  for (std::size_t i = 0; i < m.sessions.size(); ++i) {
+    map.sessions.push_back(from_checked_message(m.sessions[i]));
+    map.sessions.back().robot = m.robots[i];
+  }
   for (const auto& k : m.keyframes)
     map.keyframes.push_back({k.session, k.id, from_utime(k.utime), *from_message(k.pose, nullptr)});
   for (const auto& l : m.loops) {

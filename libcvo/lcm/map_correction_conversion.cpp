@@ -22,6 +22,7 @@ cvo_lcm::map_correction_t to_message(const slam::SessionCorrection& c, std::int6
         {l.keyframe, l.other_session, l.other_keyframe, to_message(l.measurement), to_message(l.other_pose)});
   }
   m.num_loops = static_cast<std::int32_t>(m.loops.size());
+  m.robot = c.session.robot;
   return m;
 }
 
@@ -32,6 +33,7 @@ std::optional<slam::SessionCorrection> from_message(const cvo_lcm::map_correctio
   }
   // Every pose below converts: correction_error checked each.
   slam::SessionCorrection c{static_cast<std::uint64_t>(m.revision), from_checked_message(m.session), {}};
+  c.session.robot = m.robot;
   for (const auto& l : m.loops)
     c.loops.push_back({l.keyframe, l.other_session, l.other_keyframe, *from_message(l.measurement, nullptr),
                        *from_message(l.other_pose, nullptr)});

@@ -16,10 +16,11 @@ std::int8_t to_pose_status(odometry::TrackStatus status) {
   return cvo_lcm::pose_t::STATUS_LOST;
 }
 
-cvo_lcm::pose_t pose_message(std::int64_t session, const TrackedPose& pose, double latency_ms) {
+cvo_lcm::pose_t pose_message(std::int64_t session, std::string_view robot, const TrackedPose& pose, double latency_ms) {
   cvo_lcm::pose_t m{};
   m.version = cvo_lcm::pose_t::SCHEMA_VERSION;
   m.session = session;
+  m.robot = robot;
   m.utime = to_utime(pose.timestamp);
   m.frame_index = pose.frame_index;
   m.keyframe_id = pose.keyframe_id;

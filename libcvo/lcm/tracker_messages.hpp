@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
@@ -41,8 +42,8 @@ struct TrackedPose {
 /// pose_t's STATUS_* for a tracking outcome.
 std::int8_t to_pose_status(odometry::TrackStatus status);
 
-/// CVO_POSE of `pose` in `session`, latency_ms from the frame's arrival to now.
-cvo_lcm::pose_t pose_message(std::int64_t session, const TrackedPose& pose, double latency_ms);
+/// CVO_POSE of `pose` in `session` of `robot`, latency_ms from the frame's arrival to now.
+cvo_lcm::pose_t pose_message(std::int64_t session, std::string_view robot, const TrackedPose& pose, double latency_ms);
 
 /// What a tracker's state in CVO_STATUS is made of.
 struct TrackerActivity {

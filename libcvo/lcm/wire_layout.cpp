@@ -50,33 +50,42 @@ std::int32_t read_be32(const std::uint8_t* p) {
 
 WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "rgbd_frame_t") return {134, kRgbdCounts};
-  if (type_name == "keyframe_t") return {202, kKeyframeCounts};
-  if (type_name == "local_graph_t") return {36, kLocalGraphCounts};
-  if (type_name == "map_t") return {40, kMapCounts};
-  if (type_name == "map_correction_t") return {28 + kMapSession + 4, kMapCorrectionCounts};
+  // keyframe_t, local_graph_t: the string robot after the arrays; map_t: robots, one per session.
+  if (type_name == "keyframe_t") return {202, kKeyframeCounts, kStringsAfterArrays, 1};
+  if (type_name == "local_graph_t") return {36, kLocalGraphCounts, kStringsAfterArrays, 1};
+  if (type_name == "map_t") return {40, kMapCounts, kStringsAfterArrays, 0, 0};
+  if (type_name == "map_correction_t") return {28 + kMapSession + 4, kMapCorrectionCounts, kStringsAfterArrays, 1};
+  // pose_t: version, session, utime, frame_index, keyframe_id (36), two poses (148), two booleans
+  // (150), epoch, revision (166), state (167), since_match_s (175), covariance[36] (463), a boolean
+  // (464), relative_covariance[36] (752), status, is_keyframe (754), 3 doubles (778), 2 int32 (786),
+  // latency_ms (794), then the string robot.
+  if (type_name == "pose_t") return {794, {}, 794, 1};
   if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
   if (type_name == "grid_t") return {129, kGridCounts, kStringsAfterArrays, 1};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
   // (93), rss_bytes (101), bad_messages[17] (237), 5 int64 (277), bus (278), sender (286), then the
-  // strings process and detail (then auth, as in every type).
-  if (type_name == "status_t") return {286, {}, 286, 2};
+  // strings process, detail and robot (then auth, as in every type).
+  if (type_name == "status_t") return {286, {}, 286, 3};
   return {};
 }
 
 std::string check_counts(const WireLayout& layout, const std::uint8_t* body, int size) {
   if (size < layout.header_bytes) return {};
   std::int64_t needed = layout.header_bytes;  // 64-bit: counts up to 2^31 times up to 376 bytes
-  for (const auto& field : layout.counts) {
+  std::int64_t num_strings = layout.num_strings;
+  for (std::size_t i = 0; i < layout.counts.size(); ++i) {
+    const auto& field = layout.counts[i];
     const std::int32_t count = read_be32(body + field.offset);
     if (count < 0) return "negative count " + std::string(field.name) + " = " + std::to_string(count);
     needed += std::int64_t{count} * field.bytes_per_element;
+    if (static_cast<int>(i) == layout.strings_counted_by) num_strings += count;
   }
   if (needed > size)
     return "truncated body: its counts need at least " + std::to_string(needed) + " bytes, it has " +
            std::to_string(size);
   // needed <= size: the arrays end within the body.
   const int strings_at = layout.strings_at == kStringsAfterArrays ? static_cast<int>(needed) : layout.strings_at;
-  for (int i = 0, at = strings_at; i < layout.num_strings; ++i) {
+  for (std::int64_t i = 0, at = strings_at; i < num_strings; ++i) {
     if (size - at < 4) return {};                      // truncated: the lcm-gen decoder says so
     const std::int32_t length = read_be32(body + at);  // includes the terminating NUL
     if (length < 1 || length > size - at - 4)

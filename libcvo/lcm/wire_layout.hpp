@@ -35,6 +35,9 @@ struct WireLayout {
   // 1..remaining bytes first, and the text to end at its only NUL.
   int strings_at = -1;
   int num_strings = 0;
+  // -1, or the index in `counts` of the count that gives as many more strings after those (map_t's
+  // robots, one per session).
+  int strings_counted_by = -1;
 };
 inline constexpr int kStringsAfterArrays = -2;
 

@@ -99,6 +99,7 @@ KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   }
 
   Session& s = enter(k.session);
+  if (s.robot.empty()) s.robot = k.robot;
   const posegraph::NodeId id = node(s, frame);
   loop_closure::KeyframePlacement placement{id, std::nullopt, {}, backend_.piece(k.session), std::nullopt};
   if (const auto after = s.keyframes.upper_bound(k.id); after != s.keyframes.begin())
@@ -257,6 +258,7 @@ MapSession Mapper::describe(core::SessionId id, const Session& s) const {
   entry.piece = backend_.piece(id);
   entry.keyframes = s.keyframes.size() + s.forgotten_before + s.forgotten;
   entry.joined_at_keyframe = s.joined_at_keyframe;
+  entry.robot = s.robot;
   entry.correction = backend_.odometry_correction(id);
   entry.state = s.lost         ? core::LocalizationState::kLost
                 : entry.placed ? core::LocalizationState::kLocalized

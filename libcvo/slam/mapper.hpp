@@ -90,6 +90,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "libcvo/core/rgbd_frame.hpp"
@@ -125,6 +126,7 @@ struct SessionKeyframe {
   const core::RgbdFrame& frame;
   core::SE3 odometry;  // T_odom_camera
   const registration::PointCloud& cloud;
+  std::string_view robot = {};  // its tracker's (CVO_KEYFRAME's robot): the session's from its first keyframe
 };
 
 struct MapSession {
@@ -141,6 +143,7 @@ struct MapSession {
   // Of its newest keyframe's map pose (a visitor's window solve), [rho; phi], right-perturbed.
   std::optional<core::Matrix6d> keyframe_covariance = std::nullopt;
   std::int64_t covariance_keyframe = -1;  // the keyframe id it is of
+  std::string robot = std::string();      // its tracker's (its keyframes name it); "": not known yet
 };
 
 struct MapKeyframe {
@@ -341,6 +344,7 @@ class Mapper {
     // Its first keyframe's id until its successor came: a first keyframe proposes no loop
     // candidates when it comes (no predecessor normalises η), its successor does (merge_first).
     std::optional<std::int64_t> undetected_first;
+    std::string robot;  // from its first keyframe that names one
   };
   // A session localized in the read-only map.
   struct Visitor {
@@ -354,6 +358,7 @@ class Mapper {
     std::size_t keyframes = 0;
     double last_match_time = -1, newest_time = -1;
     bool lost = false;
+    std::string robot;
   };
 
   Session& enter(core::SessionId id);

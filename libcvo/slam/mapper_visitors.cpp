@@ -25,6 +25,7 @@ KeyframeOutcome Mapper::visit(const SessionKeyframe& k) {
   auto [it, fresh] = visitors_.try_emplace(k.session);
   Visitor& v = it->second;
   if (fresh) v.ordinal = next_ordinal_++;
+  if (v.robot.empty()) v.robot = k.robot;
   if (v.lost) throw MapperError(name(k.session, k.id) + ": the session was lost");
   const auto frame = static_cast<std::int64_t>(k.frame.index);
   for (const auto& w : v.window)
@@ -180,6 +181,7 @@ MapSession Mapper::describe(core::SessionId id, const Visitor& v) const {
   if (v.last_match_time >= 0) s.since_match_s = v.newest_time - v.last_match_time;
   s.keyframe_covariance = v.covariance;
   s.covariance_keyframe = v.covariance_keyframe;
+  s.robot = v.robot;
   return s;
 }
 

@@ -45,6 +45,7 @@ double stamp(std::int64_t frame) { return 1305031229.0 + 0.033 * static_cast<dou
 std::vector<std::uint8_t> keyframe(std::int64_t id) {
   lcm::Keyframe k;
   k.session = kSession;
+  k.robot = "hall-a";
   k.id = id;
   k.frame.index = static_cast<std::uint64_t>(id * kStride);
   k.frame.timestamp = k.frame.depth_timestamp = stamp(id * kStride);
@@ -76,7 +77,7 @@ std::vector<std::uint8_t> local_graph(std::int64_t id) {
   graph.add_node({static_cast<std::uint64_t>(to), stamp(to), odometry(to)});
   graph.add_edge({static_cast<std::uint64_t>(from), static_cast<std::uint64_t>(to),
                   odometry(from).inverse() * odometry(to), 1e4 * core::Matrix6d::Identity()});
-  return lcm::encode(lcm::to_message(graph, kSession, id, static_cast<std::int64_t>(stamp(to) * 1e6)));
+  return lcm::encode(lcm::to_message(graph, kSession, id, static_cast<std::int64_t>(stamp(to) * 1e6), "hall-a"));
 }
 
 // A session of `keyframes` keyframes in the tracker's order (the graph of keyframe k - 1 closes

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "libcvo/core/session.hpp"
 #include "tests/support/temp_dir.hpp"
 
 namespace cvo::config {
@@ -115,8 +116,12 @@ TEST(Config, ARobotIsNamedAsAHostIsOrByItsHost) {
   EXPECT_EQ(Config{}.trackerd.robot, kHostName);
   EXPECT_EQ(parse_config("trackerd: {robot: hall-a_2.east}\n").trackerd.robot, "hall-a_2.east");
   expect_error("trackerd: {robot: \"hall a\"}\n", 0,
-               "trackerd.robot (hall a) must be $HOSTNAME or at most 64 letters, digits, '.', '-' or '_'");
+               "trackerd.robot (hall a) must be $HOSTNAME or 1 to 64 letters, digits, '.', '-' or '_'");
   expect_error("trackerd: {robot: " + std::string(65, 'r') + "}\n", 0, "trackerd.robot (");
+  EXPECT_EQ(robot_name("hall-a"), "hall-a");
+  EXPECT_TRUE(core::is_robot_name(robot_name(kHostName))) << robot_name(kHostName);  // the host's, or localhost
+  EXPECT_NE(robot_name(kHostName), kHostName);
+  EXPECT_FALSE(core::is_robot_name(""));
 }
 
 TEST(Config, LoadsFilesWithPathAndLineInErrors) {

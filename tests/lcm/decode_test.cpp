@@ -84,11 +84,12 @@ TEST(Decode, AMapCorrectionCutShortOrOfAnotherVersionIsRefusedByKind) {
   EXPECT_FALSE(decode<cvo_lcm::map_correction_t>(bytes.data(), static_cast<int>(bytes.size()) - 1, &error, &failure));
   EXPECT_EQ(failure, DecodeFailure::kBody) << error;
   auto other = test::sample_map_correction();
-  other.version = 2;
+  other.version = cvo_lcm::map_correction_t::SCHEMA_VERSION + 1;
   const auto newer = encode(other);
   EXPECT_FALSE(decode<cvo_lcm::map_correction_t>(newer.data(), static_cast<int>(newer.size()), &error, &failure));
   EXPECT_EQ(failure, DecodeFailure::kVersion);
-  EXPECT_NE(error.find("cvo_lcm.map_correction_t: schema version 2"), std::string::npos) << error;
+  EXPECT_NE(error.find("cvo_lcm.map_correction_t: schema version " + std::to_string(other.version)), std::string::npos)
+      << error;
   auto counted = bytes;  // num_loops follows the fixed header (wire_layout.cpp)
   const auto at = 8 + static_cast<std::size_t>(wire_layout("map_correction_t").counts.front().offset);
   ASSERT_EQ(counted[at + 3], 2) << "the sample's two loops";

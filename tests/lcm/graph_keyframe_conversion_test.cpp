@@ -13,6 +13,7 @@
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/lcm/map_correction_conversion.hpp"
 #include "libcvo/registration/point_selection.hpp"
 #include "tests/lcm/through_bytes.hpp"
 #include "tests/support/map_session.hpp"
@@ -24,6 +25,7 @@ TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
   Keyframe k;
   k.session = -0x0123'4567'89ab'cdef;  // 64 random bits: any sign
   k.id = 7;
+  k.robot = "hall-a_2.east";
   k.frame = io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").read(5);
   k.pose = core::SE3::exp((core::Vector6d() << 0.1, -0.2, 0.3, 0.01, 0.02, -0.03).finished());
   registration::PointSelector selector(k.frame.bgr.cols, k.frame.bgr.rows, core::SelectionParameters{});
@@ -40,6 +42,7 @@ TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
   ASSERT_TRUE(back) << error;
   EXPECT_EQ(back->session, -0x0123'4567'89ab'cdef);
   EXPECT_EQ(back->id, 7);
+  EXPECT_EQ(back->robot, "hall-a_2.east");
   EXPECT_EQ(back->frame.index, k.frame.index);
   EXPECT_EQ(back->frame.timestamp, k.frame.timestamp);
   ASSERT_TRUE(k.frame.intrinsics.has_distortion());  // tum_fr1
@@ -57,6 +60,7 @@ TEST(KeyframeConversion, RoundTripIsLosslessWithPng) {
 TEST(KeyframeConversion, NonFinitePointsAndBadPosesAreRefused) {
   Keyframe k;
   k.frame = io::TumSequence::open(std::filesystem::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50").read(0);
+  k.robot = "hall-a";
   k.cloud = registration::PointCloud(4);
   k.cloud.push_back({0, 0, 1}, registration::Feature{});
   std::string error;
@@ -94,9 +98,37 @@ odometry::LocalGraph sample_graph() {
   return g;
 }
 
+// Every tracker message names its robot (proto/pose_t.lcm): a keyframe or local graph that names
+// none, or a name no log or status line could show, is refused as content.
+TEST(RobotNames, AKeyframeOrLocalGraphWithoutARobotNameIsRefused) {
+  const auto keyframe = through_bytes(test::sample_keyframe());
+  const auto graph = through_bytes(to_message(sample_graph(), 1, 3, 0, "hall-a"));
+  ASSERT_TRUE(keyframe && graph);
+  EXPECT_EQ(graph->robot, "hall-a");
+  for (const std::string& bad :
+       {std::string(), std::string("hall a"), std::string("r\n"), std::string(65, 'r'), std::string("caf\xc3\xa9")}) {
+    std::string error;
+    auto failure = ContentFailure::kNotFinite;
+    auto k = *keyframe;
+    k.robot = bad;
+    EXPECT_FALSE(from_message(k, &error, &failure)) << bad;
+    EXPECT_EQ(failure, ContentFailure::kContent);
+    EXPECT_NE(error.find("no robot name"), std::string::npos) << error;
+    auto g = *graph;
+    g.robot = bad;
+    failure = ContentFailure::kNotFinite;
+    EXPECT_FALSE(from_message(g, &error, &failure)) << bad;
+    EXPECT_EQ(failure, ContentFailure::kContent);
+    EXPECT_NE(error.find("no robot name"), std::string::npos) << error;
+  }
+  auto g = *graph;
+  g.robot = std::string(64, 'r');  // the longest name
+  EXPECT_TRUE(from_message(g, nullptr));
+}
+
 TEST(LocalGraphConversion, RoundTripKeepsNodesEdgesAndInformation) {
   const auto graph = sample_graph();
-  const auto decoded = through_bytes(to_message(graph, 0x7e57, 3, 123456));
+  const auto decoded = through_bytes(to_message(graph, 0x7e57, 3, 123456, "hall-a"));
   ASSERT_TRUE(decoded);
   EXPECT_EQ(decoded->session, 0x7e57);
   EXPECT_EQ(decoded->keyframe_id, 3);
@@ -116,7 +148,7 @@ TEST(LocalGraphConversion, RoundTripKeepsNodesEdgesAndInformation) {
 }
 
 TEST(LocalGraphConversion, EdgesToUnknownFramesAndBadInformationAreRefused) {
-  auto message = to_message(sample_graph(), 1, 3, 0);
+  auto message = to_message(sample_graph(), 1, 3, 0, "hall-a");
   std::string error;
   auto dangling = message;
   dangling.edges[1].to = 99;
@@ -143,7 +175,7 @@ TEST(LocalGraphConversion, TheSampleMessageIsUsable) {
 // Which check refused a graph (the back end counts each kind in CVO_STATUS): an indefinite or
 // non-symmetric information matrix, a NaN, or a malformed graph.
 TEST(LocalGraphConversion, RefusalsSayWhichKind) {
-  const auto message = to_message(sample_graph(), 1, 3, 0);
+  const auto message = to_message(sample_graph(), 1, 3, 0, "hall-a");
   std::string error;
   auto failure = ContentFailure::kContent;
 
@@ -205,6 +237,7 @@ TEST(MapConversion, RoundTripKeepsSessionsKeyframesAndLoops) {
   const core::SE3 correction = core::SE3::from_translation({0.5, -0.25, 2.0});
   map.sessions = {test::map_session(-7, true, -7, 2, 0, core::SE3()),
                   test::map_session(99, false, 99, 1, -1, correction)};
+  map.sessions[0].robot = "hall-a";  // the second's robot is not known (none of its keyframes came)
   map.keyframes = {{-7, 0, 1305031229.528748, core::SE3()},
                    {-7, 1, 1305031230.5, core::SE3::from_translation({1, 0, 0})},
                    {99, 0, 1305031240.25, correction}};
@@ -229,6 +262,8 @@ TEST(MapConversion, RoundTripKeepsSessionsKeyframesAndLoops) {
   EXPECT_FALSE(back->sessions[1].placed);
   EXPECT_EQ(back->sessions[1].session, 99);
   EXPECT_EQ(back->sessions[1].joined_at_keyframe, -1);
+  EXPECT_EQ(back->sessions[0].robot, "hall-a");
+  EXPECT_EQ(back->sessions[1].robot, "");
   EXPECT_LT((back->sessions[1].correction.translation() - correction.translation()).norm(), 1e-12);
   ASSERT_EQ(back->keyframes.size(), 3u);
   EXPECT_EQ(back->keyframes[2].session, 99);
@@ -238,10 +273,33 @@ TEST(MapConversion, RoundTripKeepsSessionsKeyframesAndLoops) {
   EXPECT_EQ(back->loops[0].to_id, 0);
   EXPECT_EQ(back->loops[0].loop.information(2, 2), 3.0);
 
+  auto forged = *decoded;
+  forged.robots[1] = "hall a";
+  EXPECT_FALSE(from_message(forged, &error));
+  EXPECT_NE(error.find("session 99: robot of 6 bytes is no robot name"), std::string::npos) << error;
+
   auto old = *decoded;
   old.version = 1;  // a back end from before sessions
   EXPECT_FALSE(from_message(old, &error));
   EXPECT_NE(error.find("schema version 1"), std::string::npos) << error;
+}
+
+// CVO_MAP_CORRECTION says whose session it places: the robot comes with the entry, and a forged
+// name is refused as the whole correction.
+TEST(MapCorrectionConversion, TheSessionsRobotComesWithItsEntry) {
+  slam::SessionCorrection c{5, test::map_session(99, true, -7, 1, 0, core::SE3()), {}};
+  c.session.robot = "dock.b_2";
+  const auto decoded = through_bytes(to_message(c, 1234, 1));
+  ASSERT_TRUE(decoded);
+  EXPECT_EQ(decoded->robot, "dock.b_2");
+  std::string error;
+  const auto back = from_message(*decoded, &error);
+  ASSERT_TRUE(back) << error;
+  EXPECT_EQ(back->session.robot, "dock.b_2");
+  auto forged = *decoded;
+  forged.robot = "dock b";
+  EXPECT_FALSE(from_message(forged, &error));
+  EXPECT_NE(error.find("no robot name"), std::string::npos) << error;
 }
 
 }  // namespace

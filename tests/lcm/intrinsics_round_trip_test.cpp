@@ -93,7 +93,7 @@ TEST(IntrinsicsRoundTrip, ThroughCvoRgbdEveryFieldComesBack) {
 
 TEST(IntrinsicsRoundTrip, ThroughCvoKeyframeEveryFieldComesBack) {
   const core::Intrinsics k = every_field_set();
-  Keyframe keyframe{7, 2, frame_of(k), core::SE3{}, registration::PointCloud(1)};
+  Keyframe keyframe{7, 2, frame_of(k), core::SE3{}, registration::PointCloud(1), "hall-a"};
   keyframe.cloud.push_back({0.5f, -0.25f, 1.5f}, registration::Feature{});
   std::string error;
   const auto message = to_message(keyframe, RgbdEncoding{ColourEncoding::kPng, DepthEncoding::kPng}, &error);

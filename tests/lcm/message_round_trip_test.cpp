@@ -2,6 +2,10 @@
 // offsets matches what lcm-gen actually encodes.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <string>
+#include <vector>
+
 #include "lcm/sample_messages.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/wire_layout.hpp"
@@ -66,29 +70,55 @@ TYPED_TEST(MessageRoundTrip, DecodesToTheSameMessage) {
   EXPECT_EQ(encode(*decoded), bytes);
 }
 
+std::int32_t be32(const std::uint8_t* p) { return (p[0] << 24) | (p[1] << 16) | (p[2] << 8) | p[3]; }
+
+// Where the table puts each string's length in the sample's encoding (body offsets).
+std::vector<std::int64_t> string_offsets(const WireLayout& layout, const std::uint8_t* body) {
+  std::int64_t size = layout.header_bytes;
+  std::int64_t strings = layout.num_strings;
+  for (std::size_t i = 0; i < layout.counts.size(); ++i) {
+    const std::int32_t count = be32(body + layout.counts[i].offset);
+    size += std::int64_t{count} * layout.counts[i].bytes_per_element;
+    if (static_cast<int>(i) == layout.strings_counted_by) strings += count;
+  }
+  std::vector<std::int64_t> at;
+  if (layout.strings_at >= 0) size = layout.strings_at;
+  for (std::int64_t i = 0; i < strings; ++i, size += 4 + be32(body + size)) at.push_back(size);
+  at.push_back(size);  // the end of the last: where auth_t begins
+  return at;
+}
+
 TYPED_TEST(MessageRoundTrip, WireLayoutTableMatchesTheEncoding) {
   const TypeParam m = Sample<TypeParam>::make();
   const auto bytes = encode(m);
   const WireLayout layout = wire_layout(TypeParam::getTypeName());
-  if (layout.strings_at >= 0) {  // the first string's length is where the table says
-    const auto* at = bytes.data() + 8 + layout.strings_at;
-    EXPECT_EQ((at[0] << 24) | (at[1] << 16) | (at[2] << 8) | at[3], 13) << "\"cvo-trackerd\" and its NUL";
-  }
-  if (layout.counts.empty()) GTEST_SKIP() << TypeParam::getTypeName() << " has no variable-length arrays";
   const std::uint8_t* body = bytes.data() + 8;
-  std::int64_t size = layout.header_bytes;
-  for (const auto& field : layout.counts) {
-    const std::int32_t count = (body[field.offset] << 24) | (body[field.offset + 1] << 16) |
-                               (body[field.offset + 2] << 8) | body[field.offset + 3];
-    EXPECT_GT(count, 0) << field.name << ": the sample sets every count";
-    size += std::int64_t{count} * field.bytes_per_element;
+  for (const auto& field : layout.counts)
+    EXPECT_GT(be32(body + field.offset), 0) << field.name << ": the sample sets every count";
+  const auto at = string_offsets(layout, body);
+  for (std::size_t i = 0; i + 1 < at.size(); ++i) {  // each length is a text's, with its one NUL
+    const std::int32_t length = be32(body + at[i]);
+    ASSERT_GE(length, 1) << "string " << i;
+    EXPECT_EQ(body[at[i] + 4 + length - 1], 0) << "string " << i;
   }
-  if (layout.strings_at == kStringsAfterArrays)  // grid_t's frame: its length, "grid" and its NUL
-    for (int i = 0; i < layout.num_strings; ++i)
-      size += 4 + ((body[size] << 24) | (body[size + 1] << 16) | (body[size + 2] << 8) | body[size + 3]);
   // Then auth_t, the last field of every type sent on a channel: the last kAuthTrailerBytes.
-  EXPECT_EQ(size + kAuthTrailerBytes, static_cast<std::int64_t>(bytes.size()) - 8)
-      << "header and element sizes of the table, then the auth trailer";
+  EXPECT_EQ(at.back() + kAuthTrailerBytes, static_cast<std::int64_t>(bytes.size()) - 8)
+      << "header and element sizes of the table, its strings, then the auth trailer";
+}
+
+TYPED_TEST(MessageRoundTrip, EveryStringsCorruptLengthIsRefusedBeforeDecoding) {
+  const auto bytes = encode(Sample<TypeParam>::make());
+  const WireLayout layout = wire_layout(TypeParam::getTypeName());
+  const auto at = string_offsets(layout, bytes.data() + 8);
+  if (at.size() < 2) GTEST_SKIP() << TypeParam::getTypeName() << " has no strings";
+  for (std::size_t i = 0; i + 1 < at.size(); ++i)
+    for (const std::uint8_t high : {std::uint8_t{0x7f}, std::uint8_t{0x80}}) {  // huge, negative
+      auto corrupt = bytes;
+      corrupt[8 + static_cast<std::size_t>(at[i])] = high;
+      std::string error;
+      EXPECT_FALSE(decode<TypeParam>(corrupt.data(), static_cast<int>(corrupt.size()), &error));
+      EXPECT_NE(error.find("corrupt string length"), std::string::npos) << "string " << i << ": " << error;
+    }
 }
 
 TEST(MessageRoundTrip, SpotChecksOfDecodedFields) {

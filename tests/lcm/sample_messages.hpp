@@ -85,6 +85,7 @@ inline cvo_lcm::pose_t sample_pose_message() {
   m.iterations = 37;
   m.points = 9001;
   m.latency_ms = 12.25;
+  m.robot = "hall-a";
   return m;
 }
 
@@ -116,6 +117,7 @@ inline cvo_lcm::keyframe_t sample_keyframe() {
   m.depth = {0x89, 'P', 'N', 'G', 9, 8};
   m.colour_size = static_cast<std::int32_t>(m.colour.size());
   m.depth_size = static_cast<std::int32_t>(m.depth.size());
+  m.robot = "hall-a";
   return m;
 }
 
@@ -135,6 +137,7 @@ inline cvo_lcm::local_graph_t sample_local_graph() {
   m.edges = {sample_edge(120, 121), sample_edge(120, 122), sample_edge(121, 122)};
   m.num_nodes = static_cast<std::int32_t>(m.nodes.size());
   m.num_edges = static_cast<std::int32_t>(m.edges.size());
+  m.robot = "hall-a";
   return m;
 }
 
@@ -166,6 +169,7 @@ inline cvo_lcm::map_t sample_map() {
         {i < 3 ? kFirst : kSecond, ids[i], 1305031233528748 + 100000 * ids[i], sample_pose(static_cast<double>(i))});
   m.loops = {{kFirst, kFirst, sample_edge(0, 2)}, {kFirst, kSecond, sample_edge(1, 5)}};
   m.num_sessions = static_cast<std::int32_t>(m.sessions.size());
+  m.robots = {"hall-a", "dock.b_2"};
   m.num_keyframes = static_cast<std::int32_t>(m.keyframes.size());
   m.num_loops = static_cast<std::int32_t>(m.loops.size());
   return m;
@@ -185,6 +189,7 @@ inline cvo_lcm::map_correction_t sample_map_correction() {
   m.loops = {{5, 0x5e5510'0000'0001, 1, sample_pose(0.3), sample_pose(1.0)},
              {4, 0x5e5510'0000'0001, 0, sample_pose(0.4), sample_pose(0.0)}};
   m.num_loops = static_cast<std::int32_t>(m.loops.size());
+  m.robot = "dock.b_2";
   return m;
 }
 

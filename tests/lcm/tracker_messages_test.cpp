@@ -25,7 +25,7 @@ TEST(TrackerMessages, PoseMessageCarriesTheTrackedFrame) {
   p.gamma_keyframe = 0.5;
   p.iterations = 17;
   p.points = 4321;
-  const cvo_lcm::pose_t m = pose_message(0x5e55, p, 12.5);
+  const cvo_lcm::pose_t m = pose_message(0x5e55, "hall-a", p, 12.5);
   EXPECT_EQ(m.version, cvo_lcm::pose_t::SCHEMA_VERSION);
   EXPECT_EQ(m.session, 0x5e55);
   EXPECT_EQ(m.utime, 1305031102175304);
@@ -42,6 +42,7 @@ TEST(TrackerMessages, PoseMessageCarriesTheTrackedFrame) {
   EXPECT_EQ(m.iterations, 17);
   EXPECT_EQ(m.points, 4321);
   EXPECT_EQ(m.latency_ms, 12.5);
+  EXPECT_EQ(m.robot, "hall-a");
   // What goes on the wire decodes with the checking decoder.
   const auto bytes = encode(m);
   std::string error;
@@ -59,7 +60,7 @@ TEST(TrackerMessages, PoseMessageSaysTheSessionsStateItsMapAndBothCovariances) {
   p.map_epoch = 1000;
   p.map_revision = 12;
   p.relative_covariance = core::Matrix6d::Identity() * 1e-6;
-  cvo_lcm::pose_t m = pose_message(1, p, 0);
+  cvo_lcm::pose_t m = pose_message(1, "r", p, 0);
   EXPECT_EQ(m.state, +cvo_lcm::pose_t::STATE_LOCALIZED);
   EXPECT_EQ(m.since_match_s, 0.75);
   EXPECT_EQ(m.map_epoch, 1000);
@@ -72,13 +73,13 @@ TEST(TrackerMessages, PoseMessageSaysTheSessionsStateItsMapAndBothCovariances) {
   p.has_map_pose = false;
   p.map_pose = core::SE3::from_translation({3, 0, 0});
   p.relative_covariance.reset();
-  m = pose_message(1, p, 0);
+  m = pose_message(1, "r", p, 0);
   EXPECT_EQ(m.since_match_s, -1);
   EXPECT_FALSE(m.has_map_pose);
   EXPECT_EQ(m.map_pose.position[0], 0) << "no map pose is given";
   EXPECT_FALSE(m.has_relative_covariance);
   p.state = core::LocalizationState::kLost;
-  EXPECT_EQ(pose_message(1, p, 0).state, +cvo_lcm::pose_t::STATE_LOST);
+  EXPECT_EQ(pose_message(1, "r", p, 0).state, +cvo_lcm::pose_t::STATE_LOST);
 }
 
 TEST(TrackerMessages, StatusMessageHoldsEveryCounter) {

@@ -43,7 +43,8 @@ void feed(Mapper& mapper, core::SessionId session, const std::vector<Keyframe>& 
       mapper.add_local_graph(session, static_cast<std::int64_t>(i - 1),
                              graph_between(keyframes[i - 1], keyframes[i], odom_T_world));
     const Keyframe& k = keyframes[i];
-    mapper.add_keyframe({session, static_cast<std::int64_t>(i), k.frame, odom_T_world * k.truth, k.cloud});
+    mapper.add_keyframe({session, static_cast<std::int64_t>(i), k.frame, odom_T_world * k.truth, k.cloud,
+                         "robot-" + std::to_string(session)});
     if (states) states->push_back(mapper.session(session).state);
   }
 }
@@ -70,6 +71,7 @@ TEST(Localization, AVisitorIsLocalizedAndItsCorrectionIsTheOffsetBetweenTheFrame
   const MapSession visitor = mapper.session(0x715);
   EXPECT_TRUE(visitor.placed);
   EXPECT_TRUE(visitor.visitor);
+  EXPECT_EQ(visitor.robot, "robot-" + std::to_string(0x715));  // a visitor is named too
   EXPECT_GE(visitor.since_match_s, 0.0);
   // T_map_odom is the inverse of the offset the visitor's odometry has from the map's frame.
   const core::SE3 error = visitor.correction * kFarAway;

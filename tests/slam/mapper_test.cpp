@@ -67,6 +67,24 @@ TEST(Mapper, AKeyframeRepeatedWithOtherContentIsRefusedAndTheMapperGoesOn) {
   EXPECT_TRUE(mapper.knows(kSession, 1));
 }
 
+// Several robots, one map: each session's entry names the robot its first keyframe named (a
+// later keyframe of the same session cannot rename it), in map() and in its correction alike.
+TEST(Mapper, EachSessionIsNamedByItsRobot) {
+  Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), MapperParameters{});
+  const RealKeyframe a = real_keyframe(0), b = real_keyframe(10);
+  mapper.add_keyframe({1, 0, a.frame, core::SE3(), a.cloud, "hall-a"});
+  mapper.add_keyframe({1, 1, b.frame, core::SE3(), b.cloud, "impostor"});
+  mapper.add_keyframe({2, 0, b.frame, core::SE3(), b.cloud, "dock.b_2"});
+  mapper.add_keyframe({3, 0, a.frame, core::SE3(), a.cloud});  // no robot named
+  const Map map = mapper.map();
+  ASSERT_EQ(map.sessions.size(), 3u);
+  EXPECT_EQ(map.sessions[0].robot, "hall-a");
+  EXPECT_EQ(map.sessions[1].robot, "dock.b_2");
+  EXPECT_EQ(map.sessions[2].robot, "");
+  EXPECT_EQ(mapper.session(2).robot, "dock.b_2");
+  EXPECT_EQ(mapper.correction(1, 8).session.robot, "hall-a");
+}
+
 TEST(Mapper, ALocalGraphThatDoesNotStartAtItsKeyframeIsRefused) {
   Mapper mapper(loop_closure::Vocabulary::load(CVO_DEFAULT_VOCABULARY), MapperParameters{});
   const RealKeyframe a = real_keyframe(0);

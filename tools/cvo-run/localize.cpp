@@ -51,10 +51,12 @@ core::SessionId first_free_session(const slam::Mapper& mapper) {
 struct Localizer::State {
   State(const config::Config& config, loop_closure::Vocabulary vocabulary)
       : mapper(std::move(vocabulary), config::mapper_parameters(config)),
-        parameters(config::keyframe_odometry_parameters(config)) {}
+        parameters(config::keyframe_odometry_parameters(config)),
+        robot(config::robot_name(config.trackerd.robot)) {}
 
   slam::Mapper mapper;
   odometry::KeyframeOdometryParameters parameters;
+  std::string robot;                                    // what cvo-trackerd would name (trackerd.robot)
   std::unique_ptr<odometry::KeyframeOdometry> tracker;  // made at the first frame: its size
   core::SessionId session = 0;
   bool localized = false;  // the current session was localized at some frame
@@ -114,7 +116,8 @@ odometry::TrackResult Localizer::track(const core::RgbdFrame& frame) {
   // The state as it stood when the frame was tracked: its own keyframe is seen after.
   s.count(s.mapper.session(s.session).state, frame, step.pose);
   if (const auto& g = step.closed_graph) s.mapper.add_local_graph(s.session, g->keyframe_id, *g->graph);
-  if (const auto& k = step.new_keyframe) s.mapper.add_keyframe({s.session, k->id, k->frame, k->pose, *k->cloud});
+  if (const auto& k = step.new_keyframe)
+    s.mapper.add_keyframe({s.session, k->id, k->frame, k->pose, *k->cloud, s.robot});
   s.report.window_keyframes_max = std::max(s.report.window_keyframes_max, s.mapper.window_keyframes());
   return step;
 }

@@ -20,10 +20,12 @@ struct SlamPipeline::Session {
           std::vector<io::AccelerometerSample> samples)
       : id(session),
         tracker(width, height, config::keyframe_odometry_parameters(config)),
-        accelerometer(std::move(samples)) {}
+        accelerometer(std::move(samples)),
+        robot(config::robot_name(config.trackerd.robot)) {}
   core::SessionId id;
   odometry::KeyframeOdometry tracker;
   std::vector<io::AccelerometerSample> accelerometer;
+  std::string robot;  // what cvo-trackerd would name (trackerd.robot)
 };
 
 SlamPipeline::SlamPipeline(const config::Config& config, loop_closure::Vocabulary vocabulary, bool map,
@@ -49,7 +51,7 @@ odometry::TrackStep SlamPipeline::track(const core::RgbdFrame& frame) {
   if (const auto& g = step.closed_graph) add_local_graph(s.id, *g);
   if (const auto& k = step.new_keyframe) {
     to_store([&](StoreOutput& store) { store.keyframe(s.id, k->id, k->frame, k->pose, *k->cloud); });
-    const auto outcome = mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud});
+    const auto outcome = mapper_.add_keyframe({s.id, k->id, k->frame, k->pose, *k->cloud, s.robot});
     for (const auto& merge : outcome.merges) to_store([&](StoreOutput& store) { store.merge(merge); });
     if (mapping_)
       mapping_->add_keyframe({s.id, k->id}, k->frame, io::mean_specific_force(s.accelerometer, k->frame.timestamp));

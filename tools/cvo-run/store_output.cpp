@@ -44,9 +44,13 @@ lcm::RgbdEncoding keyframe_encoding(const config::Config& config) {
 
 struct StoreOutput::State {
   State(const fs::path& file, const config::Config& config)
-      : encoding(keyframe_encoding(config)), store(create_store(file)), merges(*store) {}
+      : encoding(keyframe_encoding(config)),
+        robot(config::robot_name(config.trackerd.robot)),
+        store(create_store(file)),
+        merges(*store) {}
 
   lcm::RgbdEncoding encoding;  // first: a bad setting fails before the file is made
+  std::string robot;           // the records name it as cvo-trackerd's would (trackerd.robot)
   std::unique_ptr<KeyframeStore> store;
   daemon::backendd::StoreMerges merges;  // a merged keyframe's record is garbage once its merge is stored
 
@@ -65,7 +69,8 @@ StoreOutput::~StoreOutput() = default;
 void StoreOutput::keyframe(core::SessionId session, std::int64_t id, const core::RgbdFrame& frame,
                            const core::SE3& pose, const registration::PointCloud& cloud) {
   std::string error;
-  const auto message = lcm::to_message(lcm::Keyframe{session, id, frame, pose, cloud}, state_->encoding, &error);
+  const auto message =
+      lcm::to_message(lcm::Keyframe{session, id, frame, pose, cloud, state_->robot}, state_->encoding, &error);
   if (!message)
     throw io::InputError(state_->store->file(), "keyframe " + std::to_string(id) + " cannot be encoded: " + error);
   daemon::backendd::RecordRef where;
@@ -75,7 +80,8 @@ void StoreOutput::keyframe(core::SessionId session, std::int64_t id, const core:
 
 void StoreOutput::local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph) {
   const auto closed = static_cast<std::int64_t>(std::llround(graph.nodes().back().timestamp * 1e6));
-  state_->append(RecordKind::kLocalGraph, lcm::encode(lcm::to_message(graph, session, keyframe_id, closed)));
+  state_->append(RecordKind::kLocalGraph,
+                 lcm::encode(lcm::to_message(graph, session, keyframe_id, closed, state_->robot)));
 }
 
 void StoreOutput::merge(const slam::KeyframeMerge& merge) {
