@@ -44,6 +44,7 @@
 #include "libcvo/lcm/tracker_messages.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
 #include "libcvo/mapping/mapping.hpp"
+#include "libcvo/slam/map_robots.hpp"
 #include "libcvo/slam/mapper.hpp"
 
 namespace cvo::daemon::backendd {
@@ -676,9 +677,12 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, const QueuedRecord& queued
   w.first_arrival.try_emplace(k.session, queued.arrived);
   if (w.merges) w.merges->keyframe(k.session, k.id, queued.stored);
   for (const auto& merge : outcome.merges) store_merge(merge, !queued.arrived);
-  for (const auto& loop : outcome.loops)
+  for (const auto& loop : outcome.loops) {
+    const auto to = w.mapper.robot(loop.to_session), from = w.mapper.robot(loop.from_session);
     notes_.note("loop accepted: " + keyframe_name(loop.to_session, loop.to_id) + " to " +
-                keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3));
+                keyframe_name(loop.from_session, loop.from_id) + ", alpha " + fixed(loop.loop.alpha, 3) +
+                (to != from ? ", between robots " + to + " and " + from : ""));
+  }
   // The keyframe is in the SLAM map whether or not the occupancy grid can use it; a visitor's is in
   // no map.
   try {
@@ -912,6 +916,7 @@ void Backendd::finish() {
               std::to_string(w.mapper.loops_accepted()) + " loops accepted of " +
               std::to_string(w.mapper.loops_tried()) + " tried");
   notes_.note(text("CVO_MAP_CORRECTION", w.corrections) + "; " + text("CVO_MAP", w.maps));
+  notes_.note(slam::describe(slam::map_robots(w.mapper.map())));
   const auto& g = w.grid;
   notes_.note(text(g, w.mapping.statistics()) + "; " + std::to_string(g.published) + " CVO_GRIDs sent; place " +
               std::to_string(g.places) + " times, " +

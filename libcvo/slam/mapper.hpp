@@ -268,6 +268,8 @@ class Mapper {
   /// What map() says of one session, without building the map: a default entry (kLocalizing,
   /// unplaced) for one not seen.
   [[nodiscard]] MapSession session(core::SessionId session) const;
+  /// session()'s robot alone ("" for one not seen or not named).
+  [[nodiscard]] std::string robot(core::SessionId session) const;
   /// session(), at the map's revision, with the session's newest loops (at most max_loops) between
   /// its keyframes and keyframes of other sessions that are in the keyframe graph (map()'s loops).
   [[nodiscard]] SessionCorrection correction(core::SessionId session, std::size_t max_loops) const;

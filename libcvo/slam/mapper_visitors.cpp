@@ -185,6 +185,12 @@ MapSession Mapper::describe(core::SessionId id, const Visitor& v) const {
   return s;
 }
 
+std::string Mapper::robot(core::SessionId id) const {
+  if (const auto v = visitors_.find(id); v != visitors_.end()) return v->second.robot;
+  if (const auto s = sessions_.find(id); s != sessions_.end()) return s->second.robot;
+  return {};
+}
+
 MapSession Mapper::session(core::SessionId id) const {
   if (const auto v = visitors_.find(id); v != visitors_.end()) return describe(id, v->second);
   if (const auto s = sessions_.find(id); s != sessions_.end()) return describe(id, s->second);

@@ -3,8 +3,10 @@
 // 250-474), and one cvo-backendd takes both over real LCM UDP multicast. The back end must join the
 // second session to the first (both placed in its last CVO_MAP, loops between them), and the map's
 // ATE over both sessions (cvo-log map, cvo-eval) must stay within 1.5x of the same daemons on every
-// frame as one session. Run with the back end up throughout, and with the back end killed
-// (SIGKILL) and restarted between the sessions, which must resume both from its store.
+// frame as one session. Run with the back end up throughout (one robot's tracker restarted), and
+// with the back end killed (SIGKILL) and restarted between the sessions, which must resume both
+// from its store; there the second session is another robot's, and the map names each session's
+// robot (the first's from the store) and reports the loops between the two robots.
 //
 // Needs ../shared/data/tum/fr1_rpy (skips with a message without it). Runs only inside
 // tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone, no packet can leave the host.
@@ -62,6 +64,7 @@ struct Leg {
   fs::path folder;
   std::size_t frames = 0;
   bool killed = false;  // SIGKILL after its last frame's pose (else it exits at the end of its frames)
+  std::string robot = "hall-a";
 };
 
 struct MapRun {
@@ -69,6 +72,7 @@ struct MapRun {
   std::vector<std::int64_t> sessions;  // the trackers' sessions, in order
   std::string backend_log;             // every back-end instance's stderr
   double ate = 0;
+  std::string map_log;  // what cvo-log map said
 };
 
 class BackenddSessions : public ::testing::Test {
@@ -85,7 +89,7 @@ class BackenddSessions : public ::testing::Test {
   // or left to exit; returns its session.
   static std::int64_t run_leg(const Leg& leg, LcmCapture& capture, const fs::path& stderr_file) {
     const auto before = capture.snapshot().last_frame;  // earlier sessions
-    auto trackerd = cvo::testing::start_trackerd(leg.folder, stderr_file, !leg.killed);
+    auto trackerd = cvo::testing::start_trackerd(leg.folder, stderr_file, !leg.killed, {"trackerd.robot=" + leg.robot});
     std::int64_t session = 0;
     const auto last = static_cast<std::int64_t>(leg.frames) - 1;
     const bool tracked = capture.wait_until(
@@ -145,16 +149,17 @@ class BackenddSessions : public ::testing::Test {
     for (const auto& log : logs) run.backend_log += cvo::testing::slurp(log);
     run.captured = capture.snapshot();
     capture_owner.reset();
-    run.ate = ate(dir, maps);
+    run.ate = ate(dir, maps, &run.map_log);
     return run;
   }
 
-  // cvo-log map, then cvo-eval against the sequence's ground truth.
-  static double ate(const fs::path& dir, const fs::path& maps) {
+  // cvo-log map (what it says in *said), then cvo-eval against the sequence's ground truth.
+  static double ate(const fs::path& dir, const fs::path& maps, std::string* said) {
     const auto trajectory = dir / (maps.stem().string() + ".txt");
     const auto log = cvo::testing::run_tool(
         "cvo-log", "map " + cvo::testing::quoted(maps) + " --out " + cvo::testing::quoted(trajectory), dir);
     EXPECT_EQ(log.exit_code, 0) << log.err;
+    *said = log.err;
     const auto eval = cvo::testing::run_tool(
         "cvo-eval",
         cvo::testing::quoted(kSequence / "groundtruth.txt") + " " + cvo::testing::quoted(trajectory) + " --json", dir);
@@ -166,11 +171,11 @@ class BackenddSessions : public ::testing::Test {
   [[nodiscard]] std::vector<Leg> whole(const fs::path& dir) const {
     return {{write_part(dir / "fr1_rpy_all", 0, frames_), frames_, false}};
   }
-  // Frames 0-249, the tracker killed after them, then the rest by a new tracker.
-  [[nodiscard]] std::vector<Leg> halves(const fs::path& dir) const {
+  // Frames 0-249, the tracker killed after them, then the rest by a new tracker (of `second_robot`).
+  [[nodiscard]] std::vector<Leg> halves(const fs::path& dir, const std::string& second_robot = "hall-a") const {
     const std::size_t rest = frames_ - kSecondSession;
     return {{write_part(dir / "fr1_rpy_a", 0, kSecondSession), kSecondSession, true},
-            {write_part(dir / "fr1_rpy_b", kSecondSession, rest), rest, false}};
+            {write_part(dir / "fr1_rpy_b", kSecondSession, rest), rest, false, second_robot}};
   }
 
   std::size_t frames_ = 0;
@@ -210,12 +215,17 @@ TEST_F(BackenddSessions, ATrackerRestartIsASecondSessionJoinedToTheMap) {
   const auto one = run_map(dir.path(), "one", whole(dir.path()), false);
   const auto two = run_map(dir.path(), "two", halves(dir.path()), false);
   check_joined(two, one);
+  // One robot: both sessions are hall-a's, and no loop is between robots.
+  ASSERT_TRUE(two.captured.map);
+  EXPECT_EQ(two.captured.map->robots, (std::vector<std::string>{"hall-a", "hall-a"}));
+  EXPECT_NE(two.map_log.find("robots: hall-a (2 sessions, 2 placed, "), std::string::npos) << two.map_log;
+  EXPECT_NE(two.map_log.find("loops between robots: none"), std::string::npos) << two.map_log;
 }
 
 TEST_F(BackenddSessions, ABackEndRestartBetweenSessionsResumesBoth) {
   cvo::test::TempDir dir;
   const auto one = run_map(dir.path(), "one", whole(dir.path()), false);
-  const auto two = run_map(dir.path(), "two", halves(dir.path()), true);
+  const auto two = run_map(dir.path(), "two", halves(dir.path(), "hall-b"), true);
   // Two back-end instances; the second found the first session in its store.
   std::vector<unsigned long> recovered;
   const std::regex records("\\((\\d+) records recovered\\)");
@@ -225,6 +235,20 @@ TEST_F(BackenddSessions, ABackEndRestartBetweenSessionsResumesBoth) {
   ASSERT_EQ(recovered.size(), 2u) << two.backend_log;
   EXPECT_GE(recovered[1], two.captured.keyframes_of(two.sessions[0]).size()) << two.backend_log;
   check_joined(two, one);
+  // Two robots: the first session's robot came back from the store, the loops between them are
+  // reported as they are accepted, at the stop, and by cvo-log map.
+  ASSERT_TRUE(two.captured.map);
+  const auto& map = *two.captured.map;
+  ASSERT_EQ(map.robots.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i)
+    EXPECT_EQ(map.robots[i], map.sessions[i].session == two.sessions[0] ? "hall-a" : "hall-b");
+  EXPECT_NE(log.find("between robots hall-b and hall-a"), std::string::npos) << log;
+  const std::regex between("loops between robots: hall-a-hall-b ([0-9]+)");
+  std::smatch at_stop, in_map;
+  EXPECT_TRUE(std::regex_search(log, at_stop, between)) << log;
+  ASSERT_TRUE(std::regex_search(two.map_log, in_map, between)) << two.map_log;
+  EXPECT_GT(std::stoi(in_map[1]), 0);
+  std::printf("two robots: %s\n", in_map.str().c_str());
 }
 
 }  // namespace

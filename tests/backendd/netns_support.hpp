@@ -167,9 +167,10 @@ inline std::unique_ptr<DaemonProcess> start_backendd(const std::filesystem::path
 }
 
 /// cvo-trackerd on a TUM folder at its recorded rate (30 Hz), every frame tracked (deterministic);
-/// with `exit_at_end` it exits 0 after the last frame, else it stays up as a live one would.
+/// with `exit_at_end` it exits 0 after the last frame, else it stays up as a live one would;
+/// `settings` are --set KEY=VALUE assignments.
 inline DaemonProcess start_trackerd(const std::filesystem::path& folder, const std::filesystem::path& stderr_file,
-                                    bool exit_at_end) {
+                                    bool exit_at_end, const std::vector<std::string>& settings = {}) {
   std::vector<std::string> args{"--source",
                                 "tum:" + folder.string(),
                                 "--lcm-url",
@@ -180,6 +181,7 @@ inline DaemonProcess start_trackerd(const std::filesystem::path& folder, const s
                                 "--set",
                                 "trackerd.lock_memory=false"};
   if (exit_at_end) args.emplace_back("--exit-on-eof");
+  for (const auto& s : settings) args.insert(args.end(), {"--set", s});
   return DaemonProcess(std::filesystem::path(CVO_TOOLS_DIR) / "cvo-trackerd", args, stderr_file);
 }
 

@@ -82,6 +82,8 @@ TEST(Mapper, EachSessionIsNamedByItsRobot) {
   EXPECT_EQ(map.sessions[1].robot, "dock.b_2");
   EXPECT_EQ(map.sessions[2].robot, "");
   EXPECT_EQ(mapper.session(2).robot, "dock.b_2");
+  EXPECT_EQ(mapper.robot(2), "dock.b_2");
+  EXPECT_EQ(mapper.robot(99), "");  // not seen
   EXPECT_EQ(mapper.correction(1, 8).session.robot, "hall-a");
 }
 

@@ -144,6 +144,10 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   EXPECT_EQ(last.state, +cvo_lcm::status_t::STATE_STOPPING);
   EXPECT_EQ(last.process, "cvo-trackerd");
   EXPECT_EQ(last.robot, "hall-a") << "trackerd.robot";
+  // ... and every tracker message names the robot.
+  for (const auto& p : log.poses) EXPECT_EQ(p.robot, "hall-a") << "CVO_POSE of frame " << p.frame_index;
+  for (const auto& k : log.keyframes) EXPECT_EQ(k.robot, "hall-a") << "CVO_KEYFRAME " << k.id;
+  for (const auto& g : log.local_graphs) EXPECT_EQ(g.robot, "hall-a") << "CVO_LOCAL_GRAPH " << g.keyframe_id;
   EXPECT_EQ(last.allocations_after_warmup, 0);
   EXPECT_EQ(last.dropped_frames, 0) << "deterministic mode never drops";
   EXPECT_GT(last.latency_median_ms, 0);

@@ -25,6 +25,7 @@
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
 #include "libcvo/lcm/pose_conversion.hpp"
+#include "libcvo/slam/map_robots.hpp"
 #include "program/cli.hpp"
 #include "program/json.hpp"
 
@@ -39,7 +40,8 @@ poses   writes the CVO_POSE messages of LOG as a TUM trajectory (odometry poses;
         map-corrected ones), stamped with the frames' colour timestamps: cvo-eval reads it.
 map     writes the last CVO_MAP of LOG as a TUM trajectory of keyframe poses, stamped with the
         keyframes' colour timestamps: every keyframe of every session placed in the map, in one
-        file sorted by time. Sessions the map has not placed are left out and named on stderr.
+        file sorted by time. Sessions the map has not placed are left out and named on stderr,
+        and so is each robot's share of the map and the loops between robots.
 status  prints the last CVO_STATUS of every robot's every process and session in LOG (--json:
         one object keyed by process, the last of each, with the status_t field names; and under
         "senders" every robot's, process's and session's last, each with its "process").
@@ -140,6 +142,7 @@ int write_map(const Arguments& a) {
   io::write_tum_trajectory(a.out, trajectory);
   std::cerr << "cvo-log: " << trajectory.size() << " keyframe poses of map revision " << last->revision
             << " written to " << a.out.string() << "\n";
+  std::cerr << "cvo-log: " << slam::describe(slam::map_robots(*last)) << "\n";
   return 0;
 }
 
