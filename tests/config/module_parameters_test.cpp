@@ -132,6 +132,7 @@ TEST(ConfigModuleParameters, NoModuleRedeclaresATunable) {
       {"tools/cvo-run/report.hpp", "mode"},                      // the odometry mode run, not the back end's
       {"libcvo/lcm/tracker_messages.hpp", "robot"},              // the resolved name a status carries
       {"libcvo/slam/mapper.hpp", "robot"},                       // the name a session's keyframes carry
+      {"libcvo/slam/map_robots.hpp", "robot"},                   // a robot of the map, by that name
   };
   std::set<std::string> names;
   for (const auto& key : config_keys()) names.insert(key.substr(key.find('.') + 1));
