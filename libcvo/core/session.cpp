@@ -18,6 +18,11 @@ bool is_robot_name(std::string_view name) {
   });
 }
 
+std::string robot_name_error(std::string_view name) {
+  if (is_robot_name(name)) return {};
+  return "robot of " + std::to_string(name.size()) + " bytes is no robot name (" + std::string(kRobotNameRule) + ")";
+}
+
 const char* to_string(LocalizationState state) {
   switch (state) {
     case LocalizationState::kLocalizing: return "localizing";

@@ -20,6 +20,8 @@ std::string session_name(SessionId session);
 /// messages, logs and cvo-log's output, where spaces and control characters would not survive.
 bool is_robot_name(std::string_view name);
 inline constexpr std::string_view kRobotNameRule = "1 to 64 letters, digits, '.', '-' or '_'";  // for messages
+/// "" for a robot name, else why not (its length, not its bytes: they may be anything).
+std::string robot_name_error(std::string_view name);
 
 /// Where a session stands in the map (CVO_POSE, CVO_MAP): not placed yet, placed (its map poses
 /// are map poses), or its odometry failed (a new session follows; this one is over).

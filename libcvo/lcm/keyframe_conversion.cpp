@@ -63,9 +63,7 @@ std::optional<Keyframe> from_message(const cvo_lcm::keyframe_t& m, std::string* 
   if (m.version != cvo_lcm::keyframe_t::SCHEMA_VERSION)
     return fail(error, "schema version " + std::to_string(m.version));
   if (m.id < 0) return fail(error, "negative keyframe id " + std::to_string(m.id));
-  if (!core::is_robot_name(m.robot))
-    return fail(error, "robot of " + std::to_string(m.robot.size()) + " bytes is no robot name (" +
-                           std::string(core::kRobotNameRule) + ")");
+  if (auto why = core::robot_name_error(m.robot); !why.empty()) return fail(error, why);
   std::string why;
   const auto pose = from_message(m.pose, &why);
   if (!pose) {

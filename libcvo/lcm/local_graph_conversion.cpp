@@ -94,10 +94,7 @@ std::optional<odometry::LocalGraph> from_message(const cvo_lcm::local_graph_t& m
   };
   if (m.version != cvo_lcm::local_graph_t::SCHEMA_VERSION)
     return refuse({ContentFailure::kContent, "schema version " + std::to_string(m.version)});
-  if (!core::is_robot_name(m.robot))
-    return refuse({ContentFailure::kContent, "robot of " + std::to_string(m.robot.size()) +
-                                                 " bytes is no robot name (" + std::string(core::kRobotNameRule) +
-                                                 ")"});
+  if (auto why = core::robot_name_error(m.robot); !why.empty()) return refuse({ContentFailure::kContent, why});
   if (m.num_nodes < 1) return refuse({ContentFailure::kContent, "no nodes (a local graph has at least its keyframe)"});
   // Capacity num_nodes: add_edge() then refuses a third edge per node, as the tracker never makes one.
   odometry::LocalGraph graph(static_cast<std::size_t>(m.num_nodes));

@@ -11,9 +11,8 @@ namespace {
 // "" when the entry and its robot ("": not known) are usable, else why not, after `prefix`.
 std::string session_error(const std::string& prefix, const cvo_lcm::map_session_t& s, const std::string& robot) {
   const std::string session = prefix + "session " + std::to_string(s.session) + ": ";
-  if (!robot.empty() && !core::is_robot_name(robot))
-    return session + "robot of " + std::to_string(robot.size()) + " bytes is no robot name (" +
-           std::string(core::kRobotNameRule) + ")";
+  if (!robot.empty())
+    if (auto why = core::robot_name_error(robot); !why.empty()) return session + why;
   std::string why;
   if (!from_message(s.correction, &why)) return session + why;
   if (s.state < cvo_lcm::pose_t::STATE_LOCALIZING || s.state > cvo_lcm::pose_t::STATE_LOST)
