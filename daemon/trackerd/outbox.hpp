@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "libcvo/core/rgbd_frame.hpp"
@@ -26,6 +27,9 @@ namespace cvo::daemon::trackerd {
 // A tracked frame (what CVO_POSE says, lcm::pose_message), and when it arrived for its latency.
 struct PoseEvent : lcm::TrackedPose {
   std::chrono::steady_clock::time_point received;
+  // The tracked odometry pose of the keyframe this frame made (frame n-1 or n itself), which the
+  // map places: odom_pose is the smooth pose a controller reads, not the keyframe's anchor.
+  std::optional<core::SE3> keyframe_odom_pose;
 };
 
 struct KeyframeSlot {

@@ -161,8 +161,9 @@ void Tracking::track(const RingSlot& slot, Event& event) {
   e.timestamp = frame.timestamp;
   e.received = slot.received;
   e.status = step.status;
-  e.odom_pose = step.pose;
-  e.map_pose = placement.T_map_odom * step.pose;
+  e.odom_pose = step.published_pose();  // the smooth pose (smooth_position.hpp); keyframes keep the tracked one
+  e.map_pose = placement.T_map_odom * e.odom_pose;
+  e.keyframe_odom_pose = step.new_keyframe ? std::optional<core::SE3>(step.new_keyframe->pose) : std::nullopt;
   e.map_placed = placement.placed;
   e.has_map_pose = placement.placed || odometry_until_localized_;
   e.map_epoch = placement.epoch;

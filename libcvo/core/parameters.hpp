@@ -35,6 +35,13 @@ struct SelectionParameters {
   // Frames whose two stamps are equal (rendered frames, synchronised sensors) are taken as
   // simultaneous and left as they are.
   double depth_time_offset_s = -0.010;
+  // Each point's depth is the mean of the valid depths in the (2r+1)² pixels around where it is
+  // read, r = depth_window, that lie within depth_window_tolerance · z of that pixel's own depth
+  // (the same surface: a depth edge's other side is left out). A depth sensor's per-pixel noise
+  // and quantisation then enter a point by a fraction of their size, as they would across the
+  // dense pixels of a direct method. 0: the pixel's own depth.
+  int depth_window = 2;
+  double depth_window_tolerance = 0.01;
 
   bool operator==(const SelectionParameters&) const = default;
 };

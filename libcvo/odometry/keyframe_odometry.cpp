@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -21,6 +22,11 @@ using core::ms_since;
 
 bool usable(registration::SelectionStatus s) {
   return s == registration::SelectionStatus::kOk || s == registration::SelectionStatus::kCapacityClamped;
+}
+
+// A frame whose points the compensations move: a rolling shutter, or depth not taken with the colour.
+bool compensates(const core::RgbdFrame& frame) {
+  return frame.intrinsics.rolling_shutter() || (frame.depth_timestamp > 0 && frame.depth_timestamp != frame.timestamp);
 }
 
 // γ compares two inner products of different frame pairs. Evaluated with the tracker's tight
@@ -89,12 +95,14 @@ void KeyframeOdometry::start_over() {
   keyframe_frame_ = previous_frame_ = 0;
   keyframe_pose_ = previous_pose_ = T_m_previous_ = velocity_ = last_pose_ = core::SE3();
   previous_timestamp_ = velocity_dt_ = gamma_reference_ = gamma_ = 0;
-  compensation_velocity_ = core::SE3();
-  compensation_dt_ = 0;
+  compensation_velocity_ = last_compensation_velocity_ = core::SE3();
+  compensation_dt_ = last_compensation_dt_ = 0;
+  current_uncompensated_ = previous_uncompensated_ = false;
   reason_ = KeyframeReason::kNone;
   covariance_chain_ = PoseCovarianceChain{};
   variance_factor_ = VarianceFactor{};
   motion_redundancy_ = MotionRedundancy{};
+  smooth_position_ = SmoothPosition{};
 }
 
 void KeyframeOdometry::start_keyframe(int cloud, std::uint64_t index, double timestamp, const core::SE3& pose,
@@ -191,11 +199,11 @@ bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
 
 // Eq. 7 and 8: frame to frame from the constant velocity, keyframe to frame from the chain; then
 // T̄_m^n, the keyframe result fused with the chain (see the header; the raw one goes to the graph).
-KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& result) {
+KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& result, double f2f_ell_start) {
   Registrations r;
   const auto start = Clock::now();
-  r.f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_);
-  result.frame_registration_ms = ms_since(start);
+  r.f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_ell_start);
+  result.frame_registration_ms += ms_since(start);
   const bool f2f_ok = r.f2f.converged, separate = keyframe_ != previous_;
   r.kf = r.f2f;  // the keyframe is the previous frame: one registration
   r.chain = T_m_previous_ * (f2f_ok ? r.f2f.transform : velocity_);
@@ -305,12 +313,51 @@ std::optional<core::Matrix6d> KeyframeOdometry::fill_covariances(const Registrat
   return f2f;
 }
 
+// The compensations at frame n's own motion (see the header): a first frame-to-frame registration
+// measures T_{n-1}^n, and the frame is selected again with it; so is frame n-1 when it was
+// selected without a motion (a session's first frame, the first after a failure). Returns where
+// the frame-to-frame registration of those points starts: at ℓ_min from the first one's result,
+// or (nothing to compensate, or the first registration failed: the points stand) as without.
+double KeyframeOdometry::select_with_own_motion(const core::RgbdFrame& frame, TrackResult& result) {
+  if (!compensates(frame)) return f2f_ell_start();
+  const auto start = Clock::now();
+  const auto first = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_ell_start());
+  result.frame_registration_ms = ms_since(start);
+  if (!first.converged) return f2f_ell_start();
+  const auto selection_start = Clock::now();
+  compensation_velocity_ = first.transform;
+  compensation_dt_ = frame.timestamp - previous_timestamp_;
+  if (reselect(frame, current_)) current_uncompensated_ = false;
+  if (previous_uncompensated_ && reselect(previous_images_, previous_)) previous_uncompensated_ = false;
+  result.selection_ms += ms_since(selection_start);
+  result.points = clouds_[current_].size();
+  velocity_ = first.transform;
+  return parameters_.cvo.ell_min;
+}
+
+// `frame` selected again into clouds_[cloud] with the compensations' velocity; where that leaves
+// too few points, as it was selected before (without a velocity, or with the last interval's).
+bool KeyframeOdometry::reselect(const core::RgbdFrame& frame, int cloud) {
+  const auto selection = selector_.select(frame, clouds_[cloud], colour_T_depth(frame), twist(frame));
+  if (usable(selection.status) && clouds_[cloud].size() >= 3) return true;
+  const core::SE3 velocity = std::exchange(compensation_velocity_, last_compensation_velocity_);
+  const double dt = std::exchange(compensation_dt_, last_compensation_dt_);
+  selector_.select(frame, clouds_[cloud], colour_T_depth(frame), twist(frame));
+  compensation_velocity_ = velocity, compensation_dt_ = dt;
+  return false;
+}
+
+// Where the frame-to-frame registration starts: ℓ_init after a measured motion; twice that without
+// one (a session's first pair), when the camera may already turn at full speed and no
+// constant-velocity guess has taken the frame's motion out of the basin the kernel must span.
+double KeyframeOdometry::f2f_ell_start() const { return velocity_dt_ > 0 ? 0.0 : 2 * parameters_.cvo.ell_init; }
+
 // A frame with a previous one: registered, then tracked against the keyframe, made the start of a
 // new keyframe at n-1, or (neither registration converged) predicted and a restart; the motion
 // model learns from what converged.
 core::SE3 KeyframeOdometry::track_registered(const core::RgbdFrame& frame, const core::SE3& predicted,
                                              TrackStep& result) {
-  const Registrations r = register_frame(result);
+  const Registrations r = register_frame(result, select_with_own_motion(frame, result));
   const bool trip = keyframe_trips(r, result);
   core::SE3 pose = predicted;
   if (r.kf.converged && !trip) {
@@ -359,6 +406,8 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
   const auto selection_start = Clock::now();
   const auto selection = selector_.select(frame, clouds_[current_], colour_T_depth(frame), twist(frame));
   result.selection_ms = ms_since(selection_start);
+  current_uncompensated_ = compensates(frame) && !(compensation_dt_ > 0);
+  last_compensation_velocity_ = compensation_velocity_, last_compensation_dt_ = compensation_dt_;
   result.selection_status = selection.status;
   result.points = clouds_[current_].size();
 
@@ -367,6 +416,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
     result.status = TrackStatus::kSelectionFailed;
     result.odometry_covariance = track_unmeasured(covariance_chain_, false, false).odometry;
     result.pose = last_pose_ = predicted;
+    result.smooth_pose = smooth(smooth_position_, frame.timestamp, predicted, std::nullopt).pose;
     result.motion = velocity_;
     motion_redundancy_.history = 0;  // no measured increment: the third differences start again
     have_frame_ = true;
@@ -391,6 +441,9 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
   }
   result.relative_covariance = publish_relative(motion_redundancy_, result.motion,
                                                 frame.timestamp - previous_timestamp_, result.relative_covariance);
+  const SmoothStep published = smooth(smooth_position_, frame.timestamp, pose, result.relative_covariance);
+  result.smooth_pose = published.pose;
+  result.relative_covariance = published.relative;
 
   result.pose = last_pose_ = pose;
   hand_out(frame, result);
@@ -399,6 +452,7 @@ TrackStep KeyframeOdometry::track(const core::RgbdFrame& frame) {
   previous_ = current_;
   previous_frame_ = frame.index;
   previous_timestamp_ = frame.timestamp;
+  previous_uncompensated_ = current_uncompensated_;
   previous_pose_ = pose;
   T_m_previous_ = keyframe_pose_.inverse() * pose;
   have_previous_ = have_frame_ = true;

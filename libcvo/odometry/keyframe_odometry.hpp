@@ -26,15 +26,18 @@
 //
 // Depth-time compensation: the colour and depth images of a Kinect are not taken together (TUM
 // stamps differ by up to ±17 ms, plus SelectionParameters::depth_time_offset_s). Each frame's
-// points are selected with colour_T_depth, the last velocity scaled to that interval
+// points are selected with colour_T_depth, the velocity (below) scaled to that interval
 // (PointSelector::select explains the rest); what it gains on fr1/rpy: bench/odometry-tuning.md.
-// The velocity of both compensations (depth time, rolling shutter) is the published motion of the
-// last interval, P_{n-2}^{-1} P_{n-1}, not the last frame-to-frame registration alone: a
-// compensation moves frame n's points by whatever error its velocity has, that error enters
-// T_{n-1}^n and through it the next velocity, so a one-registration velocity makes the published
-// increments jitter. The published motion carries the keyframe registration's information as
-// well, over the same interval (no more lag). The frame-to-frame registration still starts from
-// the last frame-to-frame result (the constant-velocity guess).
+// The velocity of both compensations (depth time, rolling shutter) is frame n's own motion. The
+// frame is first selected with the published motion of the last interval, P_{n-2}^{-1} P_{n-1}
+// (not the last frame-to-frame registration alone, whose error would move the next frame's points
+// and through them the next velocity: the increments would jitter); a frame-to-frame registration
+// from the last frame-to-frame result measures T_{n-1}^n on those points; and the frame is selected
+// again with that. A camera that turns faster or slower than in the last interval (a hand-held
+// camera's shaking) is compensated for the motion it has, not the one it had 1.5 frames before.
+// Both registrations then run on the second selection, the frame-to-frame one from the first's
+// result at ℓ_min. A frame with nothing to compensate (a global shutter, depth stamped with the
+// colour) is selected and registered once.
 //
 // Failures never crash and never jump: a frame whose points cannot be selected, or whose two
 // registrations both fail, keeps the constant-velocity prediction, is marked, and the next usable
@@ -54,6 +57,7 @@
 #include "libcvo/odometry/local_graph.hpp"
 #include "libcvo/odometry/motion_redundancy.hpp"
 #include "libcvo/odometry/pose_covariance.hpp"
+#include "libcvo/odometry/smooth_position.hpp"
 #include "libcvo/odometry/track_result.hpp"
 #include "libcvo/odometry/variance_factor.hpp"
 #include "libcvo/registration/point_cloud.hpp"
@@ -111,10 +115,11 @@ struct TrackStep : TrackResult {
   // (a camera carried elsewhere, covered, shaken). The caller ends the session (finish(), reset())
   // and tracks the next frame as the first of a new one, which the back end localizes afresh.
   bool lost = false;
-  // Covariance of the published relative pose T_{n-1}^n = P_{n-1}⁻¹ P_n, right perturbation
-  // (T = T̄ exp(ξ)), [rho; phi] as core::SE3 (pose_covariance.hpp has the maths), completed with
-  // what the smooth motion and the stamps reveal (motion_redundancy.hpp); none for a frame without
-  // a measured motion (the first frame, a restart, a failure).
+  // Covariance of the published relative pose T_{n-1}^n = S_{n-1}⁻¹ S_n, S the smooth pose,
+  // right perturbation (T = T̄ exp(ξ)), [rho; phi] as core::SE3: the tracked relative pose's
+  // (pose_covariance.hpp has the maths), completed with what the smooth motion and the stamps
+  // reveal (motion_redundancy.hpp), its translation block the filter's (smooth_position.hpp);
+  // none for a frame without a measured motion (the first frame, a restart, a failure).
   std::optional<core::Matrix6d> relative_covariance;
   // Covariance of the published odometry pose P_n, right perturbation, accumulated along the
   // keyframe chain since the session's first frame (zero there); carried unchanged by a failure.
@@ -150,7 +155,10 @@ class KeyframeOdometry {
     core::SE3 chain, T_mn;
     core::Matrix6d chain_information = core::Matrix6d::Zero();  // what the fusion gave the chain (0: not fused)
   };
-  Registrations register_frame(TrackResult& result);
+  Registrations register_frame(TrackResult& result, double f2f_ell_start);
+  double select_with_own_motion(const core::RgbdFrame& frame, TrackResult& result);
+  bool reselect(const core::RgbdFrame& frame, int cloud);
+  [[nodiscard]] double f2f_ell_start() const;
   bool keyframe_trips(const Registrations& r, TrackResult& result);
   core::SE3 track_registered(const core::RgbdFrame& frame, const core::SE3& predicted, TrackStep& result);
   core::SE3 add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r, TrackStep& result);
@@ -188,10 +196,15 @@ class KeyframeOdometry {
   double velocity_dt_ = 0;           // colour-stamp seconds velocity_ spans; 0: none yet
   core::SE3 compensation_velocity_;  // the compensations' velocity (see the header)
   double compensation_dt_ = 0;       // colour-stamp seconds it spans; 0: none yet
+  core::SE3 last_compensation_velocity_;  // what the current frame was first selected with
+  double last_compensation_dt_ = 0;
+  bool current_uncompensated_ = false;   // the current frame needs compensation and had no velocity
+  bool previous_uncompensated_ = false;  // ... the previous frame (see select_with_own_motion)
   core::SE3 last_pose_;              // the last published pose (tracked or predicted)
   PoseCovarianceChain covariance_chain_;
   VarianceFactor variance_factor_;      // of this session's registrations (variance_factor.hpp)
-  MotionRedundancy motion_redundancy_;  // of its published increments (motion_redundancy.hpp)
+  MotionRedundancy motion_redundancy_;  // of its tracked increments (motion_redundancy.hpp)
+  SmoothPosition smooth_position_;      // the published pose's filter (smooth_position.hpp)
 
   // The previous frame (n-1), sharing the caller's images: the keyframe when one is made at n-1.
   core::RgbdFrame previous_images_;

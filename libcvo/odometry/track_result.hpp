@@ -6,6 +6,7 @@
 // marked by its status, so the caller can tell a measured pose from a guessed one; the pose never
 // jumps silently.
 #include <cstddef>
+#include <optional>
 
 #include "libcvo/core/se3.hpp"
 #include "libcvo/registration/point_selection.hpp"
@@ -23,7 +24,10 @@ const char* to_string(TrackStatus status);
 
 struct TrackResult {
   TrackStatus status = TrackStatus::kFirstFrame;
-  core::SE3 pose;         // T_world_camera of this frame
+  core::SE3 pose;         // T_world_camera of this frame, as tracked
+  // The pose a controller reads, where a tracker smooths it (KF-CVO: the tracked rotation, the
+  // position through smooth_position.hpp's filter); none: `pose` is published as it is.
+  std::optional<core::SE3> smooth_pose;
   core::SE3 motion;       // T_previous_current: this camera in the frame of the previous frame's camera
   bool keyframe = false;  // a new keyframe was made (never in frame-to-frame mode: it has none)
   registration::SelectionStatus selection_status = registration::SelectionStatus::kOk;
@@ -37,6 +41,9 @@ struct TrackResult {
   double frame_registration_ms = 0;     // the frame-to-frame align() (eq. 7)
   double keyframe_registration_ms = 0;  // the keyframe-to-frame align() (eq. 8)
   double gamma_ms = 0;                  // the inner products of γ (eq. 9)
+
+  /// What the tracker publishes for this frame (cvo-run --out, CVO_POSE's odom_pose).
+  [[nodiscard]] const core::SE3& published_pose() const { return smooth_pose ? *smooth_pose : pose; }
 
   /// The pose was measured (or is the first frame's), not predicted.
   [[nodiscard]] bool tracked() const { return status == TrackStatus::kOk || status == TrackStatus::kFirstFrame; }

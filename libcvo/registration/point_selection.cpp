@@ -77,6 +77,27 @@ RawDepthRange valid_raw_depths(float min_raw, float max_raw) {
   return {static_cast<std::uint16_t>(first), static_cast<std::uint16_t>(last)};
 }
 
+// The raw depth at (u, v) averaged over its (2r+1)² window: the valid depths within
+// `tolerance` · d of the pixel's own d (SelectionParameters::depth_window). 0 when d is not valid.
+float window_depth(const cv::Mat& depth, int u, int v, int r, float tolerance, RawDepthRange valid) {
+  const std::uint16_t centre = depth.at<std::uint16_t>(v, u);
+  if (centre < valid.lo || centre > valid.hi) return 0;
+  if (r <= 0) return centre;
+  const float band = tolerance * static_cast<float>(centre);
+  float sum = 0;
+  int n = 0;
+  for (int y = std::max(0, v - r); y <= std::min(depth.rows - 1, v + r); ++y) {
+    const auto* row = depth.ptr<std::uint16_t>(y);
+    for (int x = std::max(0, u - r); x <= std::min(depth.cols - 1, u + r); ++x) {
+      const std::uint16_t d = row[x];
+      if (d < valid.lo || d > valid.hi || std::abs(static_cast<float>(d) - static_cast<float>(centre)) > band) continue;
+      sum += static_cast<float>(d);
+      ++n;
+    }
+  }
+  return sum / static_cast<float>(n);  // n >= 1: the centre itself
+}
+
 // The fields the ray table depends on.
 bool same_rays(const core::Intrinsics& a, const core::Intrinsics& b) {
   return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.distortion == b.distortion;
@@ -413,7 +434,8 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   // 1-3: grey and |g|, the region thresholds, the candidates with valid depth.
   const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
   const auto max_raw = static_cast<float>(parameters_.max_depth_m * K.depth_scale);
-  thresholds_and_candidates(frame, valid_raw_depths(min_raw, max_raw), result);
+  const RawDepthRange valid = valid_raw_depths(min_raw, max_raw);
+  thresholds_and_candidates(frame, valid, result);
   if (result.valid_depth_pixels == 0) {
     result.status = SelectionStatus::kNoValidDepth;
     return result;
@@ -437,13 +459,15 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const Eigen::Vector3f t_cd = colour_T_depth.translation().cast<float>();
   const float fx = static_cast<float>(K.fx), fy = static_cast<float>(K.fy);
   const RollingShutter shutter(K, twist);
+  const int window = parameters_.depth_window;
+  const auto tolerance = static_cast<float>(parameters_.depth_window_tolerance);
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
     if (best < 0) continue;
     const auto p = static_cast<std::size_t>(best);
     const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
     const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
-    const float z = static_cast<float>(frame.depth.at<std::uint16_t>(v, u)) * depth_inv;
+    const float z = window_depth(frame.depth, u, v, window, tolerance, valid) * depth_inv;
     const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
     const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
                     gradient_weight * (grey_[p + W] - grey_[p - W])};
@@ -461,8 +485,8 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     const auto [xd, yd] = distorted ? core::distort(K.distortion, x, y) : std::array<float, 2>{x, y};
     const auto ud = std::lround(fx * xd + cx), vd = std::lround(fy * yd + cy);
     if (ud < 0 || vd < 0 || ud >= width_ || vd >= height_) continue;
-    const auto raw = static_cast<float>(frame.depth.at<std::uint16_t>(static_cast<int>(vd), static_cast<int>(ud)));
-    if (raw <= 0 || raw < min_raw || raw > max_raw) continue;
+    const float raw = window_depth(frame.depth, static_cast<int>(ud), static_cast<int>(vd), window, tolerance, valid);
+    if (!(raw > 0)) continue;
     const Eigen::Vector3f P_c = R_cd * (P_d * (raw * depth_inv / P_d.z())) + t_cd;
     cloud.push_back(shutter.at_frame_time(P_c, v), f);
   }

@@ -370,7 +370,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
   const std::size_t nf = std::min(fixed.size(), capacity_), nm = std::min(moving.size(), capacity_);
 
   const double ell_min = std::min(parameters_.ell_min, parameters_.ell_init);
-  double ell = ell_start > 0 ? std::clamp(ell_start, ell_min, parameters_.ell_init) : parameters_.ell_init;
+  double ell = ell_start > 0 ? std::max(ell_start, ell_min) : parameters_.ell_init;
   build_grid(fixed, nf, ell, slots_ > 0 ? kSlackFraction : 0.0);
   visibility_ = parameters_.mutual_visibility;
   if (visibility_) {

@@ -104,7 +104,8 @@ class Registration {
 
   /// Maximises <f_X, T.f_Z> from `initial`, the length-scale going from `ell_start` (0: ℓ_init)
   /// to ℓ_min. A guess already within a few millimetres (another registration's result) needs no
-  /// wide basin: starting at ℓ_min saves the coarse iterations.
+  /// wide basin: starting at ℓ_min saves the coarse iterations; a guess with no motion model
+  /// behind it may need a wider one than ℓ_init.
   RegistrationResult align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial,
                            double ell_start = 0);
 

@@ -63,7 +63,9 @@ TEST(PointSelection, DeterministicAndBackProjectsToTheScene) {
   const auto K = *core::camera_preset("synthetic");
   const auto pose = testing::camera_looking_north();
   const auto frame = sim::render(scene, K, pose);
-  PointSelector selector(640, 480, core::SelectionParameters{});
+  core::SelectionParameters own_depth;  // the pixel's own depth: exact on any surface
+  own_depth.depth_window = 0;
+  PointSelector selector(640, 480, own_depth);
   PointCloud a(8192), b(8192);
   selector.select(frame, a);
   selector.select(frame, b);
@@ -108,6 +110,40 @@ TEST(PointSelection, DepthTimeCompensationPutsPointsBackOnTheSurface) {
   EXPECT_GT(at(plain, 0.5), 0.01);
   EXPECT_LT(at(compensated, 0.5), 0.002);
   EXPECT_LT(at(compensated, 0.9), 0.01);
+}
+
+// A frame with the Kinect-like noise of the renderer (independent per pixel): a point's depth from
+// its pixel alone scatters about the surface by the sensor's noise, the mean over its window's
+// pixels on the same surface by a fraction of it; and the window never reaches across a depth
+// edge (no point pulled off its surface toward another).
+TEST(PointSelection, TheDepthWindowAveragesTheSensorNoiseOnThePointsSurface) {
+  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  const auto K = *core::camera_preset("synthetic");
+  const auto pose = testing::camera_looking_north();
+  sim::NoiseOptions noise;
+  noise.enabled = true;
+  const core::RgbdFrame frame = sim::render(scene, K, pose, noise, 7);
+  const auto surface_errors = [&](int window) {
+    core::SelectionParameters p;
+    p.depth_window = window;
+    PointCloud cloud(8192);
+    EXPECT_EQ(PointSelector(640, 480, p).select(frame, cloud).status, SelectionStatus::kOk);
+    std::vector<double> d;
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+      d.push_back(sim::distance_to_surface(scene, pose * cloud.position(i).cast<double>()));
+    EXPECT_GT(d.size(), 2000u);
+    return d;
+  };
+  const auto median = [](std::vector<double> d) {
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+    return d[d.size() / 2];
+  };
+  const auto far = [](const std::vector<double>& d) { return std::count_if(d.begin(), d.end(), [](double x) { return x > 0.03; }); };
+  const auto own = surface_errors(0), window = surface_errors(2);
+  std::printf("distance to the surface, median: the pixel's own depth %.2f mm, the 5x5 window's %.2f mm; beyond 3 cm: %td, %td\n",
+              1e3 * median(own), 1e3 * median(window), far(own), far(window));
+  EXPECT_LT(median(window), 0.5 * median(own));
+  EXPECT_LE(far(window), far(own));
 }
 
 TEST(PointSelection, GradientWeightScalesTheGradientLabel) {

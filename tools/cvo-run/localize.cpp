@@ -114,7 +114,7 @@ odometry::TrackResult Localizer::track(const core::RgbdFrame& frame) {
     return step;
   }
   // The state as it stood when the frame was tracked: its own keyframe is seen after.
-  s.count(s.mapper.session(s.session).state, frame, step.pose);
+  s.count(s.mapper.session(s.session).state, frame, step.published_pose());
   if (const auto& g = step.closed_graph) s.mapper.add_local_graph(s.session, g->keyframe_id, *g->graph);
   if (const auto& k = step.new_keyframe)
     s.mapper.add_keyframe({s.session, k->id, k->frame, k->pose, *k->cloud, s.robot});

@@ -258,7 +258,7 @@ core::Trajectory stream(io::TumSequence& sequence, Track&& track, tools::RunRepo
     const auto start = Clock::now();
     const odometry::TrackResult r = track(*frame);
     report.track_ms.push_back(core::ms_since(start));
-    trajectory.push_back({frame->timestamp, r.pose});
+    trajectory.push_back({frame->timestamp, r.published_pose()});
     report.points.push_back(static_cast<double>(r.points));
     if (r.iterations > 0) report.iterations.push_back(r.iterations);
     if (r.keyframe) ++keyframes;
