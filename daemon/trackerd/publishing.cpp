@@ -146,7 +146,8 @@ void Publishing::publish(const Event& event) {
     own_keyframes_.clear();
     own_next_ = 0;
   }
-  if (event.has_pose && event.pose.keyframe_odom_pose) remember_keyframe(event.pose.keyframe_id, *event.pose.keyframe_odom_pose);
+  if (event.has_pose && event.pose.keyframe_odom_pose)
+    remember_keyframe(event.pose.keyframe_id, *event.pose.keyframe_odom_pose);
   if (event.has_pose && event.pose.keyframe_id >= 0) history().made(event.session, event.pose.keyframe_id);
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = outbox.graph(event.graph_slot);

@@ -190,17 +190,17 @@ class KeyframeOdometry {
 
   std::uint64_t previous_frame_ = 0;
   double previous_timestamp_ = 0;
-  core::SE3 previous_pose_;          // P_{n-1}
-  core::SE3 T_m_previous_;           // T_m^{n-1}
-  core::SE3 velocity_;               // T_{n-2}^{n-1}
-  double velocity_dt_ = 0;           // colour-stamp seconds velocity_ spans; 0: none yet
-  core::SE3 compensation_velocity_;  // the compensations' velocity (see the header)
-  double compensation_dt_ = 0;       // colour-stamp seconds it spans; 0: none yet
+  core::SE3 previous_pose_;               // P_{n-1}
+  core::SE3 T_m_previous_;                // T_m^{n-1}
+  core::SE3 velocity_;                    // T_{n-2}^{n-1}
+  double velocity_dt_ = 0;                // colour-stamp seconds velocity_ spans; 0: none yet
+  core::SE3 compensation_velocity_;       // the compensations' velocity (see the header)
+  double compensation_dt_ = 0;            // colour-stamp seconds it spans; 0: none yet
   core::SE3 last_compensation_velocity_;  // what the current frame was first selected with
   double last_compensation_dt_ = 0;
   bool current_uncompensated_ = false;   // the current frame needs compensation and had no velocity
   bool previous_uncompensated_ = false;  // ... the previous frame (see select_with_own_motion)
-  core::SE3 last_pose_;              // the last published pose (tracked or predicted)
+  core::SE3 last_pose_;                  // the last published pose (tracked or predicted)
   PoseCovarianceChain covariance_chain_;
   VarianceFactor variance_factor_;      // of this session's registrations (variance_factor.hpp)
   MotionRedundancy motion_redundancy_;  // of its tracked increments (motion_redundancy.hpp)

@@ -54,10 +54,10 @@ SmoothStep smooth(SmoothPosition& state, double timestamp, const core::SE3& trac
   } else {
     const Vector3d a = (v - state.last_velocity) / (0.5 * (dt + state.last_dt));
     const double sample = a.squaredNorm() / 3;
-    state.acceleration_variance = state.measured == 2 ? sample
-                                                      : state.acceleration_variance +
-                                                            (1 - std::exp(-dt / kAccelerationWindow_s)) *
-                                                                (sample - state.acceleration_variance);
+    state.acceleration_variance = state.measured == 2
+                                      ? sample
+                                      : state.acceleration_variance + (1 - std::exp(-dt / kAccelerationWindow_s)) *
+                                                                          (sample - state.acceleration_variance);
     const core::Matrix6d F = transition(dt);
     const core::Matrix6d P_last = state.P;
     const core::Matrix6d P_prior = F * P_last * F.transpose() + process_noise(state.acceleration_variance, dt);

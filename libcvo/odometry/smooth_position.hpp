@@ -47,16 +47,16 @@ struct SmoothPosition {
   core::Matrix6d P = core::Matrix6d::Zero();
   double acceleration_variance = 0;  // σ_a², per axis
   double last_time = 0;
-  Eigen::Vector3d last_position = Eigen::Vector3d::Zero();   // tracked p_{n-1}
-  Eigen::Vector3d last_velocity = Eigen::Vector3d::Zero();   // tracked (p_{n-1} − p_{n-2}) / Δt_{n-1}
+  Eigen::Vector3d last_position = Eigen::Vector3d::Zero();  // tracked p_{n-1}
+  Eigen::Vector3d last_velocity = Eigen::Vector3d::Zero();  // tracked (p_{n-1} − p_{n-2}) / Δt_{n-1}
   double last_dt = 0;
   int measured = 0;  // frames with a measured motion since the filter started (0: not started)
 };
 
 /// What the filter publishes for one frame.
 struct SmoothStep {
-  core::SE3 pose;                                // the tracked rotation, the filtered position
-  std::optional<core::Matrix6d> relative;        // covariance of the smooth relative pose T_{n-1}^n
+  core::SE3 pose;                          // the tracked rotation, the filtered position
+  std::optional<core::Matrix6d> relative;  // covariance of the smooth relative pose T_{n-1}^n
 };
 
 /// Frame n (colour stamp `timestamp`, tracked pose `tracked`, the tracked relative pose's

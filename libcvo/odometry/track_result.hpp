@@ -24,7 +24,7 @@ const char* to_string(TrackStatus status);
 
 struct TrackResult {
   TrackStatus status = TrackStatus::kFirstFrame;
-  core::SE3 pose;         // T_world_camera of this frame, as tracked
+  core::SE3 pose;  // T_world_camera of this frame, as tracked
   // The pose a controller reads, where a tracker smooths it (KF-CVO: the tracked rotation, the
   // position through smooth_position.hpp's filter); none: `pose` is published as it is.
   std::optional<core::SE3> smooth_pose;

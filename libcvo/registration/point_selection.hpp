@@ -12,7 +12,9 @@
 //     candidate; s is adapted (a few passes) so about `target_points` survive, spreading points
 //     over the whole image.
 //  4. Each point is back-projected with the intrinsics and labelled with its RGB and gradient:
-//     X = z · (x', y', 1) with z = raw_depth / depth_scale. Without lens distortion the ray is
+//     X = z · (x', y', 1) with z = raw_depth / depth_scale, raw_depth the mean of the valid depths
+//     of the (2r+1)² pixels around it within a fraction of its own (its surface;
+//     SelectionParameters::depth_window says why). Without lens distortion the ray is
 //     x' = (u - cx) / fx, y' = (v - cy) / fy. With distortion (core::Intrinsics::distortion) it
 //     is the undistorted ray of pixel (u, v), read from a per-pixel table that cv::undistortPoints
 //     fills once per intrinsics. This assumes, as for TUM fr1/fr2, that depth is registered in the

@@ -299,8 +299,8 @@ TEST(KeyframeOdometry, ASessionThatStartsTurningAtFullSpeedIsTrackedFromItsFirst
   const auto p = path_frames([](double t) { return sim::path_pose(sim::PathKind::rpy, t); }, 4, 0.0,
                              *core::camera_preset("synthetic"), noise, 0);
   const auto errors = increment_errors_deg(p, 1);
-  std::printf("rpy path from its start: rotation error of the first pairs %.3f %.3f %.3f deg\n", errors[0],
-              errors[1], errors[2]);
+  std::printf("rpy path from its start: rotation error of the first pairs %.3f %.3f %.3f deg\n", errors[0], errors[1],
+              errors[2]);
   for (const double e : errors) EXPECT_LT(e, 0.2);
 }
 

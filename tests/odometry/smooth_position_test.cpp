@@ -74,26 +74,31 @@ std::pair<Eigen::Vector3d, Eigen::Matrix3d> shaken(double t) {
           Eigen::AngleAxisd(0.5 * std::sin(2 * M_PI * t), Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix()};
 }
 
+// One-frame and position errors, tracked and published, of a run.
+struct Errors {
+  double one_frame_tracked, one_frame_published, position_tracked, position_published;
+};
+Errors errors_of(const FilterRun& r, const char* name) {
+  const Errors e{one_frame_rms(r.tracked, r.truth), one_frame_rms(r.smooth, r.truth), position_rms(r.tracked, r.truth),
+                 position_rms(r.smooth, r.truth)};
+  std::printf("%s: one-frame error %.2f mm tracked, %.2f mm published; position %.2f / %.2f mm\n", name,
+              1e3 * e.one_frame_tracked, 1e3 * e.one_frame_published, 1e3 * e.position_tracked,
+              1e3 * e.position_published);
+  return e;
+}
+
 TEST(SmoothPosition, OnASmoothDriveItSmoothsTheOneFrameErrorAndKeepsThePosition) {
-  const Eigen::Vector3d sigma(0.001, 0.002, 0.004);
-  const FilterRun r = run(circle, sigma, 600);
-  const double raw = one_frame_rms(r.tracked, r.truth), filtered = one_frame_rms(r.smooth, r.truth);
-  std::printf("smooth drive: one-frame error %.2f mm tracked, %.2f mm published; position %.2f / %.2f mm\n",
-              1e3 * raw, 1e3 * filtered, 1e3 * position_rms(r.tracked, r.truth), 1e3 * position_rms(r.smooth, r.truth));
-  EXPECT_LT(filtered, 0.8 * raw);  // σ_a² holds the noise too: a bound, not a best fit (the header)
-  EXPECT_LT(position_rms(r.smooth, r.truth), position_rms(r.tracked, r.truth));
+  const Errors e = errors_of(run(circle, Eigen::Vector3d(0.001, 0.002, 0.004), 600), "smooth drive");
+  EXPECT_LT(e.one_frame_published, 0.8 * e.one_frame_tracked);  // σ_a² holds the noise too: a bound (the header)
+  EXPECT_LT(e.position_published, e.position_tracked);
 }
 
 // The acceleration variance is measured from what the filter sees: a camera that shakes gets a
 // filter that follows it (no lag beyond the noise) and still smooths what is noise.
 TEST(SmoothPosition, FollowsAShakenCamera) {
-  const Eigen::Vector3d sigma(0.0005, 0.0005, 0.001);
-  const FilterRun r = run(shaken, sigma, 600);
-  const double raw = one_frame_rms(r.tracked, r.truth), filtered = one_frame_rms(r.smooth, r.truth);
-  std::printf("shaken camera: one-frame error %.2f mm tracked, %.2f mm published; position %.2f / %.2f mm\n",
-              1e3 * raw, 1e3 * filtered, 1e3 * position_rms(r.tracked, r.truth), 1e3 * position_rms(r.smooth, r.truth));
-  EXPECT_LT(filtered, raw);
-  EXPECT_LT(position_rms(r.smooth, r.truth), 1.5 * position_rms(r.tracked, r.truth));
+  const Errors e = errors_of(run(shaken, Eigen::Vector3d(0.0005, 0.0005, 0.001), 600), "shaken camera");
+  EXPECT_LT(e.one_frame_published, e.one_frame_tracked);
+  EXPECT_LT(e.position_published, 1.5 * e.position_tracked);
 }
 
 // The published translation covariance is the smooth increment's, in frame n's axes (the noise is

@@ -138,10 +138,14 @@ TEST(PointSelection, TheDepthWindowAveragesTheSensorNoiseOnThePointsSurface) {
     std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
     return d[d.size() / 2];
   };
-  const auto far = [](const std::vector<double>& d) { return std::count_if(d.begin(), d.end(), [](double x) { return x > 0.03; }); };
+  const auto far = [](const std::vector<double>& d) {
+    return std::count_if(d.begin(), d.end(), [](double x) { return x > 0.03; });
+  };
   const auto own = surface_errors(0), window = surface_errors(2);
-  std::printf("distance to the surface, median: the pixel's own depth %.2f mm, the 5x5 window's %.2f mm; beyond 3 cm: %td, %td\n",
-              1e3 * median(own), 1e3 * median(window), far(own), far(window));
+  std::printf(
+      "distance to the surface, median: the pixel's own depth %.2f mm, the 5x5 window's %.2f mm; beyond 3 cm: %td, "
+      "%td\n",
+      1e3 * median(own), 1e3 * median(window), far(own), far(window));
   EXPECT_LT(median(window), 0.5 * median(own));
   EXPECT_LE(far(window), far(own));
 }

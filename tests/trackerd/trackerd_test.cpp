@@ -163,6 +163,19 @@ TEST(Trackerd, TracksAFolderToTheEndAndPublishesEverything) {
   EXPECT_LT(rpe.translation.rmse, 0.10);
   EXPECT_LT(rpe.rotation_deg.rmse, 8.0);
   EXPECT_LT(ate.error.rmse, 0.06);
+  // odom_pose is the library's published pose, the smooth one (smooth_position.hpp), frame for
+  // frame what cvo-run --mode kf-cvo writes; the keyframes keep the tracked pose they are anchored at.
+  const auto kf_cvo = cvo::testing::run_tool(
+      "cvo-run", cvo::testing::quoted(kClip) + " --mode kf-cvo --out " + cvo::testing::quoted(dir.path() / "kf.txt"),
+      dir.path());
+  ASSERT_EQ(kf_cvo.exit_code, 0) << kf_cvo.err;
+  const auto published = io::read_tum_trajectory(dir.path() / "kf.txt");
+  const auto odom = odom_trajectory(log.poses);
+  ASSERT_EQ(published.size(), odom.size());
+  double furthest = 0;
+  for (std::size_t i = 0; i < odom.size(); ++i)
+    furthest = std::max(furthest, (published[i].pose.translation() - odom[i].pose.translation()).norm());
+  EXPECT_LT(furthest, 1e-6) << "CVO_POSE's odom_pose against cvo-run's published pose (m)";
 
   // cvo-log turns the recording into what scripts use: a TUM trajectory and the last status.
   const auto poses = cvo::testing::run_tool(
