@@ -338,7 +338,7 @@ double KeyframeOdometry::select_with_own_motion(const core::RgbdFrame& frame, Tr
 // `frame` selected again into clouds_[cloud] with the compensations' velocity; where that leaves
 // too few points, as it was selected before (without a velocity, or with the last interval's).
 bool KeyframeOdometry::reselect(const core::RgbdFrame& frame, int cloud) {
-  const auto selection = selector_.select(frame, clouds_[cloud], colour_T_depth(frame), twist(frame));
+  const auto selection = selector_.reselect(frame, clouds_[cloud], colour_T_depth(frame), twist(frame));
   if (usable(selection.status) && clouds_[cloud].size() >= 3) return true;
   const core::SE3 velocity = std::exchange(compensation_velocity_, last_compensation_velocity_);
   const double dt = std::exchange(compensation_dt_, last_compensation_dt_);

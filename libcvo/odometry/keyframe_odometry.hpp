@@ -33,11 +33,11 @@
 // (not the last frame-to-frame registration alone, whose error would move the next frame's points
 // and through them the next velocity: the increments would jitter); a frame-to-frame registration
 // from the last frame-to-frame result measures T_{n-1}^n on those points; and the frame is selected
-// again with that. A camera that turns faster or slower than in the last interval (a hand-held
-// camera's shaking) is compensated for the motion it has, not the one it had 1.5 frames before.
-// Both registrations then run on the second selection, the frame-to-frame one from the first's
-// result at ℓ_min. A frame with nothing to compensate (a global shutter, depth stamped with the
-// colour) is selected and registered once.
+// again with that (its pixels back-projected anew, PointSelector::reselect). A camera that turns
+// faster or slower than in the last interval (a hand-held camera's shaking) is compensated for the
+// motion it has, not the one it had 1.5 frames before. Both registrations then run on the second
+// selection, the frame-to-frame one from the first's result at ℓ_min. A frame with nothing to
+// compensate (a global shutter, depth stamped with the colour) is selected and registered once.
 //
 // Failures never crash and never jump: a frame whose points cannot be selected, or whose two
 // registrations both fail, keeps the constant-velocity prediction, is marked, and the next usable

@@ -80,22 +80,25 @@ RawDepthRange valid_raw_depths(float min_raw, float max_raw) {
 // The raw depth at (u, v) averaged over its (2r+1)² window: the valid depths within
 // `tolerance` · d of the pixel's own d (SelectionParameters::depth_window). 0 when d is not valid.
 float window_depth(const cv::Mat& depth, int u, int v, int r, float tolerance, RawDepthRange valid) {
-  const std::uint16_t centre = depth.at<std::uint16_t>(v, u);
+  const int centre = depth.at<std::uint16_t>(v, u);
   if (centre < valid.lo || centre > valid.hi) return 0;
-  if (r <= 0) return centre;
-  const float band = tolerance * static_cast<float>(centre);
-  float sum = 0;
-  int n = 0;
+  if (r <= 0) return static_cast<float>(centre);
+  // The surface's depths [lo, hi]: within the band of the centre and valid (integers, no branch in
+  // the loop: the window is read a few thousand times a frame).
+  const int band = static_cast<int>(tolerance * static_cast<float>(centre));
+  const int lo = std::max<int>(valid.lo, centre - band), hi = std::min<int>(valid.hi, centre + band);
+  int sum = 0, n = 0;
+  const int x0 = std::max(0, u - r), x1 = std::min(depth.cols - 1, u + r);
   for (int y = std::max(0, v - r); y <= std::min(depth.rows - 1, v + r); ++y) {
     const auto* row = depth.ptr<std::uint16_t>(y);
-    for (int x = std::max(0, u - r); x <= std::min(depth.cols - 1, u + r); ++x) {
-      const std::uint16_t d = row[x];
-      if (d < valid.lo || d > valid.hi || std::abs(static_cast<float>(d) - static_cast<float>(centre)) > band) continue;
-      sum += static_cast<float>(d);
-      ++n;
+    for (int x = x0; x <= x1; ++x) {
+      const int d = row[x];
+      const int in = static_cast<int>(d >= lo) & static_cast<int>(d <= hi);
+      sum += in * d;
+      n += in;
     }
   }
-  return sum / static_cast<float>(n);  // n >= 1: the centre itself
+  return static_cast<float>(sum) / static_cast<float>(n);  // n >= 1: the centre itself
 }
 
 // The fields the ray table depends on.
@@ -418,6 +421,7 @@ void PointSelector::build_ray_table(const core::Intrinsics& K) {
 SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
                                       const core::Vector6d& twist) {
   cloud.clear();
+  last_ = {};
   SelectionResult result;
   if (frame.bgr.empty() || frame.depth.empty() || frame.bgr.cols != width_ || frame.bgr.rows != height_ ||
       frame.depth.cols != width_ || frame.depth.rows != height_) {
@@ -429,7 +433,6 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     return result;
   }
   const auto& K = frame.intrinsics;
-  const auto W = static_cast<std::size_t>(width_);
 
   // 1-3: grey and |g|, the region thresholds, the candidates with valid depth.
   const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
@@ -443,8 +446,32 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   const int s = choose_cell_size(result.candidates);
   choose_winners(s);
   result.cell_size = s;
+  last_ = {frame.bgr.data, frame.depth.data, frame.index, frame.timestamp, result};
+  back_project(frame, cloud, colour_T_depth, twist, result);
+  return result;
+}
 
-  // 4. Back-project the winners, in row-major order of their cells (deterministic).
+SelectionResult PointSelector::reselect(const core::RgbdFrame& frame, PointCloud& cloud,
+                                        const core::SE3& colour_T_depth, const core::Vector6d& twist) {
+  if (!last_.result || frame.bgr.data != last_.bgr || frame.depth.data != last_.depth || frame.index != last_.index ||
+      frame.timestamp != last_.timestamp)
+    return select(frame, cloud, colour_T_depth, twist);
+  cloud.clear();
+  SelectionResult result = *last_.result;
+  result.status = SelectionStatus::kOk;
+  back_project(frame, cloud, colour_T_depth, twist, result);
+  return result;
+}
+
+// 4. Back-project the winners, in row-major order of their cells (deterministic).
+void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
+                                 const core::Vector6d& twist, SelectionResult& result) {
+  const auto& K = frame.intrinsics;
+  const auto W = static_cast<std::size_t>(width_);
+  const int s = result.cell_size;
+  const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
+  const auto max_raw = static_cast<float>(parameters_.max_depth_m * K.depth_scale);
+  const RawDepthRange valid = valid_raw_depths(min_raw, max_raw);
   const bool distorted = K.has_distortion();
   if (distorted && (rays_.empty() || !same_rays(K, ray_intrinsics_))) build_ray_table(K);
   const int cells = ((width_ + s - 1) / s) * ((height_ + s - 1) / s);
@@ -492,7 +519,6 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   }
   result.selected = cloud.size();
   if (cloud.overflowed() > 0) result.status = SelectionStatus::kCapacityClamped;
-  return result;
 }
 
 }  // namespace cvo::registration

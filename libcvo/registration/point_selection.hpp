@@ -26,6 +26,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <opencv2/core/mat.hpp>
@@ -85,6 +86,13 @@ class PointSelector {
   SelectionResult select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth = core::SE3(),
                          const core::Vector6d& twist = core::Vector6d::Zero());
 
+  /// `frame`, the one the last select() was given, selected again at another compensation: steps
+  /// 1-3 depend on its images alone, so its winners are back-projected anew (step 4), the very
+  /// points select() would give at that compensation, at a fraction of the cost. Any other frame
+  /// (another index, stamp or image buffer) is selected in full.
+  SelectionResult reselect(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
+                           const core::Vector6d& twist = core::Vector6d::Zero());
+
   [[nodiscard]] int width() const { return width_; }
   [[nodiscard]] int height() const { return height_; }
 
@@ -102,6 +110,18 @@ class PointSelector {
   std::size_t count_for_cell_size(int s);
   void choose_winners(int s);
   void build_ray_table(const core::Intrinsics& intrinsics);
+  void back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
+                    const core::Vector6d& twist, SelectionResult& result);
+
+  // The frame the last select() chose winners for (reselect()); no result: none.
+  struct LastSelection {
+    const void* bgr = nullptr;
+    const void* depth = nullptr;
+    std::uint64_t index = 0;
+    double timestamp = 0;
+    std::optional<SelectionResult> result;
+  };
+  LastSelection last_;
 
   int width_, height_;
   core::SelectionParameters parameters_;

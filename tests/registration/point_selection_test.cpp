@@ -150,6 +150,43 @@ TEST(PointSelection, TheDepthWindowAveragesTheSensorNoiseOnThePointsSurface) {
   EXPECT_LE(far(window), far(own));
 }
 
+// reselect(): the frame of the last select() at another compensation gives the very points a full
+// select() gives there; another frame is selected in full.
+TEST(PointSelection, ReselectingAtAnotherCompensationGivesWhatSelectGives) {
+  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  const auto K = *core::camera_preset("synthetic");
+  const auto pose = testing::camera_looking_north();
+  const core::SE3 M(core::so3_exp(Eigen::Vector3d(0.0, 1.0 * M_PI / 180.0, 0.0)), Eigen::Vector3d(0.01, 0.0, 0.02));
+  core::RgbdFrame frame = sim::render(scene, K, pose);
+  frame.depth = sim::render(scene, K, pose * M).depth;
+  frame.index = 7;
+  PointSelector selector(640, 480, core::SelectionParameters{});
+  PointCloud first(8192), again(8192), full(8192);
+  selector.select(frame, first, core::SE3());
+  const auto r = selector.reselect(frame, again, M);
+  PointSelector fresh(640, 480, core::SelectionParameters{});
+  const auto f = fresh.select(frame, full, M);
+  ASSERT_EQ(r.status, f.status);
+  EXPECT_EQ(r.selected, f.selected);
+  EXPECT_EQ(r.cell_size, f.cell_size);
+  ASSERT_EQ(again.size(), full.size());
+  bool moved = false;
+  for (std::size_t i = 0; i < full.size(); ++i) {
+    ASSERT_EQ(again.position(i), full.position(i)) << "point " << i;
+    ASSERT_EQ(again.feature(i), full.feature(i));
+    moved = moved || (i < first.size() && first.position(i) != full.position(i));
+  }
+  EXPECT_TRUE(moved) << "the compensation moves points";
+  // Another frame (another index) is selected in full, not back-projected with the last winners.
+  core::RgbdFrame other = sim::render(scene, K, pose * core::SE3::from_translation(Eigen::Vector3d(0.3, 0, 0)));
+  other.index = 8;
+  PointCloud reselected(8192), selected(8192);
+  selector.reselect(other, reselected, core::SE3());
+  fresh.select(other, selected, core::SE3());
+  ASSERT_EQ(reselected.size(), selected.size());
+  for (std::size_t i = 0; i < selected.size(); ++i) ASSERT_EQ(reselected.position(i), selected.position(i));
+}
+
 TEST(PointSelection, GradientWeightScalesTheGradientLabel) {
   const auto frame = rendered(sim::SceneKind::textured_room);
   core::SelectionParameters full, half, none;
