@@ -76,11 +76,12 @@ SmoothStep smooth(SmoothPosition& state, double timestamp, const core::SE3& trac
     state.x = x;
     state.P = P;
     core::Matrix6d published = *relative;
-    published.topLeftCorner<3, 3>() = Rn.transpose() * increment * Rn;
+    const Matrix3d in_frame_n = Rn.transpose() * increment * Rn;
+    published.topLeftCorner<3, 3>() = 0.5 * (in_frame_n + in_frame_n.transpose());
     published.topRightCorner<3, 3>().setZero();
     published.bottomLeftCorner<3, 3>().setZero();
     state.last_velocity = v, state.last_dt = dt, state.last_position = p, state.last_time = timestamp;
-    ++state.measured;
+    state.measured = 3;  // filtering: only 0, 1, 2 and more are told apart
     return {core::SE3(tracked.rotation(), x.head<3>()), published};
   }
   state.last_velocity = v, state.last_dt = dt, state.last_position = p, state.last_time = timestamp;

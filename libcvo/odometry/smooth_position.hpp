@@ -50,7 +50,7 @@ struct SmoothPosition {
   Eigen::Vector3d last_position = Eigen::Vector3d::Zero();  // tracked p_{n-1}
   Eigen::Vector3d last_velocity = Eigen::Vector3d::Zero();  // tracked (p_{n-1} − p_{n-2}) / Δt_{n-1}
   double last_dt = 0;
-  int measured = 0;  // frames with a measured motion since the filter started (0: not started)
+  int measured = 0;  // frames since the filter started: 0 not started, 1, 2, 3 filtering
 };
 
 /// What the filter publishes for one frame.
