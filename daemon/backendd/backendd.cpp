@@ -50,6 +50,19 @@
 namespace cvo::daemon::backendd {
 namespace {
 
+// Why the back end stopped asking for keyframes (KeyframeGaps::GivenUp::Reason), for its note.
+std::string why_given_up(KeyframeGaps::GivenUp::Reason reason) {
+  using Reason = KeyframeGaps::GivenUp::Reason;
+  switch (reason) {
+    case Reason::kSilent: return "asked again, and its tracker is no longer heard";
+    case Reason::kUnanswered: return "asked again while its tracker ran, with no answer: it no longer holds them";
+    case Reason::kNoAsking: return "a recording cannot be asked again";
+    case Reason::kBounds: return "beyond what is waited for (a gap older than any tracker keeps, or too many)";
+    case Reason::kStopped: return "the back end stopped while waiting";
+  }
+  return "unknown";
+}
+
 using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 constexpr const char* kProcess = "cvo-backendd";
@@ -511,8 +524,8 @@ void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
   for (const auto& g : round.given_up) {
     const std::string which = g.first == g.last ? "keyframe " + std::to_string(g.first)
                                                 : "keyframes " + std::to_string(g.first) + "-" + std::to_string(g.last);
-    notes_.note_limited("keyframes lost",
-                        "gave up on " + which + " of session " + core::session_name(g.session) + ": never came (lost)");
+    notes_.note_limited("keyframes lost", "gave up on " + which + " of session " + core::session_name(g.session) +
+                                              ": never came (lost): " + why_given_up(g.reason));
   }
   if (gaps_.recovered() > keyframes_recovered_)
     notes_.note_limited("keyframes recovered",

@@ -15,7 +15,8 @@ KeyframeGaps::Session& KeyframeGaps::session(std::int64_t id, Clock::time_point 
       const auto oldest = std::min_element(sessions_.begin(), sessions_.end(), [](const auto& a, const auto& b) {
         return a.second.last_seen < b.second.last_seen;
       });
-      for (const auto& [missing_id, m] : oldest->second.missing) give_up(oldest->first, missing_id, missing_id);
+      for (const auto& [missing_id, m] : oldest->second.missing)
+        give_up(oldest->first, missing_id, missing_id, GivenUp::Reason::kBounds);
       missing_ -= oldest->second.missing.size();
       sessions_.erase(oldest);
     }
@@ -74,7 +75,7 @@ void KeyframeGaps::expect(std::int64_t session_id, Session& s, std::int64_t keyf
     const auto first = s.missing.lower_bound(lo), last = s.missing.lower_bound(cut);
     missing_ -= static_cast<std::size_t>(std::distance(first, last));
     s.missing.erase(first, last);  // counted in the range given up
-    give_up(session_id, lo, cut - 1);
+    give_up(session_id, lo, cut - 1, GivenUp::Reason::kBounds);
     lo = cut;
   }
   for (std::int64_t id = lo; id < hi; ++id) {
@@ -85,7 +86,7 @@ void KeyframeGaps::expect(std::int64_t session_id, Session& s, std::int64_t keyf
     if (inserted) {
       if (missing_ >= policy_.max_missing) {
         s.missing.erase(it);
-        give_up(session_id, id, id);
+        give_up(session_id, id, id, GivenUp::Reason::kBounds);
         continue;
       }
       ++missing_;
@@ -110,16 +111,30 @@ void KeyframeGaps::came(Session& s, std::int64_t id, bool keyframe) {
   --missing_;
 }
 
-void KeyframeGaps::give_up(std::int64_t session, std::int64_t first, std::int64_t last) {
+void KeyframeGaps::give_up(std::int64_t session, std::int64_t first, std::int64_t last, GivenUp::Reason reason) {
   lost_ += last - first + 1;
-  if (!given_up_.empty() && given_up_.back().session == session && given_up_.back().last + 1 == first)
+  if (!given_up_.empty() && given_up_.back().session == session && given_up_.back().last + 1 == first &&
+      given_up_.back().reason == reason)
     given_up_.back().last = last;
   else
-    given_up_.push_back({session, first, last});
+    given_up_.push_back({session, first, last, reason});
 }
 
+// retry_wait doubled after each request; past `requests`, at most max_retry_wait.
 KeyframeGaps::Clock::duration KeyframeGaps::wait_after(int requests) const {
-  return policy_.retry_wait * (std::int64_t{1} << std::clamp(requests - 1, 0, 20));
+  const Clock::duration doubled = policy_.retry_wait * (std::int64_t{1} << std::clamp(requests - 1, 0, 20));
+  return requests >= policy_.requests ? std::min<Clock::duration>(doubled, policy_.max_retry_wait) : doubled;
+}
+
+// Why asking for `m` is over (see the header), or nothing while it goes on.
+std::optional<KeyframeGaps::GivenUp::Reason> KeyframeGaps::done_asking(const Session& s, const Missing& m,
+                                                                       Clock::time_point now) const {
+  using Reason = GivenUp::Reason;
+  if (policy_.requests <= 0) return Reason::kNoAsking;
+  if (m.requests < policy_.requests) return std::nullopt;
+  if (now - s.last_seen > policy_.alive_window) return Reason::kSilent;
+  if (now - m.first_request >= policy_.give_up_after) return Reason::kUnanswered;
+  return std::nullopt;
 }
 
 KeyframeGaps::Round KeyframeGaps::due(Clock::time_point now) {
@@ -131,14 +146,14 @@ KeyframeGaps::Round KeyframeGaps::due(Clock::time_point now) {
       Missing& m = it->second;
       if (m.next > now) {
         ++it;
-      } else if (m.requests >= policy_.requests) {  // asked often enough (or never to be asked)
-        give_up(session_id, it->first, it->first);
+      } else if (const auto reason = done_asking(s, m, now)) {
+        give_up(session_id, it->first, it->first, *reason);
         it = s.missing.erase(it);
         --missing_;
       } else {
         if (budget > 0) {  // else due in a later round, not counted as asked
           --budget;
-          if (m.requests++ == 0) ++requested_;
+          if (m.requests++ == 0) ++requested_, m.first_request = now;
           m.next = now + wait_after(m.requests);
           request.ids.push_back(it->first);
         }
@@ -154,7 +169,7 @@ KeyframeGaps::Round KeyframeGaps::due(Clock::time_point now) {
 
 std::vector<KeyframeGaps::GivenUp> KeyframeGaps::give_up_all() {
   for (auto& [session_id, s] : sessions_) {
-    for (const auto& [id, m] : s.missing) give_up(session_id, id, id);
+    for (const auto& [id, m] : s.missing) give_up(session_id, id, id, GivenUp::Reason::kStopped);
     s.missing.clear();
   }
   missing_ = 0;

@@ -2,8 +2,14 @@
 // cvo-backendd's bookkeeping of keyframes lost in transport (LCM over UDP drops a large message
 // whole when a socket buffer overflows). Per tracker session it knows which keyframes and local
 // graphs should have come and have not, says when to ask the tracker for them again
-// (CVO_KEYFRAME_REQUEST, a few times with back-off) and when to give up. No LCM here: cvo-receive
-// tells it what it saw and sends the requests it hands out.
+// (CVO_KEYFRAME_REQUEST, with back-off) and when to give up. No LCM here: cvo-receive tells it what
+// it saw and sends the requests it hands out.
+//
+// How long it asks (issue 28): `requests` times in any case; then on, the wait capped at
+// max_retry_wait, for as long as the session's tracker is heard (a pose, keyframe or local graph of
+// the session within alive_window: a live tracker may still answer once its link clears), up to
+// give_up_after from the first request (a tracker that no longer holds the keyframe never will).
+// What it gives up on says why (GivenUp::Reason).
 //
 // What a message says should have come, in its session (the tracker publishes keyframe k's local
 // graph just before keyframe k+1, and names the keyframe of every pose):
@@ -18,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <vector>
 
 namespace cvo::daemon::backendd {
@@ -29,6 +36,11 @@ struct GapPolicy {
   // (0: never ask, give up at once: a recording cannot answer).
   std::chrono::milliseconds retry_wait{500};
   int requests = 4;
+  // After those, while the tracker is heard within alive_window: again every max_retry_wait at
+  // most, until give_up_after from the first request.
+  std::chrono::milliseconds alive_window{2000};
+  std::chrono::milliseconds max_retry_wait{4000};
+  std::chrono::milliseconds give_up_after{60000};
   // Requests go out at most once per round_interval, for at most ids_per_round keyframes (each
   // answer is a burst of large messages that must not overflow the socket again); at most
   // keyframe_request_t::MAX_IDS.
@@ -61,14 +73,22 @@ class KeyframeGaps {
     std::vector<std::int64_t> ids;  // ascending
   };
   struct GivenUp {  // keyframes first..last of a session, lost
+    enum class Reason {
+      kSilent,      // asked `requests` times, and the tracker is no longer heard
+      kUnanswered,  // asked for give_up_after while the tracker was heard
+      kNoAsking,    // requests == 0: nothing to ask (a recording)
+      kBounds,      // beyond max_gap, max_missing or max_sessions
+      kStopped,     // the back end stopped
+    };
     std::int64_t session = 0, first = 0, last = 0;
+    Reason reason = Reason::kSilent;
   };
   struct Round {
     std::vector<Request> requests;  // to send now
     std::vector<GivenUp> given_up;  // since the last round
   };
   /// What to do now: the requests due (within the round's budget; the rest stay due) and what was
-  /// given up (asked `requests` times and not come, or beyond the bounds).
+  /// given up, and why (see the header).
   Round due(Clock::time_point now);
   /// At a stop: everything still waited for is given up (and counted lost).
   std::vector<GivenUp> give_up_all();
@@ -83,6 +103,7 @@ class KeyframeGaps {
     bool keyframe = false, graph = false;  // what has not come
     int requests = 0;                      // sent so far
     Clock::time_point next;                // the next request, or giving up once all were sent
+    Clock::time_point first_request;       // when it was first asked for
   };
   struct Session {
     std::int64_t keyframes_until = 0;  // every keyframe id below came, or is in `missing`, or was given up
@@ -95,8 +116,10 @@ class KeyframeGaps {
   void expect(std::int64_t session, Session& s, std::int64_t keyframes_until, std::int64_t graphs_until,
               Clock::time_point now);
   void came(Session& s, std::int64_t id, bool keyframe);
-  void give_up(std::int64_t session, std::int64_t first, std::int64_t last);
+  void give_up(std::int64_t session, std::int64_t first, std::int64_t last, GivenUp::Reason reason);
   [[nodiscard]] Clock::duration wait_after(int requests) const;
+  [[nodiscard]] std::optional<GivenUp::Reason> done_asking(const Session& s, const Missing& m,
+                                                           Clock::time_point now) const;
 
   GapPolicy policy_;
   std::map<std::int64_t, Session> sessions_;

@@ -133,12 +133,65 @@ TEST(KeyframeGaps, AsksAgainWithBackOffThenGivesUpAndCountsItLost) {
   EXPECT_EQ(round.given_up[0].session, kSession);
   EXPECT_EQ(round.given_up[0].first, 2);
   EXPECT_EQ(round.given_up[0].last, 2);
+  EXPECT_EQ(round.given_up[0].reason, KeyframeGaps::GivenUp::Reason::kSilent) << "nothing heard since t0";
   EXPECT_EQ(gaps.requested(), 1) << "one keyframe asked for, however often";
   EXPECT_EQ(gaps.lost(), 1);
   EXPECT_EQ(gaps.recovered(), 0);
   gaps.seen(Seen::kKeyframe, kSession, 2, t0 + 4s);  // too late: it stays counted lost, not recovered
   EXPECT_EQ(gaps.recovered(), 0);
   EXPECT_TRUE(gaps.due(t0 + 1h).requests.empty());
+}
+
+// Issue 28: past its `requests`, the back end keeps asking while the session's tracker is heard
+// (its poses), every max_retry_wait at most, and gives up once it is silent, saying so.
+TEST(KeyframeGaps, KeepsAskingWithBackOffWhileItsTrackerIsHeard) {
+  GapPolicy policy;
+  policy.requests = 3;
+  KeyframeGaps gaps(policy);
+  send(gaps, 0, 2, t0);
+  gaps.seen(Seen::kLocalGraph, kSession, 1, t0);
+  gaps.seen(Seen::kKeyframe, kSession, 3, t0);  // keyframe 2 lost
+  std::vector<Clock::time_point> asked_at;
+  Clock::time_point now = t0;
+  for (; now < t0 + 30s; now += 100ms) {
+    gaps.seen(Seen::kPose, kSession, 3, now);  // the tracker runs: a pose every 100 ms
+    if (!asked(gaps.due(now)).empty()) asked_at.push_back(now);
+  }
+  ASSERT_GE(asked_at.size(), 8u) << "asked again for as long as the tracker runs";
+  EXPECT_EQ(asked_at[0], t0 + 100ms);
+  EXPECT_EQ(asked_at[1] - asked_at[0], 500ms);
+  EXPECT_EQ(asked_at[2] - asked_at[1], 1s);
+  EXPECT_EQ(asked_at[3] - asked_at[2], 2s);
+  for (std::size_t i = 4; i < asked_at.size(); ++i) EXPECT_EQ(asked_at[i] - asked_at[i - 1], 4s) << "capped";
+  EXPECT_EQ(gaps.lost(), 0);
+  // The tracker falls silent: once asking is due again and nothing was heard for alive_window.
+  std::vector<KeyframeGaps::GivenUp> given_up;
+  for (; given_up.empty() && now < t0 + 60s; now += 100ms) given_up = gaps.due(now).given_up;
+  ASSERT_EQ(given_up.size(), 1u);
+  EXPECT_EQ(given_up[0].first, 2);
+  EXPECT_EQ(given_up[0].reason, KeyframeGaps::GivenUp::Reason::kSilent);
+  EXPECT_EQ(gaps.lost(), 1);
+}
+
+// A tracker that runs but never answers (it no longer holds the keyframe) is asked for
+// give_up_after from the first request, not for ever.
+TEST(KeyframeGaps, GivesUpOnATrackerThatRunsButNeverAnswers) {
+  GapPolicy policy;
+  policy.give_up_after = 20s;
+  KeyframeGaps gaps(policy);
+  send(gaps, 0, 2, t0);
+  gaps.seen(Seen::kLocalGraph, kSession, 1, t0);
+  gaps.seen(Seen::kKeyframe, kSession, 3, t0);
+  std::vector<KeyframeGaps::GivenUp> given_up;
+  Clock::time_point now = t0;
+  for (; given_up.empty() && now < t0 + 60s; now += 100ms) {
+    gaps.seen(Seen::kPose, kSession, 3, now);
+    given_up = gaps.due(now).given_up;
+  }
+  ASSERT_EQ(given_up.size(), 1u);
+  EXPECT_EQ(given_up[0].reason, KeyframeGaps::GivenUp::Reason::kUnanswered);
+  EXPECT_GE(now - t0, 20s);
+  EXPECT_LE(now - t0, 25s);
 }
 
 TEST(KeyframeGaps, TheGraphOfAKeyframeGivenUpIsNotCountedAgain) {
@@ -149,12 +202,12 @@ TEST(KeyframeGaps, TheGraphOfAKeyframeGivenUpIsNotCountedAgain) {
   gaps.seen(Seen::kPose, kSession, 3, t0);  // keyframe 3 lost (and graph 2)
   EXPECT_EQ(asked(gaps.due(t0 + 1s)), (Ids{2, 3}));
   gaps.seen(Seen::kLocalGraph, kSession, 2, t0 + 1s);
-  EXPECT_EQ(gaps.due(t0 + 2s).given_up.size(), 1u);  // keyframe 3: never came
+  EXPECT_EQ(gaps.due(t0 + 3500ms).given_up.size(), 1u);  // keyframe 3: never came, the tracker silent
   EXPECT_EQ(gaps.lost(), 1);
-  gaps.seen(Seen::kGraphWithoutKeyframe, kSession, 3, t0 + 3s);  // its graph at the session's end
-  gaps.seen(Seen::kKeyframe, kSession, 4, t0 + 3s);              // and the session goes on
-  gaps.seen(Seen::kLocalGraph, kSession, 4, t0 + 3s);
-  gaps.seen(Seen::kKeyframe, kSession, 5, t0 + 3s);
+  gaps.seen(Seen::kGraphWithoutKeyframe, kSession, 3, t0 + 4s);  // its graph at the session's end
+  gaps.seen(Seen::kKeyframe, kSession, 4, t0 + 4s);              // and the session goes on
+  gaps.seen(Seen::kLocalGraph, kSession, 4, t0 + 4s);
+  gaps.seen(Seen::kKeyframe, kSession, 5, t0 + 4s);
   EXPECT_TRUE(gaps.due(t0 + 1h).given_up.empty());
   EXPECT_EQ(gaps.give_up_all().size(), 0u);
   EXPECT_EQ(gaps.lost(), 1);
@@ -188,6 +241,7 @@ TEST(KeyframeGaps, ARecordingIsNeverAskedItsGapsAreLostAtOnce) {
   EXPECT_TRUE(round.requests.empty());
   ASSERT_EQ(round.given_up.size(), 1u);
   EXPECT_EQ(round.given_up[0].first, 1);
+  EXPECT_EQ(round.given_up[0].reason, KeyframeGaps::GivenUp::Reason::kNoAsking);
   EXPECT_EQ(gaps.requested(), 0);
   EXPECT_EQ(gaps.lost(), 1);
 }
@@ -201,6 +255,7 @@ TEST(KeyframeGaps, AStopGivesUpWhatIsStillWaitedFor) {
   ASSERT_EQ(given_up.size(), 1u);
   EXPECT_EQ(given_up[0].first, 1);
   EXPECT_EQ(given_up[0].last, 4);
+  EXPECT_EQ(given_up[0].reason, KeyframeGaps::GivenUp::Reason::kStopped);
   EXPECT_EQ(gaps.lost(), 4);
   EXPECT_EQ(gaps.missing(), 0u);
 }
@@ -235,6 +290,7 @@ TEST(KeyframeGaps, AForgedIdAsksOnlyForTheNewestAndGivesUpTheRest) {
   ASSERT_EQ(round.given_up.size(), 1u);
   EXPECT_EQ(round.given_up[0].first, 1);
   EXPECT_EQ(round.given_up[0].last, kForged - 9);
+  EXPECT_EQ(round.given_up[0].reason, KeyframeGaps::GivenUp::Reason::kBounds);
   EXPECT_EQ(gaps.lost(), kForged - 9);
 }
 
