@@ -363,6 +363,15 @@ void Backendd::receive_loop() {
     }
   } poses{this, &verifier};
   lcm.subscribe("CVO_POSE", &PoseHandler::handle, &poses);
+  struct StatusHandler {
+    Backendd* self;
+    auth::Verifier* verifier;
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
+      if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
+        self->saw_status(buffer->data, buffer->data_size);
+    }
+  } statuses{this, &verifier};
+  lcm.subscribe("CVO_STATUS", &StatusHandler::handle, &statuses);
   const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
     receive_heartbeat_.beat();
@@ -494,6 +503,20 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
       posed_[pose->session] = Clock::now();  // live: its correction goes again once a status period
   }
   if (lost) queue_.push({LostSession{pose->session}, Clock::now()});
+}
+
+// A tracker's CVO_STATUS says its session is alive though it sends no pose (its camera ended or
+// paused): the keyframes it lost in transport are still asked for (keyframe_gaps.hpp).
+void Backendd::saw_status(const void* data, std::size_t size) {
+  std::string error;
+  auto failure = lcm::DecodeFailure::kBody;
+  const auto status = lcm::decode<cvo_lcm::status_t>(data, static_cast<int>(size), &error, &failure);
+  if (!status) {
+    const auto why = static_cast<std::size_t>(failure);
+    ++bad_messages_[why];
+    return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_STATUS: " + error);
+  }
+  if (status->process == "cvo-trackerd") gaps_.heard(status->session, Clock::now());
 }
 
 // A log cannot answer: what it lacks is lost as soon as it is noticed.

@@ -116,6 +116,7 @@ class Backendd {
   std::optional<std::int64_t> authentic(auth::Verifier& verifier, const std::string& channel, const void* data,
                                         std::size_t size);
   void saw_pose(const void* data, std::size_t size);
+  void saw_status(const void* data, std::size_t size);
   void ask_for_missing(::lcm::LCM& lcm, bool stopping);
   static GapPolicy gap_policy(const config::Config& config);
   void note_store_change();

@@ -61,6 +61,10 @@ void KeyframeGaps::seen(Seen what, std::int64_t session_id, std::int64_t id, Clo
   }
 }
 
+void KeyframeGaps::heard(std::int64_t session_id, Clock::time_point now) {
+  if (const auto it = sessions_.find(session_id); it != sessions_.end()) it->second.last_seen = now;
+}
+
 // Keyframes [s.keyframes_until, keyframes_until) and local graphs [s.graphs_until, graphs_until)
 // should have come: each not yet waited for is, from now on.
 void KeyframeGaps::expect(std::int64_t session_id, Session& s, std::int64_t keyframes_until, std::int64_t graphs_until,

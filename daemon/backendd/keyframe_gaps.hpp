@@ -6,8 +6,9 @@
 // it saw and sends the requests it hands out.
 //
 // How long it asks (issue 28): `requests` times in any case; then on, the wait capped at
-// max_retry_wait, for as long as the session's tracker is heard (a pose, keyframe or local graph of
-// the session within alive_window: a live tracker may still answer once its link clears), up to
+// max_retry_wait, for as long as the session's tracker is heard (a pose, keyframe, local graph or
+// CVO_STATUS of the session within alive_window: a live tracker may still answer once its link
+// clears), up to
 // give_up_after from the first request (a tracker that no longer holds the keyframe never will).
 // What it gives up on says why (GivenUp::Reason).
 //
@@ -67,6 +68,9 @@ class KeyframeGaps {
     kPose,                  // CVO_POSE: a frame tracked against keyframe `id`
   };
   void seen(Seen what, std::int64_t session, std::int64_t id, Clock::time_point now);
+  /// The session's tracker was heard otherwise (its CVO_STATUS): it is alive, and may still answer.
+  /// A session not known here is not remembered for it.
+  void heard(std::int64_t session, Clock::time_point now);
 
   struct Request {
     std::int64_t session = 0;

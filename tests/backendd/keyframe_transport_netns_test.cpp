@@ -1,10 +1,11 @@
 // No keyframe lost in transport: a real cvo-trackerd on the embedded clip publishes on one LCM
 // multicast group, a real cvo-backendd listens on another, and a relay between them (this test)
-// loses every third CVO_KEYFRAME the first time it is sent, as an overflowing socket buffer would;
-// re-sends pass. The relay forwards CVO_KEYFRAME, CVO_LOCAL_GRAPH and CVO_POSE to the back end,
-// CVO_KEYFRAME_REQUEST and CVO_MAP to the tracker. The back end notices each gap, asks the tracker
-// again, and its final map (after SIGTERM) holds every keyframe the tracker made; both processes'
-// CVO_STATUS count what was asked for and recovered, and nothing lost.
+// loses every third CVO_KEYFRAME the first five times it is sent (as a lossy link would; the back
+// end asked four times before issue 28, so these would have been lost); the sixth passes. The relay
+// forwards CVO_KEYFRAME, CVO_LOCAL_GRAPH, CVO_POSE and CVO_STATUS (a tracker whose clip has ended
+// is heard by its status alone) to the back end, CVO_KEYFRAME_REQUEST and CVO_MAP to the tracker. The back end notices
+// each gap, asks the tracker again, and its final map (after SIGTERM) holds every keyframe the tracker made; both
+// processes' CVO_STATUS count what was asked for and recovered, and nothing lost.
 //
 // Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1): lo alone, no packet can
 // leave the host.
@@ -19,6 +20,7 @@
 #include <filesystem>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <regex>
@@ -56,8 +58,8 @@ constexpr const char* kTrackerUrl = "udpm://239.255.76.68:7668?ttl=0&recv_buf_si
 struct RelayLog {
   std::set<KeyframeName> made;                      // every keyframe the tracker's poses name (ids from 0)
   std::set<KeyframeName> sent;                      // every CVO_KEYFRAME the tracker sent
-  std::set<KeyframeName> dropped;                   // lost on purpose, the first time each was sent
-  int resent = 0;                                   // CVO_KEYFRAMEs sent again (passed)
+  std::set<KeyframeName> dropped;                   // lost on purpose, the first kDroppedSends times sent
+  int resent = 0;                                   // CVO_KEYFRAMEs sent again that passed
   int requests = 0;                                 // CVO_KEYFRAME_REQUESTs passed to the tracker
   std::int64_t last_frame = -1;                     // the newest frame index of the tracker's poses
   std::optional<cvo_lcm::status_t> tracker_status;  // the tracker's newest CVO_STATUS
@@ -99,13 +101,12 @@ class Relay {
 
   void from_tracker(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
     const auto size = static_cast<int>(buffer->data_size);
-    if (channel == "CVO_STATUS") {  // for the test; the back end has no use for it
+    if (channel == "CVO_STATUS") {  // for the test, and for the back end: the tracker is alive
       if (auto s = lcm::decode<cvo_lcm::status_t>(buffer->data, size, nullptr); s && s->process == "cvo-trackerd") {
         const std::lock_guard lock(mutex_);
         log_.tracker_status = std::move(*s);
       }
       changed_.notify_all();
-      return;
     }
     if (channel == "CVO_POSE") note_pose(buffer->data, size);
     if (channel == "CVO_KEYFRAME" && !pass_keyframe(buffer->data, size)) return;
@@ -131,20 +132,20 @@ class Relay {
     changed_.notify_all();
   }
 
-  // Every third keyframe is lost the first time it is sent; re-sends pass.
+  // Every third keyframe is lost the first kDroppedSends times it is sent; later sends pass.
+  static constexpr int kDroppedSends = 5;
   bool pass_keyframe(const void* data, int size) {
     const auto keyframe = lcm::decode<cvo_lcm::keyframe_t>(data, size, nullptr);
     if (!keyframe) return true;
     const KeyframeName name{keyframe->session, keyframe->id};
     const std::lock_guard lock(mutex_);
-    if (!log_.sent.insert(name).second) {
-      ++log_.resent;
-      return true;
-    }
-    if (log_.sent.size() % 3 != 0) return true;
-    log_.dropped.insert(name);
-    return false;
+    const int sends = ++sends_[name];
+    if (sends == 1 && log_.sent.insert(name).second && log_.sent.size() % 3 == 0) log_.dropped.insert(name);
+    if (log_.dropped.contains(name) && sends <= kDroppedSends) return false;
+    if (sends > 1) ++log_.resent;
+    return true;
   }
+  std::map<KeyframeName, int> sends_;  // under mutex_
 
   ::lcm::LCM tracker_side_, backend_side_;
   std::mutex mutex_;
@@ -154,7 +155,7 @@ class Relay {
   std::vector<std::thread> threads_;
 };
 
-TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeLeavesTheMapWhole) {
+TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeFiveTimesLeavesTheMapWhole) {
   if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
   cvo::test::TempDir dir;
   LcmCapture capture(dir.path() / "maps.lcmlog");
@@ -200,7 +201,10 @@ TEST(KeyframeTransport, ARelayThatLosesEveryThirdKeyframeLeavesTheMapWhole) {
   const Captured captured = capture.snapshot();
   ASSERT_TRUE(captured.map);
   EXPECT_TRUE(captured.map_holds(seen.made)) << logs();
-  EXPECT_EQ(captured.map->keyframes.size(), seen.made.size());
+  // Listed, or merged into a keyframe that covers it: one that comes seconds late, after both its
+  // neighbours, may be (libcvo/slam/mapper.hpp, revisits); its session still counts it.
+  EXPECT_LE(captured.map->keyframes.size(), seen.made.size());
+  EXPECT_GE(captured.map->keyframes.size(), seen.made.size() - seen.dropped.size());
   // And every keyframe's local graph, those refused while their keyframe was missing included.
   const auto backend_log = cvo::testing::slurp(backend_err);
   std::smatch graphs;
