@@ -354,24 +354,17 @@ void Backendd::receive_loop() {
   } keyframes{this, &verifier, RecordKind::kKeyframe}, local_graphs{this, &verifier, RecordKind::kLocalGraph};
   lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
   lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &local_graphs);
-  struct PoseHandler {
+  struct Heard {  // CVO_POSE and CVO_STATUS: verified, then what the back end learns of a session
     Backendd* self;
     auth::Verifier* verifier;
+    void (Backendd::*saw)(const void*, std::size_t);
     void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
       if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
-        self->saw_pose(buffer->data, buffer->data_size);
+        (self->*saw)(buffer->data, buffer->data_size);
     }
-  } poses{this, &verifier};
-  lcm.subscribe("CVO_POSE", &PoseHandler::handle, &poses);
-  struct StatusHandler {
-    Backendd* self;
-    auth::Verifier* verifier;
-    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
-      if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
-        self->saw_status(buffer->data, buffer->data_size);
-    }
-  } statuses{this, &verifier};
-  lcm.subscribe("CVO_STATUS", &StatusHandler::handle, &statuses);
+  } poses{this, &verifier, &Backendd::saw_pose}, statuses{this, &verifier, &Backendd::saw_status};
+  lcm.subscribe("CVO_POSE", &Heard::handle, &poses);
+  lcm.subscribe("CVO_STATUS", &Heard::handle, &statuses);
   const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
     receive_heartbeat_.beat();
@@ -482,17 +475,26 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
   }
 }
 
+// A message heard on `channel` (authentic already), decoded; one that does not decode is counted by
+// kind and noted.
+template <class Message>
+std::optional<Message> Backendd::decoded(const void* data, std::size_t size, const char* channel) {
+  std::string error;
+  auto failure = lcm::DecodeFailure::kBody;
+  auto message = lcm::decode<Message>(data, static_cast<int>(size), &error, &failure);
+  if (!message) {
+    const auto why = static_cast<std::size_t>(failure);
+    ++bad_messages_[why];
+    notes_.note_limited("refused " + std::to_string(why), std::string("skipped ") + channel + ": " + error);
+  }
+  return message;
+}
+
 // CVO_POSE names the keyframe each frame was tracked against: a keyframe lost in transport is
 // noticed while its tracker still runs, even a session's newest one.
 void Backendd::saw_pose(const void* data, std::size_t size) {
-  std::string error;
-  auto failure = lcm::DecodeFailure::kBody;
-  const auto pose = lcm::decode<cvo_lcm::pose_t>(data, static_cast<int>(size), &error, &failure);
-  if (!pose) {
-    const auto why = static_cast<std::size_t>(failure);
-    ++bad_messages_[why];
-    return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_POSE: " + error);
-  }
+  const auto pose = decoded<cvo_lcm::pose_t>(data, size, "CVO_POSE");
+  if (!pose) return;
   gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
   const bool lost = pose->state == cvo_lcm::pose_t::STATE_LOST;
   {
@@ -508,15 +510,8 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
 // A tracker's CVO_STATUS says its session is alive though it sends no pose (its camera ended or
 // paused): the keyframes it lost in transport are still asked for (keyframe_gaps.hpp).
 void Backendd::saw_status(const void* data, std::size_t size) {
-  std::string error;
-  auto failure = lcm::DecodeFailure::kBody;
-  const auto status = lcm::decode<cvo_lcm::status_t>(data, static_cast<int>(size), &error, &failure);
-  if (!status) {
-    const auto why = static_cast<std::size_t>(failure);
-    ++bad_messages_[why];
-    return notes_.note_limited("refused " + std::to_string(why), "skipped CVO_STATUS: " + error);
-  }
-  if (status->process == "cvo-trackerd") gaps_.heard(status->session, Clock::now());
+  const auto status = decoded<cvo_lcm::status_t>(data, size, "CVO_STATUS");
+  if (status && status->process == "cvo-trackerd") gaps_.heard(status->session, Clock::now());
 }
 
 // A log cannot answer: what it lacks is lost as soon as it is noticed.

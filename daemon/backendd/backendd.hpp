@@ -115,6 +115,8 @@ class Backendd {
   // The verified sender of an authentic, new buffer (cvo-receive); nullopt, counted by kind, when not.
   std::optional<std::int64_t> authentic(auth::Verifier& verifier, const std::string& channel, const void* data,
                                         std::size_t size);
+  template <class Message>
+  std::optional<Message> decoded(const void* data, std::size_t size, const char* channel);
   void saw_pose(const void* data, std::size_t size);
   void saw_status(const void* data, std::size_t size);
   void ask_for_missing(::lcm::LCM& lcm, bool stopping);

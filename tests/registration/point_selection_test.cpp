@@ -78,17 +78,27 @@ TEST(PointSelection, DeterministicAndBackProjectsToTheScene) {
   }
 }
 
+// A frame whose depth was taken after its colour image, the camera having moved by `motion` in
+// between (2 cm along the view, 1 cm sideways, 1°).
+struct LaggedDepth {
+  sim::Scene scene = sim::make_scene(sim::SceneKind::textured_room, 42);
+  core::SE3 pose = testing::camera_looking_north();
+  core::SE3 motion{core::so3_exp(Eigen::Vector3d(0.0, 1.0 * M_PI / 180.0, 0.0)), Eigen::Vector3d(0.01, 0.0, 0.02)};
+  core::RgbdFrame frame;
+  LaggedDepth() {
+    const auto K = *core::camera_preset("synthetic");
+    frame = sim::render(scene, K, pose);
+    frame.depth = sim::render(scene, K, pose * motion).depth;
+  }
+};
+
 // Depth taken after the colour image, the camera having moved by M in between (2 cm along the
 // view, 1 cm sideways, 1°): read at the colour pixels as they are, every depth is off by about
 // the 2 cm; with colour_T_depth = M each point is looked up where its ray was at the depth time
 // and lands back on the surface.
 TEST(PointSelection, DepthTimeCompensationPutsPointsBackOnTheSurface) {
-  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
-  const auto K = *core::camera_preset("synthetic");
-  const auto pose = testing::camera_looking_north();
-  const core::SE3 M(core::so3_exp(Eigen::Vector3d(0.0, 1.0 * M_PI / 180.0, 0.0)), Eigen::Vector3d(0.01, 0.0, 0.02));
-  core::RgbdFrame frame = sim::render(scene, K, pose);
-  frame.depth = sim::render(scene, K, pose * M).depth;
+  const LaggedDepth lagged;
+  const auto& [scene, pose, M, frame] = lagged;
   PointSelector selector(640, 480, core::SelectionParameters{});
   const auto surface_errors = [&](const core::SE3& colour_T_depth) {
     PointCloud cloud(8192);
@@ -153,13 +163,10 @@ TEST(PointSelection, TheDepthWindowAveragesTheSensorNoiseOnThePointsSurface) {
 // reselect(): the frame of the last select() at another compensation gives the very points a full
 // select() gives there; another frame is selected in full.
 TEST(PointSelection, ReselectingAtAnotherCompensationGivesWhatSelectGives) {
-  const auto scene = sim::make_scene(sim::SceneKind::textured_room, 42);
-  const auto K = *core::camera_preset("synthetic");
-  const auto pose = testing::camera_looking_north();
-  const core::SE3 M(core::so3_exp(Eigen::Vector3d(0.0, 1.0 * M_PI / 180.0, 0.0)), Eigen::Vector3d(0.01, 0.0, 0.02));
-  core::RgbdFrame frame = sim::render(scene, K, pose);
-  frame.depth = sim::render(scene, K, pose * M).depth;
-  frame.index = 7;
+  LaggedDepth lagged;
+  lagged.frame.index = 7;
+  const auto& [scene, pose, M, frame] = lagged;
+  const auto K = frame.intrinsics;
   PointSelector selector(640, 480, core::SelectionParameters{});
   PointCloud first(8192), again(8192), full(8192);
   selector.select(frame, first, core::SE3());
