@@ -8,8 +8,8 @@
 // How long it asks (issue 28): `requests` times in any case; then on, the wait capped at
 // max_retry_wait, for as long as the session's tracker is heard (a pose, keyframe, local graph or
 // CVO_STATUS of the session within alive_window: a live tracker may still answer once its link
-// clears), up to
-// give_up_after from the first request (a tracker that no longer holds the keyframe never will).
+// clears), up to give_up_after from the first request (a tracker that no longer holds the keyframe
+// never will).
 // What it gives up on says why (GivenUp::Reason).
 //
 // What a message says should have come, in its session (the tracker publishes keyframe k's local

@@ -342,7 +342,7 @@ bool KeyframeOdometry::reselect(const core::RgbdFrame& frame, int cloud) {
   if (usable(selection.status) && clouds_[cloud].size() >= 3) return true;
   const core::SE3 velocity = std::exchange(compensation_velocity_, last_compensation_velocity_);
   const double dt = std::exchange(compensation_dt_, last_compensation_dt_);
-  selector_.select(frame, clouds_[cloud], colour_T_depth(frame), twist(frame));
+  selector_.reselect(frame, clouds_[cloud], colour_T_depth(frame), twist(frame));
   compensation_velocity_ = velocity, compensation_dt_ = dt;
   return false;
 }

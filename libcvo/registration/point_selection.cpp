@@ -418,6 +418,12 @@ void PointSelector::build_ray_table(const core::Intrinsics& K) {
   ray_intrinsics_ = K;
 }
 
+// The raw depths in [min_depth_m, max_depth_m] of a camera's depth scale.
+RawDepthRange PointSelector::valid_depths(const core::Intrinsics& K) const {
+  return valid_raw_depths(static_cast<float>(parameters_.min_depth_m * K.depth_scale),
+                          static_cast<float>(parameters_.max_depth_m * K.depth_scale));
+}
+
 SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
                                       const core::Vector6d& twist) {
   cloud.clear();
@@ -432,13 +438,8 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     result.status = SelectionStatus::kBadImageType;
     return result;
   }
-  const auto& K = frame.intrinsics;
-
   // 1-3: grey and |g|, the region thresholds, the candidates with valid depth.
-  const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
-  const auto max_raw = static_cast<float>(parameters_.max_depth_m * K.depth_scale);
-  const RawDepthRange valid = valid_raw_depths(min_raw, max_raw);
-  thresholds_and_candidates(frame, valid, result);
+  thresholds_and_candidates(frame, valid_depths(frame.intrinsics), result);
   if (result.valid_depth_pixels == 0) {
     result.status = SelectionStatus::kNoValidDepth;
     return result;
@@ -469,9 +470,7 @@ void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud
   const auto& K = frame.intrinsics;
   const auto W = static_cast<std::size_t>(width_);
   const int s = result.cell_size;
-  const auto min_raw = static_cast<float>(parameters_.min_depth_m * K.depth_scale);
-  const auto max_raw = static_cast<float>(parameters_.max_depth_m * K.depth_scale);
-  const RawDepthRange valid = valid_raw_depths(min_raw, max_raw);
+  const RawDepthRange valid = valid_depths(K);
   const bool distorted = K.has_distortion();
   if (distorted && (rays_.empty() || !same_rays(K, ray_intrinsics_))) build_ray_table(K);
   const int cells = ((width_ + s - 1) / s) * ((height_ + s - 1) / s);

@@ -110,6 +110,7 @@ class PointSelector {
   std::size_t count_for_cell_size(int s);
   void choose_winners(int s);
   void build_ray_table(const core::Intrinsics& intrinsics);
+  [[nodiscard]] RawDepthRange valid_depths(const core::Intrinsics& K) const;
   void back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
                     const core::Vector6d& twist, SelectionResult& result);
 
