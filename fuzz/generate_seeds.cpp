@@ -2,6 +2,7 @@
 // tests' sample messages and a small real frame, so that each seed reaches past the fingerprint and
 // the counts into the conversions (real PNG and JPEG images included). The text corpora are written
 // by hand. Usage: fuzz-seeds OUT (fuzz/corpus).
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/merge_record.hpp"
 #include "fuzz/auth_harness.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
@@ -68,6 +70,69 @@ T checked(std::optional<T> value, const std::string& error) {
   return *value;
 }
 
+// The slices `order` (repeats allowed) of the encoded `message` (its trailer zero), named keyframe
+// `id`, with its content CRC xor `crc_xor` (0: the true one).
+std::vector<cvo_lcm::keyframe_chunk_t> slices(const std::vector<std::uint8_t>& message, std::int8_t kind,
+                                              std::int64_t id, const std::vector<std::int32_t>& order,
+                                              std::uint32_t crc_xor = 0) {
+  const cvo::lcm::SlicedName name{0x5e5510'0000'0001, id, kind};
+  const auto crc = cvo::lcm::content_crc(message.data(), message.size()) ^ crc_xor;
+  std::vector<cvo_lcm::keyframe_chunk_t> out;
+  for (const std::int32_t k : order) out.push_back(cvo::lcm::slice(message, name, crc, k));
+  return out;
+}
+
+// A seed of fuzz/fuzz_keyframe_chunk.cpp: each slice signed like every LCM seed, then framed as a
+// 2-byte big-endian length and its bytes.
+void write_chunks(const fs::path& file, const std::vector<cvo_lcm::keyframe_chunk_t>& chunks) {
+  cvo::auth::Signer signer(cvo::fuzz::fuzz_keys(), 0x5eed);
+  std::vector<std::uint8_t> framed;
+  for (const auto& chunk : chunks) {
+    auto bytes = cvo::lcm::encode(chunk);
+    signer.sign(cvo::fuzz::kFuzzChannel, bytes);
+    framed.push_back(static_cast<std::uint8_t>(bytes.size() >> 8));
+    framed.push_back(static_cast<std::uint8_t>(bytes.size() & 0xff));
+    framed.insert(framed.end(), bytes.begin(), bytes.end());
+  }
+  write_file(file, framed);
+}
+
+// The keyframe_chunk seeds: the sample keyframe (one slice), the sample local graph (two) and one of
+// many edges (eight), whole in order, out of order with repeats, with holes, under five names (more
+// than the harness's assembly holds), and with a conflicting and a wrong CRC.
+void write_chunk_seeds(const fs::path& dir) {
+  using Chunk = cvo_lcm::keyframe_chunk_t;
+  const auto keyframe = cvo::lcm::encode(cvo::test::sample_keyframe());
+  const auto graph = cvo::lcm::encode(cvo::test::sample_local_graph());
+  auto many = cvo::test::sample_local_graph();
+  for (int e = 0; e < 24; ++e) many.edges.push_back(many.edges[static_cast<std::size_t>(e % 3)]);
+  many.num_edges = static_cast<std::int32_t>(many.edges.size());
+  const auto big = cvo::lcm::encode(many);
+  const auto all = [](const std::vector<std::uint8_t>& message) {
+    std::vector<std::int32_t> order(static_cast<std::size_t>(cvo::lcm::slice_count(message.size())));
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<std::int32_t>(k);
+    return order;
+  };
+  const auto join = [](std::vector<Chunk> a, const std::vector<Chunk>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  write_chunks(dir / "in-order", join(slices(keyframe, Chunk::KEYFRAME, 5, all(keyframe)),
+                                      slices(graph, Chunk::LOCAL_GRAPH, 5, all(graph))));
+  auto backwards = all(big);  // last slice first, the last two sent twice
+  std::reverse(backwards.begin(), backwards.end());
+  const std::vector<std::int32_t> last_two(backwards.begin(), backwards.begin() + 2);
+  backwards.insert(backwards.begin() + 3, last_two.begin(), last_two.end());
+  write_chunks(dir / "out-of-order", slices(big, Chunk::LOCAL_GRAPH, 6, backwards));
+  write_chunks(dir / "holes", slices(big, Chunk::LOCAL_GRAPH, 6, {1, 3, 5, 1}));
+  std::vector<Chunk> names;
+  for (std::int64_t id = 10; id < 15; ++id) names = join(names, slices(big, Chunk::LOCAL_GRAPH, id, {0}));
+  write_chunks(dir / "eviction", join(names, slices(big, Chunk::LOCAL_GRAPH, 10, all(big))));
+  write_chunks(dir / "conflicting-crc",
+               join(join(slices(graph, Chunk::LOCAL_GRAPH, 5, {0}), slices(graph, Chunk::LOCAL_GRAPH, 5, {1}, 1)),
+                    join(slices(graph, Chunk::LOCAL_GRAPH, 5, {1}), slices(keyframe, Chunk::KEYFRAME, 5, {0}, 1))));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -106,6 +171,7 @@ int main(int argc, char** argv) try {
   write(out / "map_correction/sample", encode(cvo::test::sample_map_correction()));
   write(out / "status/sample", encode(cvo::test::sample_status()));
   write(out / "grid/sample", encode(cvo::test::sample_grid()));
+  write_chunk_seeds(out / "keyframe_chunk");
 
   // A keyframe store as cvo-backendd leaves it, then the same cut short in its last record (what a
   // crash during a write leaves).

@@ -15,6 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "cvo_lcm/grid_t.hpp"
+#include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
@@ -69,6 +70,8 @@ constexpr const char* kProcess = "cvo-backendd";
 // At a stop, messages already in the socket are taken in; a tracker that is still sending must
 // not keep the drain going for ever.
 constexpr int kMaxDrainMessages = 10000;
+// CVO_KEYFRAME_CHUNKs LCM may hold for cvo-receive: 32 keyframes' slices (~12 MB of datagrams).
+constexpr int kSliceQueue = 32 * 256;
 // Records that may wait in the store for the back end (each queued as a few bytes): hours of a
 // tracker's keyframes; beyond it live input is refused and counted (queue_drops).
 constexpr std::int64_t kMaxWaitingInStore = 16384;
@@ -354,6 +357,18 @@ void Backendd::receive_loop() {
   } keyframes{this, &verifier, RecordKind::kKeyframe}, local_graphs{this, &verifier, RecordKind::kLocalGraph};
   lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
   lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &local_graphs);
+  struct Slices {  // CVO_KEYFRAME_CHUNK: verified, then put together into its message
+    Backendd* self;
+    auth::Verifier* verifier;
+    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
+      if (const auto sender = self->authentic(*verifier, channel, buffer->data, buffer->data_size))
+        self->receive_slice(buffer->data, buffer->data_size, *sender);
+    }
+  } slices{this, &verifier};
+  // LCM drops what arrives for a subscription whose queue is full (30 messages by default): a
+  // keyframe is a burst of ~200 slices, and several trackers' bursts may meet while a keyframe
+  // completed is being stored.
+  lcm.subscribe("CVO_KEYFRAME_CHUNK", &Slices::handle, &slices)->setQueueCapacity(kSliceQueue);
   struct Heard {  // CVO_POSE and CVO_STATUS: verified, then what the back end learns of a session
     Backendd* self;
     auth::Verifier* verifier;
@@ -475,6 +490,49 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
   }
 }
 
+// CVO_KEYFRAME_CHUNK: a slice of a keyframe's or local graph's message (libcvo/lcm/chunks.hpp). A
+// slice of a message let in already is a repeat (or, with another CRC, a conflict); the others are
+// put together, and a message complete goes through the door as if it had come whole, from the
+// sender of its last slice (every slice was verified). A keyframe's slice says the keyframe exists:
+// should the rest not come, it is asked for (keyframe_gaps.hpp).
+void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t sender) {
+  const auto chunk = decoded<cvo_lcm::keyframe_chunk_t>(data, size, "CVO_KEYFRAME_CHUNK");
+  if (!chunk) return;
+  const bool graph = chunk->message == cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH;
+  const MessageKey key{graph ? RecordKind::kLocalGraph : RecordKind::kKeyframe, chunk->session, chunk->id};
+  const auto refuse = [&](std::size_t why, const std::string& detail) {
+    ++bad_messages_[why];
+    notes_.note_limited("refused " + std::to_string(why), detail);
+  };
+  if (door_.knows(key)) {
+    if (door_.check(key, static_cast<std::uint32_t>(chunk->message_crc)) == Admission::kConflict)
+      refuse(cvo_lcm::status_t::BAD_CONFLICT, "a slice of " + describe(key) + " with other content: refused");
+    return;  // a repeat: a slice re-sent for another, or late
+  }
+  if (!graph && chunk->id >= 0) gaps_.seen(KeyframeGaps::Seen::kPose, chunk->session, chunk->id, Clock::now());
+  gaps_.progressed(chunk->session, chunk->id, Clock::now());
+  auto added = slices_.add(*chunk);
+  using Outcome = lcm::ChunkAssembly::Added::Outcome;
+  if (added.outcome == Outcome::kRefused)
+    return refuse(static_cast<std::size_t>(added.refusal),
+                  "skipped CVO_KEYFRAME_CHUNK of " + describe(key) + ": " + added.why);
+  if (added.outcome != Outcome::kComplete) return;
+  const KeyframeName keyframe{key.session, key.id};
+  if (graph && !door_.knows({RecordKind::kKeyframe, key.session, key.id})) {
+    // Complete before its keyframe (whose slices are still missing some): kept for it, not refused
+    // and asked for again; past kMaxEarlyGraphs the first by name goes (asked for as any lost graph).
+    if (early_graphs_.size() >= kMaxEarlyGraphs) early_graphs_.erase(early_graphs_.begin());
+    early_graphs_[keyframe] = {std::move(added.message), sender};
+    return;
+  }
+  receive(key.kind, added.message.data(), added.message.size(), sender);
+  if (const auto early = early_graphs_.find(keyframe); !graph && early != early_graphs_.end()) {
+    const EarlyGraph g = std::move(early->second);
+    early_graphs_.erase(early);
+    receive(RecordKind::kLocalGraph, g.message.data(), g.message.size(), g.sender);
+  }
+}
+
 // A message heard on `channel` (authentic already), decoded; one that does not decode is counted by
 // kind and noted.
 template <class Message>
@@ -522,17 +580,50 @@ GapPolicy Backendd::gap_policy(const config::Config& config) {
   return policy;
 }
 
+// What a request asks of the tracker: of a keyframe nothing of which came, all of it (`ids`: the
+// keyframe, then its local graph); of one that came in part, the slices missing and all of its
+// local graph; of a local graph alone, its missing slices, or all of it. The ranges of one keyframe
+// are the closest holes merged, so that all fit the request (MAX_RANGES).
+cvo_lcm::keyframe_request_t Backendd::request_message(const KeyframeGaps::Request& request) const {
+  using Chunk = cvo_lcm::keyframe_chunk_t;
+  cvo_lcm::keyframe_request_t m{};
+  m.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
+  m.utime = core::wall_utime();
+  m.session = request.session;
+  const auto add_range = [&m](std::int64_t id, std::int8_t message, lcm::SliceRange r) {
+    m.range_ids.push_back(id);
+    m.range_messages.push_back(message);
+    m.range_first.push_back(r.first);
+    m.range_count.push_back(r.count);
+  };
+  const lcm::SliceRange all{0, std::numeric_limits<std::int32_t>::max()};
+  const std::size_t per_keyframe =
+      std::max<std::size_t>(2, cvo_lcm::keyframe_request_t::MAX_RANGES / std::max<std::size_t>(1, request.ids.size()));
+  for (const auto id : request.ids) {
+    const bool graph_only =
+        std::find(request.graphs_only.begin(), request.graphs_only.end(), id) != request.graphs_only.end();
+    const auto keyframe =
+        graph_only ? std::nullopt : slices_.missing({request.session, id, Chunk::KEYFRAME}, per_keyframe - 1);
+    if (!graph_only && !keyframe) {
+      m.ids.push_back(id);
+      continue;
+    }
+    for (const auto& r : keyframe.value_or(std::vector<lcm::SliceRange>{})) add_range(id, Chunk::KEYFRAME, r);
+    if (early_graphs_.contains({request.session, id})) continue;  // its graph came already
+    const auto graph = slices_.missing({request.session, id, Chunk::LOCAL_GRAPH}, 1);
+    add_range(id, Chunk::LOCAL_GRAPH, graph ? graph->front() : all);
+  }
+  m.num_ids = static_cast<std::int32_t>(m.ids.size());
+  m.num_ranges = static_cast<std::int32_t>(m.range_ids.size());
+  return m;
+}
+
 // cvo-receive: the requests due go out on CVO_KEYFRAME_REQUEST, what was given up is noted; at the
 // stop everything still waited for is given up. The counts go to CVO_STATUS.
 void Backendd::ask_for_missing(::lcm::LCM& lcm, bool stopping) {
   const auto round = stopping ? KeyframeGaps::Round{{}, gaps_.give_up_all()} : gaps_.due(Clock::now());
   for (const auto& request : round.requests) {
-    cvo_lcm::keyframe_request_t m{};
-    m.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
-    m.utime = core::wall_utime();
-    m.session = request.session;
-    m.ids = request.ids;
-    m.num_ids = static_cast<std::int32_t>(m.ids.size());
+    const cvo_lcm::keyframe_request_t m = request_message(request);
     auth::publish(lcm, bus_.signer(), "CVO_KEYFRAME_REQUEST", m);
     std::string ids;
     for (const auto id : request.ids) ids += (ids.empty() ? "" : ", ") + std::to_string(id);

@@ -2,7 +2,8 @@
 // cvo-backendd's wiring: two named threads around libcvo's SLAM mapper (slam::Mapper, the same
 // back end cvo-run --mode slam uses).
 //
-//   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH -> decoded once and checked -> the door (each
+//   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH (or their slices, CVO_KEYFRAME_CHUNK, put
+//                 together first: libcvo/lcm/chunks.hpp) -> decoded once and checked -> the door (each
 //                 keyframe (session, id) and local graph once; a repeat with other content is
 //                 refused, message_door.hpp) -> appended to the keyframe store (durable before
 //                 anything else happens) -> work queue, the decoded value (when it is full,
@@ -51,9 +52,11 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/status_t.hpp"
 #include "daemon/backendd/keyframe_gaps.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
@@ -66,6 +69,7 @@
 #include "daemon/common/notes.hpp"
 #include "daemon/common/systemd_notify.hpp"
 #include "libcvo/config/config.hpp"
+#include "libcvo/lcm/chunks.hpp"
 
 namespace lcm {
 class LCM;
@@ -117,6 +121,8 @@ class Backendd {
                                         std::size_t size);
   template <class Message>
   std::optional<Message> decoded(const void* data, std::size_t size, const char* channel);
+  void receive_slice(const void* data, std::size_t size, std::int64_t sender);
+  [[nodiscard]] cvo_lcm::keyframe_request_t request_message(const KeyframeGaps::Request& request) const;
   void saw_pose(const void* data, std::size_t size);
   void saw_status(const void* data, std::size_t size);
   void ask_for_missing(::lcm::LCM& lcm, bool stopping);
@@ -166,7 +172,16 @@ class Backendd {
   MessageDoor door_;  // cvo-receive only (filled from the store before it starts)
   RecordQuota quota_{config_.backendd.max_records_per_session, config_.backendd.max_records_per_sender};  // the same
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
-  std::unique_ptr<Work> work_;              // the mapper and what the daemon reports of it; cvo-backend only
+  lcm::ChunkAssembly slices_;               // cvo-receive only: messages that came in part (CVO_KEYFRAME_CHUNK)
+  // cvo-receive only: local graphs put together before their keyframe, let in after it.
+  struct EarlyGraph {
+    std::vector<std::uint8_t> message;
+    std::int64_t sender = 0;
+  };
+  using KeyframeName = std::pair<std::int64_t, std::int64_t>;  // session, id
+  static constexpr std::size_t kMaxEarlyGraphs = 64;
+  std::map<KeyframeName, EarlyGraph> early_graphs_;
+  std::unique_ptr<Work> work_;  // the mapper and what the daemon reports of it; cvo-backend only
 
   WorkQueue<QueuedRecord> queue_;  // cvo-receive -> cvo-backend
   std::atomic<bool> stop_{false}, receiver_done_{false};

@@ -65,6 +65,17 @@ void KeyframeGaps::heard(std::int64_t session_id, Clock::time_point now) {
   if (const auto it = sessions_.find(session_id); it != sessions_.end()) it->second.last_seen = now;
 }
 
+void KeyframeGaps::progressed(std::int64_t session_id, std::int64_t id, Clock::time_point now) {
+  const auto s = sessions_.find(session_id);
+  if (s == sessions_.end()) return;
+  s->second.last_seen = now;
+  const auto m = s->second.missing.find(id);
+  if (m == s->second.missing.end()) return;
+  m->second.unanswered = 0;
+  m->second.answered = now;
+  m->second.next = now + policy_.first_wait;
+}
+
 // Keyframes [s.keyframes_until, keyframes_until) and local graphs [s.graphs_until, graphs_until)
 // should have come: each not yet waited for is, from now on.
 void KeyframeGaps::expect(std::int64_t session_id, Session& s, std::int64_t keyframes_until, std::int64_t graphs_until,
@@ -137,7 +148,7 @@ std::optional<KeyframeGaps::GivenUp::Reason> KeyframeGaps::done_asking(const Ses
   if (policy_.requests <= 0) return Reason::kNoAsking;
   if (m.requests < policy_.requests) return std::nullopt;
   if (now - s.last_seen > policy_.alive_window) return Reason::kSilent;
-  if (now - m.first_request >= policy_.give_up_after) return Reason::kUnanswered;
+  if (now - m.answered >= policy_.give_up_after) return Reason::kUnanswered;
   return std::nullopt;
 }
 
@@ -145,7 +156,7 @@ KeyframeGaps::Round KeyframeGaps::due(Clock::time_point now) {
   Round round;
   std::size_t budget = now >= next_round_ ? policy_.ids_per_round : 0;
   for (auto& [session_id, s] : sessions_) {
-    Request request{session_id, {}};
+    Request request{session_id, {}, {}};
     for (auto it = s.missing.begin(); it != s.missing.end();) {
       Missing& m = it->second;
       if (m.next > now) {
@@ -157,9 +168,10 @@ KeyframeGaps::Round KeyframeGaps::due(Clock::time_point now) {
       } else {
         if (budget > 0) {  // else due in a later round, not counted as asked
           --budget;
-          if (m.requests++ == 0) ++requested_, m.first_request = now;
-          m.next = now + wait_after(m.requests);
+          if (m.requests++ == 0) ++requested_, m.answered = now;
+          m.next = now + wait_after(++m.unanswered);
           request.ids.push_back(it->first);
+          if (!m.keyframe) request.graphs_only.push_back(it->first);
         }
         ++it;
       }

@@ -8,9 +8,13 @@
 // How long it asks (issue 28): `requests` times in any case; then on, the wait capped at
 // max_retry_wait, for as long as the session's tracker is heard (a pose, keyframe, local graph or
 // CVO_STATUS of the session within alive_window: a live tracker may still answer once its link
-// clears), up to give_up_after from the first request (a tracker that no longer holds the keyframe
-// never will).
-// What it gives up on says why (GivenUp::Reason).
+// clears), up to give_up_after with nothing of it coming (a tracker that no longer holds the
+// keyframe never answers). What it gives up on says why (GivenUp::Reason).
+//
+// A keyframe sent in slices (CVO_KEYFRAME_CHUNK) comes in part: each slice of it is progress
+// (progressed()), which restarts its back-off, and puts its next request first_wait after the
+// newest slice (once the burst of an answer is over), so that a lossy link costs a few quick
+// rounds, each asking for what the last one lost.
 //
 // What a message says should have come, in its session (the tracker publishes keyframe k's local
 // graph just before keyframe k+1, and names the keyframe of every pose):
@@ -39,7 +43,7 @@ struct GapPolicy {
   int requests = 4;
   // After those, while the tracker is heard within alive_window: again every max_retry_wait at
   // most, until give_up_after from the first request.
-  std::chrono::milliseconds alive_window{2000};
+  std::chrono::milliseconds alive_window{5000};  // five CVO_STATUS periods: a lossy link loses a few
   std::chrono::milliseconds max_retry_wait{4000};
   std::chrono::milliseconds give_up_after{60000};
   // Requests go out at most once per round_interval, for at most ids_per_round keyframes (each
@@ -71,15 +75,18 @@ class KeyframeGaps {
   /// The session's tracker was heard otherwise (its CVO_STATUS): it is alive, and may still answer.
   /// A session not known here is not remembered for it.
   void heard(std::int64_t session, Clock::time_point now);
+  /// A part of keyframe `id` (or of its local graph) came: its tracker is alive and answering.
+  void progressed(std::int64_t session, std::int64_t id, Clock::time_point now);
 
   struct Request {
     std::int64_t session = 0;
-    std::vector<std::int64_t> ids;  // ascending
+    std::vector<std::int64_t> ids;          // ascending
+    std::vector<std::int64_t> graphs_only;  // of those, the ones whose keyframe came: only the local graph is missing
   };
   struct GivenUp {  // keyframes first..last of a session, lost
     enum class Reason {
       kSilent,      // asked `requests` times, and the tracker is no longer heard
-      kUnanswered,  // asked for give_up_after while the tracker was heard
+      kUnanswered,  // asked for give_up_after, nothing of it coming, while the tracker was heard
       kNoAsking,    // requests == 0: nothing to ask (a recording)
       kBounds,      // beyond max_gap, max_missing or max_sessions
       kStopped,     // the back end stopped
@@ -106,8 +113,9 @@ class KeyframeGaps {
   struct Missing {
     bool keyframe = false, graph = false;  // what has not come
     int requests = 0;                      // sent so far
+    int unanswered = 0;                    // sent since a part of it last came: the back-off
     Clock::time_point next;                // the next request, or giving up once all were sent
-    Clock::time_point first_request;       // when it was first asked for
+    Clock::time_point answered;            // when it was first asked for, or a part of it came since
   };
   struct Session {
     std::int64_t keyframes_until = 0;  // every keyframe id below came, or is in `missing`, or was given up

@@ -48,11 +48,6 @@ std::optional<RecordValue> usable(const Identified& message, std::string* error,
   return value;
 }
 
-std::uint32_t content_crc(const std::uint8_t* data, std::size_t size) {
-  const auto trailer = static_cast<std::size_t>(lcm::kAuthTrailerBytes);
-  return crc32_of(data, size >= trailer ? size - trailer : size);
-}
-
 Admission MessageDoor::check(const MessageKey& key, std::uint32_t crc) const {
   const auto it = crc_.find(key);
   if (it == crc_.end()) return Admission::kNew;

@@ -16,6 +16,7 @@
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/odometry/local_graph.hpp"
 
@@ -62,9 +63,8 @@ std::optional<Identified> identify(RecordKind kind, const std::uint8_t* data, st
 /// BAD_INFORMATION, BAD_IMAGE_*).
 std::optional<RecordValue> usable(const Identified& message, std::string* error, std::size_t* bad);
 
-/// CRC-32 of a message's bytes before its auth_t trailer (lcm::kAuthTrailerBytes): what it says,
-/// not who signed it when.
-std::uint32_t content_crc(const std::uint8_t* data, std::size_t size);
+/// CRC-32 of a message's bytes before its auth_t trailer: what it says, not who signed it when.
+using lcm::content_crc;
 
 enum class Admission { kNew, kRepeat, kConflict };
 

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
@@ -20,6 +21,7 @@
 #include "libcvo/config/config.hpp"
 #include "libcvo/core/session.hpp"
 #include "libcvo/core/units.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
@@ -70,7 +72,8 @@ Publishing::Publishing(Shared& shared)
       lcm_(shared.config.trackerd.lcm_url),
       verifier_(shared.bus.verifier(shared.config.trackerd.lcm_url)),
       receives_(!shared.config.trackerd.lcm_url.starts_with("file://")),
-      encoding_{*lcm::parse_colour_encoding(shared.config.trackerd.keyframe_colour_encoding), lcm::DepthEncoding::kPng},
+      encoding_(lcm::keyframe_encoding(*lcm::parse_colour_encoding(shared.config.trackerd.keyframe_colour_encoding))),
+      chunks_(config::keyframes_in_chunks(shared.config.trackerd)),
       robot_(config::robot_name(shared.config.trackerd.robot)),
       resend_budget_(shared.config.trackerd.resend_bytes_per_s),
       session_(shared.session.load()) {}
@@ -152,8 +155,9 @@ void Publishing::publish(const Event& event) {
   if (event.graph_slot >= 0) {  // encoded here, so that the history keeps the very bytes sent
     const auto& g = outbox.graph(event.graph_slot);
     auto bytes = lcm::encode(lcm::to_message(g.graph, event.session, g.keyframe_id, core::wall_utime(), robot_));
-    auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_LOCAL_GRAPH", bytes);
-    history().keep_graph(event.session, g.keyframe_id, bytes);
+    const auto crc = lcm::content_crc(bytes.data(), bytes.size());
+    send_record({event.session, g.keyframe_id, cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH}, bytes, crc, std::nullopt);
+    history().keep_graph(event.session, g.keyframe_id, bytes, crc);
   }
   if (event.keyframe_slot >= 0)
     publish_keyframe(event);
@@ -195,10 +199,32 @@ void Publishing::publish_keyframe(const Event& event) {
     return;
   }
   auto bytes = lcm::encode(*message);
-  auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_KEYFRAME", bytes);
-  if (!history().keep_keyframe(event.session, k.id, bytes) && history().capacity() > 0)
+  const auto crc = lcm::content_crc(bytes.data(), bytes.size());
+  send_record({event.session, k.id, cvo_lcm::keyframe_chunk_t::KEYFRAME}, bytes, crc, std::nullopt);
+  if (!history().keep_keyframe(event.session, k.id, bytes, crc) && history().capacity() > 0)
     shared_.notes.note("keyframe " + std::to_string(k.id) + " (" + std::to_string(bytes.size()) +
                        " bytes) is larger than a history slot: it cannot be sent again");
+}
+
+// A keyframe's or local graph's message out, first or again: whole on its channel, signed (afresh,
+// for a re-send), or in slices on CVO_KEYFRAME_CHUNK (trackerd.keyframe_transport), each signed,
+// the message's trailer left zero; `slices`: only those (a re-send of what the back end lacks).
+void Publishing::send_record(const lcm::SlicedName& name, std::span<const std::uint8_t> bytes, std::uint32_t crc,
+                             std::optional<lcm::SliceRange> slices) {
+  if (!chunks_) {
+    resend_.assign(bytes.begin(), bytes.end());
+    const bool graph = name.message == cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH;
+    auth::publish_bytes(lcm_, shared_.bus.signer(), graph ? "CVO_LOCAL_GRAPH" : "CVO_KEYFRAME", resend_);
+    return;
+  }
+  const lcm::SliceRange range =
+      slices ? lcm::clamp(*slices, bytes.size()) : lcm::SliceRange{0, lcm::slice_count(bytes.size())};
+  for (std::int32_t k = range.first; k < range.first + range.count; ++k) {
+    const auto chunk = lcm::slice(bytes, name, crc, k);
+    resend_.resize(static_cast<std::size_t>(chunk.getEncodedSize()));
+    chunk.encode(resend_.data(), 0, static_cast<int>(resend_.size()));
+    auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_KEYFRAME_CHUNK", resend_);
+  }
 }
 
 // CVO_KEYFRAME_REQUEST: the back end missed keyframes of a session; those of this tracker's sessions
@@ -210,22 +236,29 @@ void Publishing::answer_request(const void* data, int size, std::int64_t request
   const auto request = lcm::decode<cvo_lcm::keyframe_request_t>(data, size, &error, &failure);
   if (!request) return shared_.count_bad(static_cast<int>(failure), "skipped CVO_KEYFRAME_REQUEST", error);
   const std::string what = "CVO_KEYFRAME_REQUEST for session " + core::session_name(request->session);
-  if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS)
-    return shared_.count_bad(
-        cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
-        std::to_string(request->num_ids) + " ids, more than " + std::to_string(cvo_lcm::keyframe_request_t::MAX_IDS));
+  if (request->num_ids > cvo_lcm::keyframe_request_t::MAX_IDS ||
+      request->num_ranges > cvo_lcm::keyframe_request_t::MAX_RANGES)
+    return shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what,
+                             std::to_string(request->num_ids) + " ids and " + std::to_string(request->num_ranges) +
+                                 " ranges, more than " + std::to_string(cvo_lcm::keyframe_request_t::MAX_IDS) +
+                                 " and " + std::to_string(cvo_lcm::keyframe_request_t::MAX_RANGES));
   if (!shared_.out.ready) {  // nothing made yet: only a request for the running session concerns us
     if (request->session == shared_.session.load())
       shared_.count_bad(cvo_lcm::status_t::BAD_CONTENT, "skipped " + what, "no keyframe made yet");
     return;
   }
-  const auto send = [&](const char* channel, std::span<const std::uint8_t> bytes) {
-    resend_.assign(bytes.begin(), bytes.end());  // the bytes first sent, with a new counter
-    auth::publish_bytes(lcm_, shared_.bus.signer(), channel, resend_);
+  const auto send = [&](const KeyframeHistory::Resend& r) {
+    const std::int8_t message = r.graph ? cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH : cvo_lcm::keyframe_chunk_t::KEYFRAME;
+    send_record({request->session, r.id, message}, r.message.bytes, r.message.crc, r.slices);
   };
+  std::vector<KeyframeHistory::Wanted> ranges;
+  for (std::int32_t i = 0; i < request->num_ranges; ++i)
+    ranges.push_back({request->range_ids[i],
+                      request->range_messages[i] == cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH,
+                      {request->range_first[i], request->range_count[i]}});
   const double now_s = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
   const auto afford = [&](std::size_t bytes) { return resend_budget_.take(requester, request->session, bytes, now_s); };
-  const auto answer = history().answer(request->session, request->ids, send, afford);
+  const auto answer = history().answer(request->session, request->ids, ranges, send, afford);
   if (!answer.ours) return;
   if (!answer.over.empty())
     shared_.notes.note_limited("re-send budget", "keyframes " + id_list(answer.over) + " of session " +

@@ -1,7 +1,8 @@
 #pragma once
 // cvo-publish: Outbox -> LCM. Every event's CVO_POSE, CVO_KEYFRAME and CVO_LOCAL_GRAPH (encoded
 // here, and kept as sent in the KeyframeHistory, so the back end's CVO_KEYFRAME_REQUEST is answered
-// with the very bytes it missed), CVO_STATUS once a period and systemd's STATUS. In from LCM:
+// with the very bytes it missed; on a network in slices of one datagram on CVO_KEYFRAME_CHUNK,
+// trackerd.keyframe_transport, libcvo/lcm/chunks.hpp), CVO_STATUS once a period and systemd's STATUS. In from LCM:
 // CVO_MAP_CORRECTION and CVO_MAP (what the one decision of libcvo/lcm/map_decision.hpp trusts sets
 // the running session's MapCorrection: a correction of another session is left at its decoding) and
 // CVO_KEYFRAME_REQUEST. Runs until the tracker is done and the outbox is empty. With a key
@@ -10,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -20,6 +22,7 @@
 #include "daemon/trackerd/resend_budget.hpp"
 #include "daemon/trackerd/shared.hpp"
 #include "libcvo/auth/authenticator.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/map_decision.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
 
@@ -37,6 +40,8 @@ class Publishing {
   std::optional<std::int64_t> authentic(const std::string& channel, const void* data, std::size_t size);
   void publish(const Event& event);
   void publish_keyframe(const Event& event);
+  void send_record(const lcm::SlicedName& name, std::span<const std::uint8_t> bytes, std::uint32_t crc,
+                   std::optional<lcm::SliceRange> slices);
   void remember_keyframe(std::int64_t id, const core::SE3& odometry_pose);
   void answer_request(const void* data, int size, std::int64_t requester);
   void publish_status(std::int8_t state_override);
@@ -48,9 +53,10 @@ class Publishing {
   Shared& shared_;
   ::lcm::LCM lcm_;
   auth::Verifier verifier_;           // CVO_MAP_CORRECTION, CVO_MAP, CVO_KEYFRAME_REQUEST, before decoding
-  std::vector<std::uint8_t> resend_;  // a kept message, signed afresh for its re-send
+  std::vector<std::uint8_t> resend_;  // a message or slice as signed and sent
   const bool receives_;               // a file:// output is a log being written: nothing comes back on it
   const lcm::RgbdEncoding encoding_;
+  const bool chunks_;                         // keyframes and local graphs in slices (trackerd.keyframe_transport)
   const std::string robot_;                   // trackerd.robot, named in every message
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again

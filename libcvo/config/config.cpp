@@ -256,6 +256,10 @@ const std::vector<Field>& table() {
           "frames after which the tracking thread must not allocate (counted in CVO_STATUS)"),
       row("trackerd.keyframe_colour_encoding", &Config::trackerd, &TrackerdParameters::keyframe_colour_encoding, kAny,
           "colour image encoding of CVO_KEYFRAME: raw, jpeg or png"),
+      row("trackerd.keyframe_transport", &Config::trackerd, &TrackerdParameters::keyframe_transport, kAny,
+          "how keyframes and local graphs go out: chunks (slices of one datagram each on CVO_KEYFRAME_CHUNK, a lost "
+          "packet costs a slice), whole (CVO_KEYFRAME, CVO_LOCAL_GRAPH), or auto (whole into a file:// log, chunks "
+          "on a network)"),
       row("trackerd.status_period_s", &Config::trackerd, &TrackerdParameters::status_period_s, kPositive,
           "CVO_STATUS period"),
       row("trackerd.keyframe_history", &Config::trackerd, &TrackerdParameters::keyframe_history, kNonNegative,
@@ -476,6 +480,8 @@ void check_consistency(const Config& c, const std::filesystem::path& source) {
   if (c.mapping.max_range > 4000 * c.mapping.cell_size)
     throw ConfigError(source, "mapping.max_range (" + shortest(c.mapping.max_range) +
                                   ") must be at most 4000 mapping.cell_size (" + shortest(c.mapping.cell_size) + ")");
+  if (const auto& t = c.trackerd.keyframe_transport; t != "auto" && t != "chunks" && t != "whole")
+    throw ConfigError(source, "trackerd.keyframe_transport (" + t + ") must be auto, chunks or whole");
   if (c.trackerd.map_pose_until_localized != "odometry" && c.trackerd.map_pose_until_localized != "none")
     throw ConfigError(source, "trackerd.map_pose_until_localized (" + c.trackerd.map_pose_until_localized +
                                   ") must be odometry or none");
@@ -646,6 +652,11 @@ std::string robot_name(std::string_view configured) {
   char host[256] = {};
   if (gethostname(host, sizeof host - 1) != 0 || !core::is_robot_name(host)) return "localhost";
   return host;
+}
+
+bool keyframes_in_chunks(const TrackerdParameters& trackerd) {
+  if (trackerd.keyframe_transport != "auto") return trackerd.keyframe_transport == "chunks";
+  return !trackerd.lcm_url.starts_with("file://");
 }
 
 }  // namespace cvo::config

@@ -43,6 +43,9 @@ struct TrackerdParameters {
   double deadline_ms = 33.3;  // one frame period at 30 Hz
   std::size_t warmup_frames = 30;
   std::string keyframe_colour_encoding = "jpeg";
+  // Keyframes and local graphs in slices of one datagram (CVO_KEYFRAME_CHUNK), whole, or auto: whole
+  // into a file:// log (nothing is lost there), in slices on a network (libcvo/lcm/chunks.hpp).
+  std::string keyframe_transport = "auto";
   double status_period_s = 1.0;
   // Keyframes (with their local graphs) kept, as sent, to answer CVO_KEYFRAME_REQUEST; each slot is
   // preallocated for the largest message (about 2.2 MB at 640x480).
@@ -69,6 +72,9 @@ struct TrackerdParameters {
   // The robot this tracker speaks for, in its messages (CVO_STATUS); kHostName: the host's name.
   std::string robot = std::string(kHostName);
 };
+
+/// Whether cvo-trackerd sends keyframes in slices (trackerd.keyframe_transport, resolved for its lcm_url).
+bool keyframes_in_chunks(const TrackerdParameters& trackerd);
 
 /// cvo-backendd's own settings (daemon/backendd).
 struct BackenddParameters {

@@ -122,7 +122,7 @@ bool write_pixels(png_structp png, png_infop info, const cv::Mat& image, PngPixe
                depth ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, compression);
-  png_set_compression_strategy(png, Z_RLE);
+  png_set_compression_strategy(png, compression <= 1 ? Z_RLE : Z_DEFAULT_STRATEGY);
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
   png_write_info(png, info);
   if (depth) {

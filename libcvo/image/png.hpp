@@ -34,8 +34,9 @@ std::string decode_png(std::span<const std::uint8_t> png, PngPixels pixels, cv::
 
 /// Encodes `image` (CV_8UC3 for kBgr8 / kRgb8, CV_16UC1 for kGrey16; a view with row padding is
 /// fine) into `png` (replaced). compression is zlib's level, 0 (stored) to 9; every row is
-/// filtered with Sub and deflated with Z_RLE: at level 1 that is what makes encoding fast
-/// (libcvo/image/README.md has the measurements).
+/// filtered with Sub. Up to level 1 it is deflated with Z_RLE, which is what makes encoding fast
+/// (libcvo/image/README.md has the measurements); above, with deflate's full search, which finds
+/// the repeats of a row (a depth image 7 % smaller at level 4, for twice the time).
 std::string encode_png(const cv::Mat& image, PngPixels pixels, int compression, std::vector<std::uint8_t>& png);
 
 }  // namespace cvo::image

@@ -15,6 +15,14 @@ std::nullopt_t fail(std::string* error, const std::string& what) {
 }
 }  // namespace
 
+RgbdEncoding keyframe_encoding(ColourEncoding colour) {
+  RgbdEncoding encoding;
+  encoding.colour = colour;
+  encoding.depth = DepthEncoding::kPng;
+  encoding.png_compression = 4;
+  return encoding;
+}
+
 std::optional<cvo_lcm::keyframe_t> to_message(const Keyframe& keyframe, const RgbdEncoding& encoding,
                                               std::string* error) {
   // The images travel exactly as in CVO_RGBD: encode them as a frame message and move the bytes.

@@ -35,8 +35,12 @@ constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession},
 // count of map_correction_loop_t (keyframe, other_session, other_keyframe, measurement, other_pose).
 constexpr int kCorrectionLoop = 8 + 8 + 8 + kPose3d + kPose3d;
 constexpr std::array kMapCorrectionCounts{CountField{"num_loops", 28 + kMapSession, kCorrectionLoop}};
-// keyframe_request_t: version, utime, session (20), then the count of int64 ids.
-constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}};
+// keyframe_request_t: version, utime, session (20), then the counts of int64 ids and of ranges (an
+// int64 keyframe id, an int8 message, two int32: first slice, count).
+constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}, CountField{"num_ranges", 24, 8 + 1 + 4 + 4}};
+// keyframe_chunk_t: version, session, id (20), message (21), message_size, message_crc, index (33),
+// then the count of data bytes.
+constexpr std::array kKeyframeChunkCounts{CountField{"data_size", 33, 1}};
 // grid_t: version, utime, revision, epoch (28), map_T_grid (84), up (85), resolution (93),
 // origin[3] (117), width height (125), then the count of int8 cells, and the string frame after them.
 constexpr std::array kGridCounts{CountField{"num_cells", 125, 1}};
@@ -60,7 +64,8 @@ WireLayout wire_layout(std::string_view type_name) {
   // (464), relative_covariance[36] (752), status, is_keyframe (754), 3 doubles (778), 2 int32 (786),
   // latency_ms (794), then the string robot.
   if (type_name == "pose_t") return {794, {}, 794, 1};
-  if (type_name == "keyframe_request_t") return {24, kKeyframeRequestCounts};
+  if (type_name == "keyframe_request_t") return {28, kKeyframeRequestCounts};
+  if (type_name == "keyframe_chunk_t") return {37, kKeyframeChunkCounts};
   if (type_name == "grid_t") return {129, kGridCounts, kStringsAfterArrays, 1};
   // status_t: version, session, utime, pid, state (25), 3 doubles (49), 5 int64 (89), queue_depth
   // (93), rss_bytes (101), bad_messages[17] (237), 5 int64 (277), bus (278), sender (286), then the

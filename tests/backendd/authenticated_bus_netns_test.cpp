@@ -30,6 +30,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/map_t.hpp"
@@ -37,6 +38,7 @@
 #include "cvo_lcm/status_t.hpp"
 #include "libcvo/auth/authenticator.hpp"
 #include "libcvo/auth/key.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "tests/backendd/netns_support.hpp"
 #include "tests/support/daemon_process.hpp"
@@ -75,7 +77,7 @@ struct Heard {
 class Listener {
  public:
   Listener() : lcm_(kUrl) {
-    lcm_.subscribe("CVO_.*", &Listener::handle, this);
+    lcm_.subscribe("CVO_.*", &Listener::handle, this)->setQueueCapacity(10000);  // bursts of slices
     thread_ = std::thread([this] {
       while (!stop_) lcm_.handleTimeout(50);
     });
@@ -116,6 +118,13 @@ class Listener {
           heard_.keyframes.emplace(k->session, k->id);
           heard_.newest_keyframe.assign(data, data + size);
         }
+      } else if (channel == "CVO_KEYFRAME_CHUNK") {  // the same, in slices (the tracker's default)
+        auto c = lcm::decode<cvo_lcm::keyframe_chunk_t>(data, size, nullptr);
+        if (c && c->auth.sender != 0 && c->message == cvo_lcm::keyframe_chunk_t::KEYFRAME) {
+          heard_.keyframes.emplace(c->session, c->id);
+          if (auto added = slices_.add(*c); added.outcome == lcm::ChunkAssembly::Added::Outcome::kComplete)
+            heard_.newest_keyframe = std::move(added.message);
+        }
       }
     }
     changed_.notify_all();
@@ -123,6 +132,7 @@ class Listener {
 
   ::lcm::LCM lcm_;
   std::mutex mutex_;
+  lcm::ChunkAssembly slices_;  // under mutex_
   std::condition_variable changed_;
   Heard heard_;
   std::atomic<bool> stop_{false};
@@ -273,6 +283,13 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
       const auto bytes = lcm::encode(*next);
       attacker.publish("CVO_KEYFRAME", bytes.data(), static_cast<unsigned>(bytes.size()));
     }
+    {  // and a slice of the next one (slices are signed one by one)
+      next->id = newest + 4;
+      const auto message = lcm::encode(*next);
+      const auto slice = lcm::encode(lcm::slice(message, {session, next->id, cvo_lcm::keyframe_chunk_t::KEYFRAME},
+                                                lcm::content_crc(message.data(), message.size()), 0));
+      attacker.publish("CVO_KEYFRAME_CHUNK", slice.data(), static_cast<unsigned>(slice.size()));
+    }
     cvo_lcm::keyframe_request_t request{};  // the amplifier: each would re-send a keyframe of ~100 kB
     request.version = cvo_lcm::keyframe_request_t::SCHEMA_VERSION;
     request.session = session;
@@ -302,7 +319,8 @@ TEST_F(AuthenticatedBus, ForgedAndReplayedMapsMoveNoMapPoseAndAreCounted) {
   EXPECT_EQ(status.keyframes_requested, 0) << "no keyframe sent again (the genuine back end lost none)";
   EXPECT_EQ(status.bad_messages[S::BAD_REPLAY], 1) << "the real map, sent again";
   const auto& backend = heard.last_status.at("cvo-backendd");
-  EXPECT_EQ(backend.bad_messages[S::BAD_AUTH], 3) << "the keyframes forged for the live session's next ids";
+  EXPECT_EQ(backend.bad_messages[S::BAD_AUTH], 3 + 1)
+      << "the keyframes (and slice) forged for the live session's next ids";
   EXPECT_EQ(backend.bad_messages[S::BAD_REPLAY] + backend.bad_messages[S::BAD_CONFLICT], 0)
       << "the genuine tracker's messages are all accepted";
   std::int64_t genuine_after = 0;  // genuine maps still applied after the forgeries

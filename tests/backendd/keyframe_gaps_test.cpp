@@ -115,6 +115,7 @@ TEST(KeyframeGaps, AsksAgainWithBackOffThenGivesUpAndCountsItLost) {
   policy.first_wait = 100ms;
   policy.retry_wait = 500ms;
   policy.requests = 3;
+  policy.alive_window = 2s;
   KeyframeGaps gaps(policy);
   send(gaps, 0, 2, t0);
   gaps.seen(Seen::kLocalGraph, kSession, 1, t0);
@@ -194,9 +195,41 @@ TEST(KeyframeGaps, GivesUpOnATrackerThatRunsButNeverAnswers) {
   EXPECT_LE(now - t0, 25s);
 }
 
+// A keyframe that comes in slices over a lossy link: each answer brings part of it, which restarts
+// the back-off and puts the next request just after the answer's burst; asking goes on for as long
+// as parts come, however long that is, and stops give_up_after once nothing more does.
+TEST(KeyframeGaps, EachPartThatComesRestartsTheBackOffAndTheTimeToGiveUp) {
+  GapPolicy policy;
+  policy.give_up_after = 10s;
+  KeyframeGaps gaps(policy);
+  send(gaps, 0, 2, t0);
+  gaps.seen(Seen::kLocalGraph, kSession, 1, t0);
+  gaps.seen(Seen::kKeyframe, kSession, 3, t0);  // keyframe 2 came in part
+  Clock::time_point now = t0 + 100ms;
+  ASSERT_EQ(asked(gaps.due(now)), (Ids{2}));
+  for (int round = 0; round < 20; ++round) {  // 20 answers, each bringing a part 50 ms after asking
+    gaps.progressed(kSession, 2, now + 50ms);
+    EXPECT_TRUE(gaps.due(now + 149ms).requests.empty()) << "the burst of the answer is waited out";
+    now += 150ms;
+    ASSERT_EQ(asked(gaps.due(now)), (Ids{2})) << "asked again at once, not after a doubled wait: round " << round;
+  }
+  EXPECT_GT(now - t0, 3s);
+  // Nothing more comes: the back-off doubles again, and asking stops give_up_after the last part.
+  std::vector<KeyframeGaps::GivenUp> given_up;
+  for (; given_up.empty() && now < t0 + 60s; now += 100ms) {
+    gaps.seen(Seen::kPose, kSession, 3, now);  // the tracker runs
+    given_up = gaps.due(now).given_up;
+  }
+  ASSERT_EQ(given_up.size(), 1u);
+  EXPECT_EQ(given_up[0].reason, KeyframeGaps::GivenUp::Reason::kUnanswered);
+  EXPECT_GE(now - (t0 + 100ms + 20 * 150ms), 10s);
+  EXPECT_EQ(gaps.requested(), 1);
+}
+
 TEST(KeyframeGaps, TheGraphOfAKeyframeGivenUpIsNotCountedAgain) {
   GapPolicy policy;
   policy.requests = 1;
+  policy.alive_window = 2s;
   KeyframeGaps gaps(policy);
   send(gaps, 0, 3, t0);
   gaps.seen(Seen::kPose, kSession, 3, t0);  // keyframe 3 lost (and graph 2)

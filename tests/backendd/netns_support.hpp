@@ -26,6 +26,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
@@ -64,7 +65,7 @@ inline bool map_holds(const cvo_lcm::map_t& map, const std::set<KeyframeName>& n
 struct Captured {
   std::optional<cvo_lcm::map_t> map;                // the last CVO_MAP
   std::vector<cvo_lcm::status_t> backend_statuses;  // cvo-backendd's CVO_STATUS, in order
-  std::set<KeyframeName> keyframes;                 // every CVO_KEYFRAME seen
+  std::set<KeyframeName> keyframes;                 // every CVO_KEYFRAME seen, whole or a slice of it
   std::map<std::int64_t, std::int64_t> last_frame;  // CVO_POSE: each session's newest frame index
   // CVO_POSE: each session's states as they changed (pose_t STATE_*), sessions in the order seen.
   std::vector<std::pair<std::int64_t, std::vector<std::int8_t>>> state_changes;
@@ -93,7 +94,7 @@ struct Captured {
 class LcmCapture {
  public:
   explicit LcmCapture(const std::filesystem::path& log) : log_(log.string(), "w"), lcm_(kUrl) {
-    lcm_.subscribe("CVO_.*", &LcmCapture::handle, this);
+    lcm_.subscribe("CVO_.*", &LcmCapture::handle, this)->setQueueCapacity(10000);  // bursts of slices
     thread_ = std::thread([this] {
       pthread_setname_np(pthread_self(), "lcm-capture");
       while (!stop_) lcm_.handleTimeout(50);
@@ -135,6 +136,9 @@ class LcmCapture {
       } else if (channel == "CVO_KEYFRAME") {
         if (const auto k = cvo::lcm::decode<cvo_lcm::keyframe_t>(buffer->data, size, nullptr))
           captured_.keyframes.emplace(k->session, k->id);
+      } else if (channel == "CVO_KEYFRAME_CHUNK") {
+        const auto c = cvo::lcm::decode<cvo_lcm::keyframe_chunk_t>(buffer->data, size, nullptr);
+        if (c && c->message == cvo_lcm::keyframe_chunk_t::KEYFRAME) captured_.keyframes.emplace(c->session, c->id);
       } else if (channel == "CVO_POSE") {
         if (const auto p = cvo::lcm::decode<cvo_lcm::pose_t>(buffer->data, size, nullptr)) {
           auto& last = captured_.last_frame[p->session];

@@ -30,6 +30,7 @@ TEST(Decode, EveryTruncationOfEveryTypeFails) {
   expect_every_truncation_fails(test::sample_map_correction());
   expect_every_truncation_fails(test::sample_status());
   expect_every_truncation_fails(test::sample_keyframe_request());
+  expect_every_truncation_fails(test::sample_keyframe_chunk());
   expect_every_truncation_fails(test::sample_grid());
 }
 

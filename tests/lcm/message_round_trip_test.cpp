@@ -47,6 +47,10 @@ template <>
 struct Sample<cvo_lcm::keyframe_request_t> {
   static auto make() { return test::sample_keyframe_request(); }
 };
+template <>
+struct Sample<cvo_lcm::keyframe_chunk_t> {
+  static auto make() { return test::sample_keyframe_chunk(); }
+};
 
 template <>
 struct Sample<cvo_lcm::grid_t> {
@@ -55,9 +59,10 @@ struct Sample<cvo_lcm::grid_t> {
 
 template <class T>
 class MessageRoundTrip : public ::testing::Test {};
-using ChannelTypes = ::testing::Types<cvo_lcm::rgbd_frame_t, cvo_lcm::pose_t, cvo_lcm::keyframe_t,
-                                      cvo_lcm::local_graph_t, cvo_lcm::map_t, cvo_lcm::map_correction_t,
-                                      cvo_lcm::status_t, cvo_lcm::keyframe_request_t, cvo_lcm::grid_t>;
+using ChannelTypes =
+    ::testing::Types<cvo_lcm::rgbd_frame_t, cvo_lcm::pose_t, cvo_lcm::keyframe_t, cvo_lcm::local_graph_t,
+                     cvo_lcm::map_t, cvo_lcm::map_correction_t, cvo_lcm::status_t, cvo_lcm::keyframe_request_t,
+                     cvo_lcm::keyframe_chunk_t, cvo_lcm::grid_t>;
 TYPED_TEST_SUITE(MessageRoundTrip, ChannelTypes);
 
 TYPED_TEST(MessageRoundTrip, DecodesToTheSameMessage) {

@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "cvo_lcm/grid_t.hpp"
+#include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
@@ -229,6 +230,25 @@ inline cvo_lcm::keyframe_request_t sample_keyframe_request() {
   m.session = 0x5e5510'0000'0001;
   m.ids = {3, 7, 12};
   m.num_ids = static_cast<std::int32_t>(m.ids.size());
+  m.range_ids = {14, 15};
+  m.range_messages = {cvo_lcm::keyframe_chunk_t::KEYFRAME, cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH};
+  m.range_first = {40, 0};
+  m.range_count = {3, 1000};
+  m.num_ranges = static_cast<std::int32_t>(m.range_ids.size());
+  return m;
+}
+
+inline cvo_lcm::keyframe_chunk_t sample_keyframe_chunk() {
+  cvo_lcm::keyframe_chunk_t m{};
+  m.version = cvo_lcm::keyframe_chunk_t::SCHEMA_VERSION;
+  m.session = 0x5e5510'0000'0001;
+  m.id = 14;
+  m.message = cvo_lcm::keyframe_chunk_t::KEYFRAME;
+  m.message_size = 3 * cvo_lcm::keyframe_chunk_t::MAX_DATA - 17;
+  m.message_crc = 0x1234abcd;
+  m.index = 2;
+  m.data.assign(cvo_lcm::keyframe_chunk_t::MAX_DATA - 17, 0xa5);
+  m.data_size = static_cast<std::int32_t>(m.data.size());
   return m;
 }
 

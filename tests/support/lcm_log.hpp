@@ -16,6 +16,7 @@
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/decode.hpp"
 
 namespace cvo::testing {
@@ -28,6 +29,7 @@ struct PublishedLog {
   std::vector<cvo_lcm::map_t> maps;
   std::vector<cvo_lcm::map_correction_t> map_corrections;
   std::vector<cvo_lcm::grid_t> grids;
+  int keyframe_chunks = 0;  // slices on CVO_KEYFRAME_CHUNK: their messages are in keyframes, local_graphs
   int undecodable = 0;
 };
 
@@ -54,6 +56,28 @@ inline int write_event(::lcm::LogFile& log, const std::string& channel, const st
   return log.writeEvent(&e);
 }
 
+// A slice: once its message is complete, that message as if it had been logged whole.
+inline void add_slice(const ::lcm::LogEvent& e, cvo::lcm::ChunkAssembly& slices, PublishedLog& log) {
+  std::string error;
+  const auto chunk = cvo::lcm::decode<cvo_lcm::keyframe_chunk_t>(e.data, e.datalen, &error);
+  if (!chunk) {
+    ++log.undecodable;
+    ADD_FAILURE() << e.channel << ": " << error;
+    return;
+  }
+  auto added = slices.add(*chunk);
+  if (added.outcome == cvo::lcm::ChunkAssembly::Added::Outcome::kRefused)
+    ADD_FAILURE() << e.channel << ": " << added.why;
+  if (added.outcome != cvo::lcm::ChunkAssembly::Added::Outcome::kComplete) return;
+  ::lcm::LogEvent whole = e;
+  whole.data = added.message.data();
+  whole.datalen = static_cast<std::int32_t>(added.message.size());
+  if (chunk->message == cvo_lcm::keyframe_chunk_t::KEYFRAME)
+    add_decoded(whole, log.keyframes, log.undecodable);
+  else
+    add_decoded(whole, log.local_graphs, log.undecodable);
+}
+
 inline PublishedLog read_published(const std::filesystem::path& file) {
   PublishedLog log;
   ::lcm::LogFile in(file.string(), "r");
@@ -61,8 +85,12 @@ inline PublishedLog read_published(const std::filesystem::path& file) {
     ADD_FAILURE() << "cannot read LCM log " << file;
     return log;
   }
+  cvo::lcm::ChunkAssembly slices;  // a tracker on a network sends keyframes in slices
   while (const ::lcm::LogEvent* e = in.readNextEvent()) {
-    if (e->channel == "CVO_POSE")
+    if (e->channel == "CVO_KEYFRAME_CHUNK") {
+      ++log.keyframe_chunks;
+      add_slice(*e, slices, log);
+    } else if (e->channel == "CVO_POSE")
       add_decoded(*e, log.poses, log.undecodable);
     else if (e->channel == "CVO_KEYFRAME")
       add_decoded(*e, log.keyframes, log.undecodable);

@@ -61,14 +61,14 @@ TEST(KeyframeHistory, AnAnswerOverBudgetSendsNothingOfTheKeyframesItCannotAfford
   KeyframeHistory history(4, 1000, 500);
   for (std::int64_t k = 0; k < 4; ++k) {
     history.made(kSession, k);
-    ASSERT_TRUE(history.keep_keyframe(kSession, k, std::vector<std::uint8_t>(300, 1)));
+    ASSERT_TRUE(history.keep_keyframe(kSession, k, std::vector<std::uint8_t>(300, 1), 7));
   }
   ResendBudget budget(kRate);
   int sent = 0;
-  const auto send = [&](const char*, std::span<const std::uint8_t>) { ++sent; };
+  const auto send = [&](const KeyframeHistory::Resend&) { ++sent; };
   const auto afford = [&](std::size_t bytes) { return budget.take(0, kSession, bytes, 0); };
   const std::vector<std::int64_t> ids{0, 1, 2, 3};
-  const auto answer = history.answer(kSession, ids, send, afford);
+  const auto answer = history.answer(kSession, ids, {}, send, afford);
   EXPECT_EQ(answer.sent, (std::vector<std::int64_t>{0, 1, 2}));
   EXPECT_EQ(answer.over, (std::vector<std::int64_t>{3}));
   EXPECT_EQ(sent, 3);

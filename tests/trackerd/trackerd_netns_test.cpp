@@ -78,10 +78,10 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
               const std::string& channel = "CVO_MAP") {
   Replay r;
   const auto out = dir / (name + ".lcmlog");
-  DaemonProcess logger(
-      which("lcm-logger"),
-      {"--lcm-url=" + std::string(kUrl), "-c", "CVO_(POSE|KEYFRAME|LOCAL_GRAPH|STATUS)", "-f", out.string()},
-      dir / (name + ".logger.txt"));
+  DaemonProcess logger(which("lcm-logger"),
+                       {"--lcm-url=" + std::string(kUrl), "-c", "CVO_(POSE|KEYFRAME|KEYFRAME_CHUNK|LOCAL_GRAPH|STATUS)",
+                        "-f", out.string()},
+                       dir / (name + ".logger.txt"));
   DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
                          {"--source", std::string("lcm:") + kUrl, "--lcm-url", kUrl, "--deterministic", "--set",
                           "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
@@ -136,6 +136,8 @@ void expect_one_complete_session(const Replay& r) {
   for (const auto& g : log.local_graphs) EXPECT_EQ(g.session, r.session);
   for (const auto& s : log.statuses) EXPECT_EQ(s.session, r.session);
   ASSERT_FALSE(log.poses.empty());
+  ASSERT_FALSE(log.keyframes.empty());
+  EXPECT_GT(log.keyframe_chunks, 0) << "on a network keyframes go in slices (trackerd.keyframe_transport auto)";
   ASSERT_EQ(log.local_graphs.size(), log.keyframes.size()) << "the open local graph is published at the end";
   EXPECT_EQ(log.local_graphs.back().keyframe_id, log.keyframes.back().id);
   EXPECT_EQ(log.local_graphs.back().nodes.back().frame_index, log.poses.back().frame_index);
