@@ -73,7 +73,7 @@ void KeyframeGaps::progressed(std::int64_t session_id, std::int64_t id, Clock::t
   if (m == s->second.missing.end()) return;
   m->second.unanswered = 0;
   m->second.answered = now;
-  m->second.next = now + policy_.first_wait;
+  m->second.next = now + policy_.after_part;
 }
 
 // Keyframes [s.keyframes_until, keyframes_until) and local graphs [s.graphs_until, graphs_until)

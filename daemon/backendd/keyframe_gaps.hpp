@@ -12,7 +12,7 @@
 // keyframe never answers). What it gives up on says why (GivenUp::Reason).
 //
 // A keyframe sent in slices (CVO_KEYFRAME_CHUNK) comes in part: each slice of it is progress
-// (progressed()), which restarts its back-off, and puts its next request first_wait after the
+// (progressed()), which restarts its back-off, and puts its next request after_part after the
 // newest slice (once the burst of an answer is over), so that a lossy link costs a few quick
 // rounds, each asking for what the last one lost.
 //
@@ -35,8 +35,12 @@
 namespace cvo::daemon::backendd {
 
 struct GapPolicy {
-  // From noticing to the first request: a message that is only late (reordered) still comes.
-  std::chrono::milliseconds first_wait{100};
+  // From noticing to the first request: a message that is only late still comes (reordered, or a
+  // keyframe whose paced slices a pose naming it overtook, on a loaded tracker).
+  std::chrono::milliseconds first_wait{500};
+  // From the newest part of a keyframe that came in part to the next request: the rest of an
+  // answer's burst is waited out.
+  std::chrono::milliseconds after_part{100};
   // From the first request to the second, doubled after each; `requests` requests, then given up
   // (0: never ask, give up at once: a recording cannot answer).
   std::chrono::milliseconds retry_wait{500};

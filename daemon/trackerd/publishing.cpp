@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <span>
 #include <thread>
 #include <utility>
@@ -108,16 +109,18 @@ void Publishing::run() {
   Event event;
   while (true) {
     shared_.publish_heartbeat.beat();
+    const auto wait = pacer_.idle() ? std::chrono::milliseconds(10) : std::chrono::milliseconds(1);
     if (shared_.out.ready) {
-      if (shared_.out.outbox->pop(event, 10ms))
+      if (shared_.out.outbox->pop(event, wait))
         publish(event);
-      else if (shared_.tracker_done && shared_.out.outbox->finished())
+      else if (shared_.tracker_done && shared_.out.outbox->finished() && pacer_.idle())
         break;
-    } else if (shared_.tracker_done) {
+    } else if (shared_.tracker_done && pacer_.idle()) {
       break;
     } else {
-      std::this_thread::sleep_for(10ms);
+      std::this_thread::sleep_for(wait);
     }
+    send_slices();
     receive();
     if (Clock::now() - last_status_ >= period) publish_status(-1);
   }
@@ -208,7 +211,8 @@ void Publishing::publish_keyframe(const Event& event) {
 
 // A keyframe's or local graph's message out, first or again: whole on its channel, signed (afresh,
 // for a re-send), or in slices on CVO_KEYFRAME_CHUNK (trackerd.keyframe_transport), each signed,
-// the message's trailer left zero; `slices`: only those (a re-send of what the back end lacks).
+// the message's trailer left zero, paced (slice_pacer.hpp); `slices`: only those (a re-send of
+// what the back end lacks).
 void Publishing::send_record(const lcm::SlicedName& name, std::span<const std::uint8_t> bytes, std::uint32_t crc,
                              std::optional<lcm::SliceRange> slices) {
   if (!chunks_) {
@@ -217,14 +221,18 @@ void Publishing::send_record(const lcm::SlicedName& name, std::span<const std::u
     auth::publish_bytes(lcm_, shared_.bus.signer(), graph ? "CVO_LOCAL_GRAPH" : "CVO_KEYFRAME", resend_);
     return;
   }
-  const lcm::SliceRange range =
-      slices ? lcm::clamp(*slices, bytes.size()) : lcm::SliceRange{0, lcm::slice_count(bytes.size())};
-  for (std::int32_t k = range.first; k < range.first + range.count; ++k) {
-    const auto chunk = lcm::slice(bytes, name, crc, k);
-    resend_.resize(static_cast<std::size_t>(chunk.getEncodedSize()));
-    chunk.encode(resend_.data(), 0, static_cast<int>(resend_.size()));
+  pacer_.add(name, std::make_shared<const std::vector<std::uint8_t>>(bytes.begin(), bytes.end()), crc,
+             slices.value_or(lcm::SliceRange{0, lcm::slice_count(bytes.size())}));
+  send_slices();  // the first burst at once
+}
+
+// The slices due (slice_pacer.hpp), each signed.
+void Publishing::send_slices() {
+  pacer_.send_due(SlicePacer::Clock::now(), [this](const cvo_lcm::keyframe_chunk_t& slice) {
+    resend_.resize(static_cast<std::size_t>(slice.getEncodedSize()));
+    slice.encode(resend_.data(), 0, static_cast<int>(resend_.size()));
     auth::publish_bytes(lcm_, shared_.bus.signer(), "CVO_KEYFRAME_CHUNK", resend_);
-  }
+  });
 }
 
 // CVO_KEYFRAME_REQUEST: the back end missed keyframes of a session; those of this tracker's sessions

@@ -21,6 +21,7 @@
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "daemon/trackerd/resend_budget.hpp"
 #include "daemon/trackerd/shared.hpp"
+#include "daemon/trackerd/slice_pacer.hpp"
 #include "libcvo/auth/authenticator.hpp"
 #include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/map_decision.hpp"
@@ -42,6 +43,7 @@ class Publishing {
   void publish_keyframe(const Event& event);
   void send_record(const lcm::SlicedName& name, std::span<const std::uint8_t> bytes, std::uint32_t crc,
                    std::optional<lcm::SliceRange> slices);
+  void send_slices();
   void remember_keyframe(std::int64_t id, const core::SE3& odometry_pose);
   void answer_request(const void* data, int size, std::int64_t requester);
   void publish_status(std::int8_t state_override);
@@ -60,6 +62,7 @@ class Publishing {
   const std::string robot_;                   // trackerd.robot, named in every message
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again
+  SlicePacer pacer_;                          // slices waiting to go out (slice_pacer.hpp)
   lcm::AppliedCorrection applied_;            // the last correction applied (either channel)
   // The running session's newest keyframes' odometry poses, for the check of a placement against
   // the session's loops (lcm::decide_map_correction); a ring of kOwnKeyframes.

@@ -53,8 +53,8 @@ TEST(KeyframeGaps, AKeyframeAboveTheNextExpectedOneAsksForThoseBetween) {
   gaps.seen(Seen::kLocalGraph, kSession, 2, t0);
   gaps.seen(Seen::kKeyframe, kSession, 5, t0);  // 3 and 4 (and their graphs) never came
   EXPECT_EQ(gaps.missing(), 2u);
-  EXPECT_TRUE(gaps.due(t0 + 99ms).requests.empty()) << "a late message is waited for first";
-  EXPECT_EQ(asked(gaps.due(t0 + 100ms)), (Ids{3, 4}));
+  EXPECT_TRUE(gaps.due(t0 + 499ms).requests.empty()) << "a late message is waited for first";
+  EXPECT_EQ(asked(gaps.due(t0 + 500ms)), (Ids{3, 4}));
   EXPECT_EQ(gaps.requested(), 2);
 
   // The tracker answers keyframe then graph: recovered once both are there.
@@ -147,6 +147,7 @@ TEST(KeyframeGaps, AsksAgainWithBackOffThenGivesUpAndCountsItLost) {
 // (its poses), every max_retry_wait at most, and gives up once it is silent, saying so.
 TEST(KeyframeGaps, KeepsAskingWithBackOffWhileItsTrackerIsHeard) {
   GapPolicy policy;
+  policy.first_wait = 100ms;
   policy.requests = 3;
   KeyframeGaps gaps(policy);
   send(gaps, 0, 2, t0);
@@ -200,6 +201,7 @@ TEST(KeyframeGaps, GivesUpOnATrackerThatRunsButNeverAnswers) {
 // as parts come, however long that is, and stops give_up_after once nothing more does.
 TEST(KeyframeGaps, EachPartThatComesRestartsTheBackOffAndTheTimeToGiveUp) {
   GapPolicy policy;
+  policy.first_wait = 100ms;
   policy.give_up_after = 10s;
   KeyframeGaps gaps(policy);
   send(gaps, 0, 2, t0);

@@ -63,10 +63,11 @@ inline bool map_holds(const cvo_lcm::map_t& map, const std::set<KeyframeName>& n
 }
 
 struct Captured {
-  std::optional<cvo_lcm::map_t> map;                // the last CVO_MAP
-  std::vector<cvo_lcm::status_t> backend_statuses;  // cvo-backendd's CVO_STATUS, in order
-  std::set<KeyframeName> keyframes;                 // every CVO_KEYFRAME seen, whole or a slice of it
-  std::map<std::int64_t, std::int64_t> last_frame;  // CVO_POSE: each session's newest frame index
+  std::optional<cvo_lcm::map_t> map;                     // the last CVO_MAP
+  std::vector<cvo_lcm::status_t> backend_statuses;       // cvo-backendd's CVO_STATUS, in order
+  std::set<KeyframeName> keyframes;                      // every CVO_KEYFRAME seen, whole or a slice of it
+  std::map<std::int64_t, std::int64_t> last_frame;       // CVO_POSE: each session's newest frame index
+  std::map<std::int64_t, std::int64_t> newest_keyframe;  // CVO_POSE: each session's newest keyframe id
   // CVO_POSE: each session's states as they changed (pose_t STATE_*), sessions in the order seen.
   std::vector<std::pair<std::int64_t, std::vector<std::int8_t>>> state_changes;
 
@@ -93,7 +94,8 @@ struct Captured {
 /// daemons said, not for time to pass.
 class LcmCapture {
  public:
-  explicit LcmCapture(const std::filesystem::path& log) : log_(log.string(), "w"), lcm_(kUrl) {
+  explicit LcmCapture(const std::filesystem::path& log, const std::string& url = kUrl)
+      : log_(log.string(), "w"), lcm_(url) {
     lcm_.subscribe("CVO_.*", &LcmCapture::handle, this)->setQueueCapacity(10000);  // bursts of slices
     thread_ = std::thread([this] {
       pthread_setname_np(pthread_self(), "lcm-capture");
@@ -143,6 +145,8 @@ class LcmCapture {
         if (const auto p = cvo::lcm::decode<cvo_lcm::pose_t>(buffer->data, size, nullptr)) {
           auto& last = captured_.last_frame[p->session];
           last = std::max(last, p->frame_index);
+          const auto newest = captured_.newest_keyframe.try_emplace(p->session, p->keyframe_id).first;
+          newest->second = std::max(newest->second, p->keyframe_id);
           auto& changes = captured_.state_changes;
           if (changes.empty() || changes.back().first != p->session) changes.push_back({p->session, {}});
           if (changes.back().second.empty() || changes.back().second.back() != p->state)

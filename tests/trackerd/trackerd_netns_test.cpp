@@ -23,6 +23,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_request_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "libcvo/core/units.hpp"
@@ -311,7 +312,7 @@ TEST(TrackerdNetns, AFloodOfKeyframeRequestsReSendsAtMostTheBudget) {
   struct Seen {
     std::mutex mutex;
     std::int64_t session = 0, newest_keyframe = -1, last_frame = -1;
-    double keyframe_bytes = 0;  // CVO_KEYFRAMEs after the flood began
+    double keyframe_bytes = 0;  // keyframes and local graphs after the flood began
     int keyframes = 0;
     bool flooding = false;
     void pose(const ::lcm::ReceiveBuffer* b, const std::string&) {
@@ -322,17 +323,26 @@ TEST(TrackerdNetns, AFloodOfKeyframeRequestsReSendsAtMostTheBudget) {
       newest_keyframe = std::max(newest_keyframe, p->keyframe_id);
       last_frame = std::max(last_frame, p->frame_index);
     }
-    void keyframe(const ::lcm::ReceiveBuffer* b, const std::string&) {
+    void keyframe(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
       const std::lock_guard lock(mutex);
       if (!flooding) return;
-      keyframe_bytes += static_cast<double>(b->data_size);
-      ++keyframes;
+      if (channel == "CVO_KEYFRAME") {
+        keyframe_bytes += static_cast<double>(b->data_size);
+        ++keyframes;
+        return;
+      }
+      // In slices (on a network, the tracker's default): the bytes of the messages, a keyframe per first slice.
+      const auto slice = lcm::decode<cvo_lcm::keyframe_chunk_t>(b->data, static_cast<int>(b->data_size), nullptr);
+      if (!slice) return;
+      keyframe_bytes += slice->data_size;
+      if (slice->message == cvo_lcm::keyframe_chunk_t::KEYFRAME && slice->index == 0) ++keyframes;
     }
   } seen;
   ::lcm::LCM lcm(kUrl);
   ASSERT_TRUE(lcm.good());
   lcm.subscribe("CVO_POSE", &Seen::pose, &seen);
   lcm.subscribe("CVO_KEYFRAME", &Seen::keyframe, &seen);
+  lcm.subscribe("CVO_KEYFRAME_CHUNK", &Seen::keyframe, &seen)->setQueueCapacity(100000);
   const auto handle_for = [&](std::chrono::duration<double> d) {
     const auto end = std::chrono::steady_clock::now() + d;
     while (std::chrono::steady_clock::now() < end) lcm.handleTimeout(20);

@@ -1,0 +1,139 @@
+// Robots on a real (simulated) LAN, issue 28: each cvo-trackerd in its own network namespace, the
+// back end in another, joined by a bridge (tests/support/in-simulated-lan), LCM udpm with ttl=1,
+// every host losing CVO_LAN_LOSS % of the UDP datagrams it receives (nftables). Three live robots
+// track the embedded clip at its 30 Hz and stay up after its last frame, as a robot's tracker does;
+// every keyframe each of them made must be in the back end's map while they run, and in its final
+// map after they stop and it stops.
+//
+// Runs as host lan-4 (ip netns exec lan-4 under in-simulated-lan --hosts 4); the robots run on
+// lan-1 to lan-3 (ip netns exec lan-K).
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cvo_lcm/status_t.hpp"
+#include "tests/backendd/netns_support.hpp"
+#include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace cvo::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using cvo::testing::Captured;
+using cvo::testing::DaemonProcess;
+using cvo::testing::KeyframeName;
+using cvo::testing::LcmCapture;
+
+const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
+constexpr const char* kLanUrl = "udpm://239.255.76.67:7667?ttl=1&recv_buf_size=8388608";
+constexpr int kRobots = 3;
+
+// Bytes this host's eth0 has received (the kernel's count).
+double received_bytes() {
+  std::ifstream in("/sys/class/net/eth0/statistics/rx_bytes");
+  double bytes = 0;
+  in >> bytes;
+  return bytes;
+}
+
+std::string lan_skip_reason() {
+  const char* hosts = std::getenv("CVO_LAN_HOSTS");
+  if (hosts == nullptr || std::string(hosts).find("lan-4") == std::string::npos)
+    return "runs only as lan-4 of tests/support/in-simulated-lan --hosts 4";
+  return {};
+}
+
+// A program on host lan-K of the simulated LAN.
+std::unique_ptr<DaemonProcess> on_host(int k, const fs::path& program, std::vector<std::string> args,
+                                       const fs::path& stderr_file) {
+  args.insert(args.begin(), {"netns", "exec", "lan-" + std::to_string(k), program.string()});
+  return std::make_unique<DaemonProcess>("/usr/sbin/ip", args, stderr_file);
+}
+
+// Every keyframe each session's poses name (ids from 0 to its newest).
+std::set<KeyframeName> made(const Captured& c) {
+  std::set<KeyframeName> names;
+  for (const auto& [session, newest] : c.newest_keyframe)
+    for (std::int64_t id = 0; id <= newest; ++id) names.emplace(session, id);
+  return names;
+}
+
+TEST(FleetLan, ThreeLiveRobotsOverALossyLanHaveEveryKeyframeInTheMap) {
+  if (const auto why = lan_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+  const char* loss = std::getenv("CVO_LAN_LOSS");
+  cvo::test::TempDir dir;
+  LcmCapture capture(dir.path() / "maps.lcmlog", kLanUrl);
+  ASSERT_TRUE(capture.good());
+  const auto backend_err = dir.path() / "backendd.txt";
+  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
+                         {"--lcm-url", kLanUrl, "--store", (dir.path() / "keyframes.store").string()}, backend_err);
+  ASSERT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(backendd.pid()); }, 60s))
+      << capture.snapshot().backend_statuses.size() << " back-end statuses heard (pid "
+      << (capture.snapshot().backend_statuses.empty() ? 0 : capture.snapshot().backend_statuses.back().pid)
+      << ", expected " << backendd.pid() << ")\n"
+      << cvo::testing::slurp(backend_err);
+
+  const double received_before = received_bytes();
+  std::vector<std::unique_ptr<DaemonProcess>> robots;
+  std::vector<fs::path> robot_err;
+  for (int k = 1; k <= kRobots; ++k) {
+    robot_err.push_back(dir.path() / ("robot-" + std::to_string(k) + ".txt"));
+    robots.push_back(on_host(k, fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
+                             {"--source", "tum:" + kClip.string(), "--lcm-url", kLanUrl, "--deterministic", "--set",
+                              "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false", "--set",
+                              "trackerd.robot=robot-" + std::to_string(k)},
+                             robot_err.back()));
+  }
+  const auto logs = [&] {
+    std::string text = cvo::testing::slurp(backend_err);
+    for (const auto& e : robot_err) text += cvo::testing::slurp(e);
+    return text;
+  };
+  // Every robot tracked its clip to the end (its own word), then every keyframe is in the map.
+  for (const auto& e : robot_err) {
+    bool ended = false;
+    for (int i = 0; i < 1200 && !ended; ++i, std::this_thread::sleep_for(100ms))
+      ended = cvo::testing::slurp(e).find("end of tum:") != std::string::npos;
+    ASSERT_TRUE(ended) << logs();
+  }
+  ASSERT_TRUE(capture.wait_until([](const Captured& c) { return c.newest_keyframe.size() == kRobots; }, 10s));
+  const auto keyframes = made(capture.snapshot());
+  EXPECT_TRUE(capture.wait_until([&](const Captured& c) { return c.map_holds(keyframes); }, 120s))
+      << "not every keyframe reached the map while the robots run\n"
+      << logs();
+  const double received = received_bytes() - received_before;
+
+  for (auto& robot : robots) robot->signal(SIGTERM);
+  for (auto& robot : robots) EXPECT_EQ(robot->wait_for(60s).value_or(-9), 0) << logs();
+  backendd.signal(SIGTERM);
+  EXPECT_EQ(backendd.wait_for(120s).value_or(-9), 0) << logs();
+  ASSERT_TRUE(capture.wait_until(
+      [&](const Captured& c) { return c.status_from(backendd.pid(), +cvo_lcm::status_t::STATE_STOPPING); }, 30s));
+  const Captured captured = capture.snapshot();
+  EXPECT_TRUE(captured.map_holds(keyframes)) << "the final map lacks keyframes\n" << logs();
+  const auto& backend = captured.backend_statuses.back();
+  std::cout << kRobots << " robots at " << (loss != nullptr ? loss : "0") << " % loss: " << keyframes.size()
+            << " keyframes made; back end: requested " << backend.keyframes_requested << ", recovered "
+            << backend.keyframes_recovered << ", lost " << backend.keyframes_lost << ", queue drops "
+            << backend.queue_drops << "; the back end's link received " << received / 1e6 << " MB, "
+            << received / static_cast<double>(keyframes.size()) / 1e3 << " kB per keyframe (poses, statuses included)"
+            << std::endl;
+  EXPECT_EQ(backend.keyframes_lost, 0) << logs();
+  EXPECT_EQ(backend.queue_drops, 0);
+}
+
+}  // namespace
+}  // namespace cvo::daemon
