@@ -314,7 +314,9 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     const auto* payload = record.payload.data();
     const auto size = record.payload.size();
     if (record.kind == RecordKind::kMerge) {
-      queue_decoded(decode_merge(payload, size, &why));
+      auto merge = decode_merge(payload, size, &why);
+      if (merge) held_.merged(merge->session, merge->id);
+      queue_decoded(std::move(merge));
       continue;
     }
     if (record.kind == RecordKind::kSettled) {
@@ -335,6 +337,7 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     }
     const MessageKey key = message->key;
     quota_.count(key.session, sender);
+    held_.held(key.session, key.id, key.kind == RecordKind::kLocalGraph);
     gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());  // a gap in the store is asked for too
     ++replayed_pending_;
@@ -470,6 +473,7 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
                                             describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
     door_.admit(key, crc);
+    if (appended == Appended::kStored) held_.held(key.session, key.id, kind == RecordKind::kLocalGraph);
     quota_.count(key.session, sender);
     gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());
@@ -566,10 +570,16 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
 }
 
 // A tracker's CVO_STATUS says its session is alive though it sends no pose (its camera ended or
-// paused): the keyframes it lost in transport are still asked for (keyframe_gaps.hpp).
+// paused): the keyframes it lost in transport are still asked for (keyframe_gaps.hpp), and what is
+// acknowledged of it is said again.
 void Backendd::saw_status(const void* data, std::size_t size) {
   const auto status = decoded<cvo_lcm::status_t>(data, size, "CVO_STATUS");
-  if (status && status->process == "cvo-trackerd") gaps_.heard(status->session, Clock::now());
+  if (!status || status->process != "cvo-trackerd") return;
+  gaps_.heard(status->session, Clock::now());
+  // Live: its correction, with what is acknowledged, goes again once a status period (a tracker that
+  // lingers at its exit until its keyframes are acknowledged sends no pose).
+  const std::lock_guard lock(posed_mutex_);
+  posed_[status->session] = Clock::now();
 }
 
 // A log cannot answer: what it lacks is lost as soon as it is noticed.
@@ -880,7 +890,7 @@ void Backendd::publish_corrections(const std::vector<core::SessionId>& sessions,
   Work& w = *work_;
   for (const core::SessionId session : sessions) {
     const auto message = lcm::to_message(w.mapper.correction(session, cvo_lcm::map_correction_t::MAX_LOOPS),
-                                         core::wall_utime(), w.epoch);
+                                         core::wall_utime(), w.epoch, held_.acknowledged(session));
     auto entry = lcm::encode(message.session);
     if (!again && !w.schedule.differs(session, entry)) continue;
     auth::publish(w.lcm, bus_.signer(), "CVO_MAP_CORRECTION", message);

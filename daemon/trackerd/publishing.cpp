@@ -77,6 +77,8 @@ Publishing::Publishing(Shared& shared)
       chunks_(config::keyframes_in_chunks(shared.config.trackerd)),
       robot_(config::robot_name(shared.config.trackerd.robot)),
       resend_budget_(shared.config.trackerd.resend_bytes_per_s),
+      delivery_(shared.config.trackerd.spool, shared.config.trackerd.spool_bytes, shared.config.trackerd.linger_s,
+                &delivery_warning_),
       session_(shared.session.load()) {}
 
 KeyframeHistory& Publishing::history() {
@@ -106,24 +108,22 @@ void Publishing::run() {
     lcm_.subscribe("CVO_KEYFRAME_REQUEST", &Handler::request, &handler);
   }
   const auto period = std::chrono::duration<double>(shared_.config.trackerd.status_period_s);
+  if (!delivery_warning_.empty()) shared_.notes.note("warning: " + delivery_warning_);
+  hand_over();
   Event event;
-  while (true) {
+  while (!finished()) {
     shared_.publish_heartbeat.beat();
     const auto wait = pacer_.idle() ? std::chrono::milliseconds(10) : std::chrono::milliseconds(1);
-    if (shared_.out.ready) {
-      if (shared_.out.outbox->pop(event, wait))
-        publish(event);
-      else if (shared_.tracker_done && shared_.out.outbox->finished() && pacer_.idle())
-        break;
-    } else if (shared_.tracker_done && pacer_.idle()) {
-      break;
-    } else {
+    if (!shared_.out.ready)
       std::this_thread::sleep_for(wait);
-    }
+    else if (shared_.out.outbox->pop(event, wait))
+      publish(event);
     send_slices();
     receive();
+    send_unacknowledged();
     if (Clock::now() - last_status_ >= period) publish_status(-1);
   }
+  if (const auto note = delivery_.unacknowledged_note(); !note.empty()) shared_.notes.note("exit: " + note);
   publish_status(cvo_lcm::status_t::STATE_STOPPING);
   shared_.publisher_done = true;
 }
@@ -133,6 +133,56 @@ void Publishing::receive() {
   if (!receives_) return;
   pollfd pfd{lcm_.getFileno(), POLLIN, 0};
   while (poll(&pfd, 1, 0) > 0 && (pfd.revents & POLLIN) != 0) lcm_.handle();
+}
+
+// Done once the tracker is done, every event published and every slice sent, and the back end
+// acknowledged what was published (or trackerd.linger_s has passed: delivery.hpp).
+bool Publishing::finished() {
+  const bool idle = shared_.tracker_done && (!shared_.out.ready || shared_.out.outbox->finished()) && pacer_.idle();
+  if (!idle) return false;
+  const auto now = Delivery::Clock::now();
+  if (!done_at_) done_at_ = now;
+  return delivery_.may_exit(*done_at_, now);
+}
+
+// What earlier runs left in the spool (a tracker killed, or out of power, before the back end
+// acknowledged it) goes out first, and waits for acknowledgement as this run's keyframes do.
+void Publishing::hand_over() {
+  const auto left = delivery_.left_over(shared_.session.load());
+  if (left.empty()) return;
+  std::size_t keyframes = 0;
+  for (const auto& e : left) {
+    const auto bytes = delivery_.spooled(e.session, e.id, e.graph);
+    if (!bytes) continue;
+    const std::int8_t message = e.graph ? cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH : cvo_lcm::keyframe_chunk_t::KEYFRAME;
+    send_record({e.session, e.id, message}, *bytes, lcm::content_crc(bytes->data(), bytes->size()), std::nullopt);
+    keyframes += e.graph ? 0 : 1;
+  }
+  delivery_.handed_over(left, Delivery::Clock::now());
+  shared_.notes.note("handing over " + std::to_string(keyframes) + " keyframes (" + std::to_string(left.size()) +
+                     " messages) that an earlier run left in the spool unacknowledged");
+}
+
+// Keyframes the back end has not acknowledged long after they went out are sent again unasked,
+// keyframe then local graph (from the history, or the spool for a session handed over), within the
+// re-send budget.
+void Publishing::send_unacknowledged() {
+  const auto now = Delivery::Clock::now();
+  const double now_s = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+  for (const auto& [session, id] : delivery_.due(now)) {
+    for (const bool graph : {false, true}) {
+      const std::int8_t kind = graph ? cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH : cvo_lcm::keyframe_chunk_t::KEYFRAME;
+      std::vector<std::uint8_t> spooled;
+      std::span<const std::uint8_t> bytes;
+      if (const auto held = shared_.out.ready ? history().find(session, id) : std::nullopt)
+        bytes = graph ? held->graph.bytes : held->keyframe.bytes;
+      if (bytes.empty())
+        if (auto s = delivery_.spooled(session, id, graph)) bytes = spooled = std::move(*s);
+      if (bytes.empty() || !resend_budget_.take(-1, session, bytes.size(), now_s)) continue;
+      send_record({session, id, kind}, bytes, lcm::content_crc(bytes.data(), bytes.size()), std::nullopt);
+    }
+  }
+  if (const auto note = delivery_.spool_note(); !note.empty()) shared_.notes.note_limited("spool", note);
 }
 
 std::optional<std::int64_t> Publishing::authentic(const std::string& channel, const void* data, std::size_t size) {
@@ -161,6 +211,7 @@ void Publishing::publish(const Event& event) {
     const auto crc = lcm::content_crc(bytes.data(), bytes.size());
     send_record({event.session, g.keyframe_id, cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH}, bytes, crc, std::nullopt);
     history().keep_graph(event.session, g.keyframe_id, bytes, crc);
+    delivery_.published(event.session, g.keyframe_id, true, bytes, Delivery::Clock::now());
   }
   if (event.keyframe_slot >= 0)
     publish_keyframe(event);
@@ -204,6 +255,7 @@ void Publishing::publish_keyframe(const Event& event) {
   auto bytes = lcm::encode(*message);
   const auto crc = lcm::content_crc(bytes.data(), bytes.size());
   send_record({event.session, k.id, cvo_lcm::keyframe_chunk_t::KEYFRAME}, bytes, crc, std::nullopt);
+  delivery_.published(event.session, k.id, false, bytes, Delivery::Clock::now());
   if (!history().keep_keyframe(event.session, k.id, bytes, crc) && history().capacity() > 0)
     shared_.notes.note("keyframe " + std::to_string(k.id) + " (" + std::to_string(bytes.size()) +
                        " bytes) is larger than a history slot: it cannot be sent again");
@@ -267,7 +319,7 @@ void Publishing::answer_request(const void* data, int size, std::int64_t request
   const double now_s = std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
   const auto afford = [&](std::size_t bytes) { return resend_budget_.take(requester, request->session, bytes, now_s); };
   const auto answer = history().answer(request->session, request->ids, ranges, send, afford);
-  if (!answer.ours) return;
+  if (!answer.ours) return answer_from_spool(*request, ranges, afford);
   if (!answer.over.empty())
     shared_.notes.note_limited("re-send budget", "keyframes " + id_list(answer.over) + " of session " +
                                                      core::session_name(request->session) +
@@ -286,6 +338,23 @@ void Publishing::answer_request(const void* data, int size, std::int64_t request
   shared_.notes.note_limited("keyframe request", "the back end" + by + " asked again for keyframes of session " +
                                                      core::session_name(request->session) + " (#" + std::to_string(n) +
                                                      "): " + done);
+}
+
+// A request for a session an earlier run left in the spool (handed over): answered from there.
+void Publishing::answer_from_spool(const cvo_lcm::keyframe_request_t& request,
+                                   const std::vector<KeyframeHistory::Wanted>& ranges,
+                                   const KeyframeHistory::Afford& afford) {
+  const auto send = [&](std::int64_t id, bool graph, std::optional<lcm::SliceRange> slices) {
+    const auto bytes = delivery_.spooled(request.session, id, graph);
+    if (!bytes || !afford(bytes->size())) return;
+    const std::int8_t kind = graph ? cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH : cvo_lcm::keyframe_chunk_t::KEYFRAME;
+    send_record({request.session, id, kind}, *bytes, lcm::content_crc(bytes->data(), bytes->size()), slices);
+  };
+  for (const auto id : request.ids) {
+    send(id, false, std::nullopt);
+    send(id, true, std::nullopt);
+  }
+  for (const auto& w : ranges) send(w.id, w.graph, w.slices);
 }
 
 void Publishing::publish_status(std::int8_t state_override) {
@@ -341,6 +410,7 @@ void Publishing::apply_map(const std::string& channel, const void* data, int siz
   const lcm::MapContext context{core::wall_utime(), sender, own_keyframes_};
   const auto decide = channel == "CVO_MAP" ? lcm::decide_map_correction : lcm::decide_session_correction;
   const lcm::CorrectionDecision d = decide(data, size, session, applied_, limits, context);
+  if (d.acknowledged) delivery_.acknowledged(d.acknowledged->first, d.acknowledged->second, Delivery::Clock::now());
   if (d.ignored) return;
   if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped " + channel, d.why);
   const bool was_placed = applied_.session == session && applied_.placed;

@@ -17,7 +17,10 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "cvo_lcm/keyframe_request_t.hpp"
+
 #include "daemon/common/latency_window.hpp"
+#include "daemon/trackerd/delivery.hpp"
 #include "daemon/trackerd/keyframe_history.hpp"
 #include "daemon/trackerd/resend_budget.hpp"
 #include "daemon/trackerd/shared.hpp"
@@ -44,6 +47,11 @@ class Publishing {
   void send_record(const lcm::SlicedName& name, std::span<const std::uint8_t> bytes, std::uint32_t crc,
                    std::optional<lcm::SliceRange> slices);
   void send_slices();
+  bool finished();
+  void hand_over();
+  void send_unacknowledged();
+  void answer_from_spool(const cvo_lcm::keyframe_request_t& request, const std::vector<KeyframeHistory::Wanted>& ranges,
+                         const KeyframeHistory::Afford& afford);
   void remember_keyframe(std::int64_t id, const core::SE3& odometry_pose);
   void answer_request(const void* data, int size, std::int64_t requester);
   void publish_status(std::int8_t state_override);
@@ -62,6 +70,9 @@ class Publishing {
   const std::string robot_;                   // trackerd.robot, named in every message
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again
+  std::string delivery_warning_;               // a spool that could not be opened (noted at start)
+  Delivery delivery_;                         // acknowledgements, the spool, the linger (delivery.hpp)
+  std::optional<Clock::time_point> done_at_;  // when the tracker was done and everything sent
   SlicePacer pacer_;                          // slices waiting to go out (slice_pacer.hpp)
   lcm::AppliedCorrection applied_;            // the last correction applied (either channel)
   // The running session's newest keyframes' odometry poses, for the check of a placement against

@@ -286,6 +286,14 @@ const std::vector<Field>& table() {
           "map pose published before the back end localizes the session: odometry or none"),
       row("trackerd.robot", &Config::trackerd, &TrackerdParameters::robot, kAny,
           "the robot this tracker speaks for, in its messages; $HOSTNAME: the host's name"),
+      row("trackerd.spool", &Config::trackerd, &TrackerdParameters::spool, kAny,
+          "directory where keyframes and local graphs wait until the back end acknowledges them, so that a tracker "
+          "started again after a crash or power cut hands them over (\"\": none)"),
+      row("trackerd.spool_bytes", &Config::trackerd, &TrackerdParameters::spool_bytes, kAtLeastOne,
+          "the spool's bound in bytes: past it the oldest messages go first"),
+      row("trackerd.linger_s", &Config::trackerd, &TrackerdParameters::linger_s, kNonNegative,
+          "at a clean exit, seconds the tracker waits at most for the back end to acknowledge every keyframe it "
+          "published (sending again what is missing), then names what was not (0: does not wait)"),
       row("backendd.lcm_url", &Config::backendd, &BackenddParameters::lcm_url, kAny,
           "LCM provider keyframes and local graphs come from, and CVO_MAP goes to"),
       row("backendd.store", &Config::backendd, &BackenddParameters::store, kAny,

@@ -8,12 +8,14 @@
 
 namespace cvo::lcm {
 
-cvo_lcm::map_correction_t to_message(const slam::SessionCorrection& c, std::int64_t utime, std::int64_t epoch) {
+cvo_lcm::map_correction_t to_message(const slam::SessionCorrection& c, std::int64_t utime, std::int64_t epoch,
+                                     std::int64_t acknowledged) {
   cvo_lcm::map_correction_t m{};
   m.version = cvo_lcm::map_correction_t::SCHEMA_VERSION;
   m.utime = utime;
   m.epoch = epoch;
   m.revision = static_cast<std::int64_t>(c.revision);
+  m.acknowledged = acknowledged;
   m.session = to_message(c.session);
   const std::size_t n = std::min<std::size_t>(c.loops.size(), cvo_lcm::map_correction_t::MAX_LOOPS);
   for (std::size_t i = 0; i < n; ++i) {

@@ -14,7 +14,10 @@ namespace cvo::lcm {
 
 /// `epoch`: when the publishing back end started (map_t.epoch). At most MAX_LOOPS loops go (the
 /// newest: correction.loops is newest first).
-cvo_lcm::map_correction_t to_message(const slam::SessionCorrection& correction, std::int64_t utime, std::int64_t epoch);
+/// `acknowledged`: keyframes of the session below this id are stored with their local graphs
+/// (map_correction_t.acknowledged).
+cvo_lcm::map_correction_t to_message(const slam::SessionCorrection& correction, std::int64_t utime, std::int64_t epoch,
+                                     std::int64_t acknowledged = 0);
 
 /// Fails as map_check.hpp's correction_error() does.
 std::optional<slam::SessionCorrection> from_message(const cvo_lcm::map_correction_t& message, std::string* error);

@@ -214,10 +214,17 @@ CorrectionDecision decide_session_correction(const void* data, int size, std::in
   auto failure = BadKind::kBody;
   const auto message = decode<cvo_lcm::map_correction_t>(data, size, &error, &failure);
   if (!message) return refuse(failure, error);
-  if (message->session.session != session) return ignore("another session's correction");
+  const std::pair acknowledged{message->session.session, message->acknowledged};
+  if (message->session.session != session) {
+    auto d = ignore("another session's correction");
+    d.acknowledged = acknowledged;
+    return d;
+  }
   const SessionWord word{message->epoch, message->revision, &message->session, correction_error(*message),
                          nullptr,        &*message};
-  return decide(word, session, last, limits, context);
+  auto d = decide(word, session, last, limits, context);
+  d.acknowledged = acknowledged;
+  return d;
 }
 
 }  // namespace cvo::lcm

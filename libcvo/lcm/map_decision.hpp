@@ -40,6 +40,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 
 #include "libcvo/core/bad_kind.hpp"
 #include "libcvo/core/se3.hpp"
@@ -87,6 +88,10 @@ struct CorrectionDecision {
   AppliedCorrection correction;                     // when apply: the new state
   core::BadKind refusal = core::BadKind::kContent;  // when refused: CVO_STATUS's bad_messages index
   std::string why;                                  // when refused or ignored: for the daemon's note
+  // A CVO_MAP_CORRECTION that decoded, whatever the decision: its session and what the back end
+  // acknowledged of it (map_correction_t.acknowledged), for the tracker's delivery (any session of
+  // its own, the running one or one it handed over).
+  std::optional<std::pair<std::int64_t, std::int64_t>> acknowledged;
 };
 
 /// The decision for the CVO_MAP bytes `data` (as received) for `session`, given the correction

@@ -31,10 +31,11 @@ constexpr int kMapKeyframe = 8 + 8 + 8 + kPose3d;
 constexpr int kMapLoop = 8 + 8 + kGraphEdge;
 constexpr std::array kMapCounts{CountField{"num_sessions", 28, kMapSession},
                                 CountField{"num_keyframes", 32, kMapKeyframe}, CountField{"num_loops", 36, kMapLoop}};
-// map_correction_t: version, utime, epoch, revision (28), the session's map_session_t (419), then the
-// count of map_correction_loop_t (keyframe, other_session, other_keyframe, measurement, other_pose).
+// map_correction_t: version, utime, epoch, revision, acknowledged (36), the session's map_session_t
+// (427), then the count of map_correction_loop_t (keyframe, other_session, other_keyframe,
+// measurement, other_pose).
 constexpr int kCorrectionLoop = 8 + 8 + 8 + kPose3d + kPose3d;
-constexpr std::array kMapCorrectionCounts{CountField{"num_loops", 28 + kMapSession, kCorrectionLoop}};
+constexpr std::array kMapCorrectionCounts{CountField{"num_loops", 36 + kMapSession, kCorrectionLoop}};
 // keyframe_request_t: version, utime, session (20), then the counts of int64 ids and of ranges (an
 // int64 keyframe id, an int8 message, two int32: first slice, count).
 constexpr std::array kKeyframeRequestCounts{CountField{"num_ids", 20, 8}, CountField{"num_ranges", 24, 8 + 1 + 4 + 4}};
@@ -58,7 +59,7 @@ WireLayout wire_layout(std::string_view type_name) {
   if (type_name == "keyframe_t") return {202, kKeyframeCounts, kStringsAfterArrays, 1};
   if (type_name == "local_graph_t") return {36, kLocalGraphCounts, kStringsAfterArrays, 1};
   if (type_name == "map_t") return {40, kMapCounts, kStringsAfterArrays, 0, 0};
-  if (type_name == "map_correction_t") return {28 + kMapSession + 4, kMapCorrectionCounts, kStringsAfterArrays, 1};
+  if (type_name == "map_correction_t") return {36 + kMapSession + 4, kMapCorrectionCounts, kStringsAfterArrays, 1};
   // pose_t: version, session, utime, frame_index, keyframe_id (36), two poses (148), two booleans
   // (150), epoch, revision (166), state (167), since_match_s (175), covariance[36] (463), a boolean
   // (464), relative_covariance[36] (752), status, is_keyframe (754), 3 doubles (778), 2 int32 (786),
