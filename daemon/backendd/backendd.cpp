@@ -513,7 +513,8 @@ void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t se
       refuse(cvo_lcm::status_t::BAD_CONFLICT, "a slice of " + describe(key) + " with other content: refused");
     return;  // a repeat: a slice re-sent for another, or late
   }
-  if (!graph && chunk->id >= 0) gaps_.seen(KeyframeGaps::Seen::kPose, chunk->session, chunk->id, Clock::now());
+  gaps_.seen(graph ? KeyframeGaps::Seen::kGraphPart : KeyframeGaps::Seen::kPose, chunk->session, chunk->id,
+             Clock::now());
   gaps_.progressed(chunk->session, chunk->id, Clock::now());
   auto added = slices_.add(*chunk);
   using Outcome = lcm::ChunkAssembly::Added::Outcome;

@@ -173,8 +173,8 @@ class Backendd {
   MessageDoor door_;  // cvo-receive only (filled from the store before it starts)
   RecordQuota quota_{config_.backendd.max_records_per_session, config_.backendd.max_records_per_sender};  // the same
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
-  HeldPrefix held_;  // what is acknowledged of each session: cvo-receive marks, cvo-backend reads
-  lcm::ChunkAssembly slices_;               // cvo-receive only: messages that came in part (CVO_KEYFRAME_CHUNK)
+  HeldPrefix held_;            // what is acknowledged of each session: cvo-receive marks, cvo-backend reads
+  lcm::ChunkAssembly slices_;  // cvo-receive only: messages that came in part (CVO_KEYFRAME_CHUNK)
   // cvo-receive only: local graphs put together before their keyframe, let in after it.
   struct EarlyGraph {
     std::vector<std::uint8_t> message;

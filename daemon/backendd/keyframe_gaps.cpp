@@ -58,6 +58,7 @@ void KeyframeGaps::seen(Seen what, std::int64_t session_id, std::int64_t id, Clo
       return;
     }
     case Seen::kPose: expect(session_id, s, id + 1, id, now); return;
+    case Seen::kGraphPart: expect(session_id, s, id + 1, id + 1, now); return;
   }
 }
 

@@ -22,6 +22,7 @@
 //   local graph k                       keyframes up to k, local graphs below k
 //   local graph k refused because its keyframe is unknown (the door): keyframe and local graph k too
 //   a pose tracked against keyframe k   keyframes up to k, local graphs below k
+//   a slice of local graph k            keyframes up to k, local graphs up to k
 // The tracker answers a request for keyframe k with the keyframe, then its local graph, so one
 // request per keyframe id covers both. Counted (CVO_STATUS): keyframes asked for (once each however
 // often asked), recovered (all that was missing of it came after a request), lost (given up).
@@ -73,7 +74,8 @@ class KeyframeGaps {
     kKeyframe,              // let in (received, or replayed from the store)
     kLocalGraph,            // let in
     kGraphWithoutKeyframe,  // a local graph refused: its keyframe is unknown
-    kPose,                  // CVO_POSE: a frame tracked against keyframe `id`
+    kPose,                  // CVO_POSE: a frame tracked against keyframe `id` (or a slice of that keyframe)
+    kGraphPart,             // a slice of keyframe `id`'s local graph: it and its keyframe should come
   };
   void seen(Seen what, std::int64_t session, std::int64_t id, Clock::time_point now);
   /// The session's tracker was heard otherwise (its CVO_STATUS): it is alive, and may still answer.

@@ -22,7 +22,7 @@ namespace cvo::daemon::trackerd {
 class Acknowledgements {
  public:
   using Clock = std::chrono::steady_clock;
-  static constexpr std::chrono::seconds kFirstWait{5}, kMaxWait{20}, kAlive{5};
+  static constexpr std::chrono::seconds kFirstWait{3}, kMaxWait{20}, kAlive{5};
 
   /// Keyframe `id` of `session` and its local graph are out: from now on it can be acknowledged.
   void ready(std::int64_t session, std::int64_t id, Clock::time_point now);

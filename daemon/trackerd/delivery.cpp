@@ -44,10 +44,13 @@ void Delivery::published(std::int64_t session, std::int64_t id, bool graph, std:
 
 void Delivery::acknowledged(std::int64_t session, std::int64_t prefix, Clock::time_point now) {
   const auto ours = acks_.sessions();
-  if (std::find(ours.begin(), ours.end(), session) == ours.end()) return;
+  const bool handed_over_lone =
+      std::any_of(lone_.begin(), lone_.end(), [&](const auto& name) { return name.first == session; });
+  if (std::find(ours.begin(), ours.end(), session) == ours.end() && !handed_over_lone) return;
   acks_.acknowledged(session, prefix, now);
   ever_acknowledged_ = true;
-  if (spool_) spool_->acknowledged(session, prefix);
+  const bool lone = lone_.contains({session, prefix});  // handed over without its graph, all before it held
+  if (spool_) spool_->acknowledged(session, lone ? prefix + 1 : prefix);
 }
 
 std::vector<std::pair<std::int64_t, std::int64_t>> Delivery::due(Clock::time_point now) {
@@ -70,15 +73,26 @@ std::optional<std::vector<std::uint8_t>> Delivery::spooled(std::int64_t session,
   return spool_->read({session, id, graph, 0});
 }
 
+// A keyframe handed over with its graph waits for acknowledgement; one without (the killed session's
+// newest, whose graph never went out) cannot be acknowledged: it goes from the spool once all before
+// it are (acknowledged()).
 void Delivery::handed_over(const std::vector<Spool::Entry>& entries, Clock::time_point now) {
-  for (const auto& e : entries) acks_.ready(e.session, e.id, now);
+  std::set<std::pair<std::int64_t, std::int64_t>> graphs;
+  for (const auto& e : entries)
+    if (e.graph) graphs.emplace(e.session, e.id);
+  for (const auto& e : entries) {
+    if (e.graph) continue;
+    if (graphs.contains({e.session, e.id}))
+      acks_.ready(e.session, e.id, now);
+    else
+      lone_.emplace(e.session, e.id);
+  }
 }
 
 bool Delivery::may_exit(Clock::time_point done_at, Clock::time_point now) const {
   if (!ever_acknowledged_ || now - done_at >= linger_) return true;
   const auto sessions = acks_.sessions();
-  return std::all_of(sessions.begin(), sessions.end(),
-                     [&](std::int64_t s) { return acks_.unacknowledged(s).empty(); });
+  return std::all_of(sessions.begin(), sessions.end(), [&](std::int64_t s) { return acks_.unacknowledged(s).empty(); });
 }
 
 std::string Delivery::unacknowledged_note() const {

@@ -40,7 +40,7 @@ class Delivery {
   [[nodiscard]] std::vector<Spool::Entry> left_over(std::int64_t session) const;
   /// A message the spool holds (graph: the local graph), or nullopt.
   [[nodiscard]] std::optional<std::vector<std::uint8_t>> spooled(std::int64_t session, std::int64_t id,
-                                                                  bool graph) const;
+                                                                 bool graph) const;
   /// Marks the left-over messages handed over: their keyframes wait for acknowledgement as this run's do.
   void handed_over(const std::vector<Spool::Entry>& entries, Clock::time_point now);
 
@@ -56,7 +56,8 @@ class Delivery {
   Acknowledgements acks_;
   std::chrono::duration<double> linger_;
   bool ever_acknowledged_ = false;
-  std::vector<std::string> failures_;  // spool writes that failed, since the last note
+  std::set<std::pair<std::int64_t, std::int64_t>> lone_;  // keyframes handed over without their graphs
+  std::vector<std::string> failures_;                     // spool writes that failed, since the last note
 };
 
 }  // namespace cvo::daemon::trackerd

@@ -70,7 +70,7 @@ class Publishing {
   const std::string robot_;                   // trackerd.robot, named in every message
   std::unique_ptr<KeyframeHistory> history_;  // sized for the camera once the outbox is ready
   ResendBudget resend_budget_;                // what CVO_KEYFRAME_REQUESTs may make it send again
-  std::string delivery_warning_;               // a spool that could not be opened (noted at start)
+  std::string delivery_warning_;              // a spool that could not be opened (noted at start)
   Delivery delivery_;                         // acknowledgements, the spool, the linger (delivery.hpp)
   std::optional<Clock::time_point> done_at_;  // when the tracker was done and everything sent
   SlicePacer pacer_;                          // slices waiting to go out (slice_pacer.hpp)

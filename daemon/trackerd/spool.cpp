@@ -10,6 +10,7 @@
 #include <iterator>
 #include <stdexcept>
 #include <system_error>
+#include <tuple>
 #include <utility>
 
 namespace cvo::daemon::trackerd {
@@ -62,7 +63,11 @@ Spool::Spool(fs::path dir, std::uintmax_t max_bytes) : dir_(std::move(dir)), max
     found.emplace_back(file.last_write_time(ec), *entry);
   }
   if (ec) throw std::runtime_error("trackerd.spool " + dir_.string() + ": " + ec.message());
-  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  // Oldest first; files written within the clock's resolution by name (a keyframe before its graph).
+  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.first, a.second.session, a.second.id, a.second.graph) <
+           std::tie(b.first, b.second.session, b.second.id, b.second.graph);
+  });
   for (const auto& [time, entry] : found) {
     entries_.push_back(entry);
     bytes_ += entry.bytes;

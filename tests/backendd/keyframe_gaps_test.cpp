@@ -228,6 +228,18 @@ TEST(KeyframeGaps, EachPartThatComesRestartsTheBackOffAndTheTimeToGiveUp) {
   EXPECT_EQ(gaps.requested(), 1);
 }
 
+// A slice of a session's newest local graph (sent as the tracker stops, nothing after it to name
+// it) says the graph exists: the rest is asked for.
+TEST(KeyframeGaps, ASliceOfALocalGraphAsksForTheRestOfIt) {
+  KeyframeGaps gaps;
+  send(gaps, 0, 3, t0);  // keyframes 0-2, graphs 0-1
+  gaps.seen(Seen::kGraphPart, kSession, 2, t0);
+  const auto round = gaps.due(t0 + 1s);
+  ASSERT_EQ(round.requests.size(), 1u);
+  EXPECT_EQ(round.requests[0].ids, (Ids{2}));
+  EXPECT_EQ(round.requests[0].graphs_only, (Ids{2})) << "its keyframe came: the graph alone is asked for";
+}
+
 TEST(KeyframeGaps, TheGraphOfAKeyframeGivenUpIsNotCountedAgain) {
   GapPolicy policy;
   policy.requests = 1;

@@ -1,0 +1,167 @@
+// Nothing lost to a dead peer (issue 28): the back end acknowledges what it stores
+// (map_correction_t.acknowledged); a tracker lingers at a clean exit until everything it published
+// is acknowledged, sending again what is not, and names what never was; its spool keeps what is not
+// acknowledged across SIGKILL, and the next start hands it over. Real cvo-trackerd and cvo-backendd
+// on the embedded clip, the back end stopped and started again on the same store while the tracker
+// runs.
+//
+// Runs only inside tests/support/in-private-netns (CVO_PRIVATE_NETNS=1).
+#include <chrono>
+#include <csignal>
+#include <cstdint>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cvo_lcm/status_t.hpp"
+#include "libcvo/core/session.hpp"
+#include "tests/backendd/netns_support.hpp"
+#include "tests/support/run_tool.hpp"
+#include "tests/support/temp_dir.hpp"
+
+namespace cvo::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using cvo::testing::Captured;
+using cvo::testing::DaemonProcess;
+using cvo::testing::KeyframeName;
+using cvo::testing::LcmCapture;
+
+const fs::path kClip = fs::path(CVO_TEST_DATA_DIR) / "fr1_rpy_50";
+
+// Every keyframe a session's poses name.
+std::set<KeyframeName> named_by(const Captured& c, std::int64_t session) {
+  std::set<KeyframeName> names;
+  if (const auto it = c.newest_keyframe.find(session); it != c.newest_keyframe.end())
+    for (std::int64_t id = 0; id <= it->second; ++id) names.emplace(session, id);
+  return names;
+}
+
+// The session of the only tracker heard so far (by its poses), or 0.
+std::int64_t session_of(const Captured& c, const std::set<std::int64_t>& except = {}) {
+  for (const auto& [session, newest] : c.newest_keyframe)
+    if (!except.contains(session)) return session;
+  return 0;
+}
+
+bool said(const fs::path& log, const std::string& text) {
+  return cvo::testing::slurp(log).find(text) != std::string::npos;
+}
+
+bool wait_for_text(const fs::path& log, const std::string& text, std::chrono::seconds limit) {
+  for (auto end = std::chrono::steady_clock::now() + limit; std::chrono::steady_clock::now() < end;
+       std::this_thread::sleep_for(50ms))
+    if (said(log, text)) return true;
+  return false;
+}
+
+class Delivery : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (const auto why = cvo::testing::udp_test_skip_reason(); !why.empty()) GTEST_SKIP() << why;
+    capture_ = std::make_unique<LcmCapture>(dir_.path() / "maps.lcmlog");
+  }
+  // A back end on the test's store; returns once its first CVO_STATUS is heard.
+  std::unique_ptr<DaemonProcess> start_backend(const std::string& name) {
+    const auto err = dir_.path() / (name + ".txt");
+    auto backend = cvo::testing::start_backendd(dir_.path() / "keyframes.store", err);
+    const int pid = backend->pid();
+    EXPECT_TRUE(capture_->wait_until([&](const Captured& c) { return c.status_from(pid); }, 60s))
+        << cvo::testing::slurp(err);
+    return backend;
+  }
+  // Until the tracker's session has made `keyframes` keyframes and the map holds the first ones:
+  // the back end acknowledges as the tracker goes.
+  std::int64_t wait_for_keyframes(std::int64_t keyframes) {
+    std::int64_t session = 0;
+    EXPECT_TRUE(capture_->wait_until(
+        [&](const Captured& c) {
+          session = session_of(c);
+          const auto it = c.newest_keyframe.find(session);
+          return session != 0 && it->second + 1 >= keyframes && c.map_holds({{session, 0}, {session, 1}});
+        },
+        60s));
+    return session;
+  }
+  cvo::test::TempDir dir_;
+  std::unique_ptr<LcmCapture> capture_;
+};
+
+// The back end stops while the tracker runs, and comes back after the tracker's clip ended: the
+// tracker, done, lingers, sends again what the restarted back end does not acknowledge (keyframes
+// beyond any it knows of, which it would never ask for), and exits once all is acknowledged.
+TEST_F(Delivery, ATrackerThatEndsWhileTheBackEndRestartsHasEveryKeyframeStored) {
+  auto backend = start_backend("backend-1");
+  const auto tracker_err = dir_.path() / "trackerd.txt";
+  auto tracker = cvo::testing::start_trackerd(kClip, tracker_err, true, {"trackerd.linger_s=60"});
+  const std::int64_t session = wait_for_keyframes(3);
+  ASSERT_NE(session, 0) << cvo::testing::slurp(tracker_err);
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+  ASSERT_TRUE(wait_for_text(tracker_err, "end of tum:", 60s)) << cvo::testing::slurp(tracker_err);
+  const auto made = named_by(capture_->snapshot(), session);
+  backend = start_backend("backend-2");
+  const auto code = tracker.wait_for(90s);
+  EXPECT_EQ(code.value_or(-9), 0) << cvo::testing::slurp(tracker_err);
+  EXPECT_FALSE(said(tracker_err, "not acknowledged")) << cvo::testing::slurp(tracker_err);
+  EXPECT_TRUE(capture_->wait_until([&](const Captured& c) { return c.map_holds(made); }, 30s))
+      << "the restarted back end lacks keyframes\n"
+      << cvo::testing::slurp(tracker_err) << cvo::testing::slurp(dir_.path() / "backend-2.txt");
+  std::cout << made.size() << " keyframes made, the back end down for the last of them: all stored" << std::endl;
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+}
+
+// The back end never comes back: the tracker lingers trackerd.linger_s, then exits naming the
+// keyframes that were not acknowledged.
+TEST_F(Delivery, ATrackerWhoseBackEndIsGoneNamesWhatWasNotAcknowledged) {
+  auto backend = start_backend("backend");
+  const auto tracker_err = dir_.path() / "trackerd.txt";
+  auto tracker = cvo::testing::start_trackerd(kClip, tracker_err, true, {"trackerd.linger_s=2"});
+  const std::int64_t session = wait_for_keyframes(3);
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+  EXPECT_EQ(tracker.wait_for(60s).value_or(-9), 0) << cvo::testing::slurp(tracker_err);
+  const auto newest = capture_->snapshot().newest_keyframe.at(session);
+  const std::string log = cvo::testing::slurp(tracker_err);
+  EXPECT_NE(log.find("exit: keyframes"), std::string::npos) << log;
+  EXPECT_NE(log.find(std::to_string(newest) + " of session " + core::session_name(session)), std::string::npos)
+      << "the newest keyframe, " << newest << ", is named\n"
+      << log;
+}
+
+// A tracker killed (SIGKILL, as a power cut) while the back end was down: the keyframes it made
+// meanwhile are in its spool, and the tracker started again hands them over.
+TEST_F(Delivery, ATrackerKilledAndStartedAgainHandsItsKeyframesOver) {
+  auto backend = start_backend("backend-1");
+  const auto spool = dir_.path() / "spool";
+  const auto first_err = dir_.path() / "trackerd-1.txt";
+  auto first = cvo::testing::start_trackerd(kClip, first_err, false, {"trackerd.spool=" + spool.string()});
+  const std::int64_t killed = wait_for_keyframes(3);
+  ASSERT_NE(killed, 0) << cvo::testing::slurp(first_err);
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+  ASSERT_TRUE(wait_for_text(first_err, "end of tum:", 60s)) << cvo::testing::slurp(first_err);
+  first.signal(SIGKILL);
+  first.wait_for(10s);
+  const auto made = named_by(capture_->snapshot(), killed);
+  ASSERT_GE(made.size(), 6u);
+
+  backend = start_backend("backend-2");
+  const auto second_err = dir_.path() / "trackerd-2.txt";
+  auto second = cvo::testing::start_trackerd(kClip, second_err, false, {"trackerd.spool=" + spool.string()});
+  EXPECT_TRUE(capture_->wait_until([&](const Captured& c) { return c.map_holds(made); }, 60s))
+      << "the killed session's keyframes did not all reach the map\n"
+      << cvo::testing::slurp(second_err) << cvo::testing::slurp(dir_.path() / "backend-2.txt");
+  EXPECT_TRUE(said(second_err, "handing over")) << cvo::testing::slurp(second_err);
+  std::cout << made.size() << " keyframes of the killed session named by its poses: all in the map" << std::endl;
+  EXPECT_EQ(cvo::testing::stop(second, 60s).value_or(-9), 0);
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+}
+
+}  // namespace
+}  // namespace cvo::daemon
