@@ -27,7 +27,7 @@ std::string ranges(const std::vector<std::int64_t>& ids) {
 
 Delivery::Delivery(const std::string& spool_dir, std::uintmax_t spool_bytes, double linger_s, std::string* warning)
     : linger_(linger_s) {
-  if (spool_dir.empty()) return;
+  if (spool_dir.empty() || spool_dir == "none") return;
   try {
     spool_.emplace(spool_dir, spool_bytes);
   } catch (const std::exception& e) {

@@ -25,7 +25,7 @@ namespace cvo::daemon::trackerd {
 class Delivery {
  public:
   using Clock = Acknowledgements::Clock;
-  /// spool_dir "": no spool. A spool that cannot be opened is none, said in *warning.
+  /// spool_dir "none" (or ""): no spool. A spool that cannot be opened is none, said in *warning.
   Delivery(const std::string& spool_dir, std::uintmax_t spool_bytes, double linger_s, std::string* warning);
 
   /// A message of keyframe `id` went out for the first time (graph: its local graph).

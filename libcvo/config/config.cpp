@@ -288,7 +288,7 @@ const std::vector<Field>& table() {
           "the robot this tracker speaks for, in its messages; $HOSTNAME: the host's name"),
       row("trackerd.spool", &Config::trackerd, &TrackerdParameters::spool, kAny,
           "directory where keyframes and local graphs wait until the back end acknowledges them, so that a tracker "
-          "started again after a crash or power cut hands them over (\"\": none)"),
+          "started again after a crash or power cut hands them over (none: no spool)"),
       row("trackerd.spool_bytes", &Config::trackerd, &TrackerdParameters::spool_bytes, kAtLeastOne,
           "the spool's bound in bytes: past it the oldest messages go first"),
       row("trackerd.linger_s", &Config::trackerd, &TrackerdParameters::linger_s, kNonNegative,

@@ -71,9 +71,9 @@ struct TrackerdParameters {
   std::string map_pose_until_localized = "odometry";
   // The robot this tracker speaks for, in its messages (CVO_STATUS); kHostName: the host's name.
   std::string robot = std::string(kHostName);
-  // Issue 28: what the back end has not acknowledged yet is kept in this directory ("": nowhere)
+  // Issue 28: what the back end has not acknowledged yet is kept in this directory ("none": nowhere)
   // across a crash, up to spool_bytes, and waited for at a clean exit for up to linger_s.
-  std::string spool;
+  std::string spool = "none";
   std::size_t spool_bytes = std::size_t{512} << 20;
   double linger_s = 10.0;
 };

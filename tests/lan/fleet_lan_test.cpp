@@ -85,6 +85,18 @@ std::unique_ptr<DaemonProcess> on_host(int k, const fs::path& program, std::vect
   return std::make_unique<DaemonProcess>("/usr/sbin/ip", args, stderr_file);
 }
 
+// The back end on this host, on a store in `dir`; null (a failure said) when its CVO_STATUS is not heard.
+std::unique_ptr<DaemonProcess> start_backend(const fs::path& dir, LcmCapture& capture) {
+  const auto err = dir / "backendd.txt";
+  auto backend = std::make_unique<DaemonProcess>(
+      fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
+      std::vector<std::string>{"--lcm-url", kLanUrl, "--store", (dir / "keyframes.store").string()}, err);
+  const int pid = backend->pid();
+  if (capture.wait_until([&](const Captured& c) { return c.status_from(pid); }, 60s)) return backend;
+  ADD_FAILURE() << "no CVO_STATUS from the back end\n" << cvo::testing::slurp(err);
+  return nullptr;
+}
+
 // Every keyframe each session's poses name (ids from 0 to its newest).
 std::set<KeyframeName> made(const Captured& c) {
   std::set<KeyframeName> names;
@@ -100,13 +112,9 @@ TEST(FleetLan, ThreeLiveRobotsOverALossyLanHaveEveryKeyframeInTheMap) {
   LcmCapture capture(dir.path() / "maps.lcmlog", kLanUrl);
   ASSERT_TRUE(capture.good());
   const auto backend_err = dir.path() / "backendd.txt";
-  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
-                         {"--lcm-url", kLanUrl, "--store", (dir.path() / "keyframes.store").string()}, backend_err);
-  ASSERT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(backendd.pid()); }, 60s))
-      << capture.snapshot().backend_statuses.size() << " back-end statuses heard (pid "
-      << (capture.snapshot().backend_statuses.empty() ? 0 : capture.snapshot().backend_statuses.back().pid)
-      << ", expected " << backendd.pid() << ")\n"
-      << cvo::testing::slurp(backend_err);
+  auto backend_process = start_backend(dir.path(), capture);
+  ASSERT_TRUE(backend_process);
+  DaemonProcess& backendd = *backend_process;
 
   const double received_before = received_bytes();
   std::vector<std::unique_ptr<DaemonProcess>> robots;
@@ -181,10 +189,9 @@ TEST(FleetLan, EightReplayedRobotsAllJoinWithNoQueueDropAndStatusListsThemAll) {
   LcmCapture capture(dir.path() / "fleet.lcmlog", kLanUrl);
   ASSERT_TRUE(capture.good());
   const auto backend_err = dir.path() / "backendd.txt";
-  DaemonProcess backendd(fs::path(CVO_TOOLS_DIR) / "cvo-backendd",
-                         {"--lcm-url", kLanUrl, "--store", (dir.path() / "keyframes.store").string()}, backend_err);
-  ASSERT_TRUE(capture.wait_until([&](const Captured& c) { return c.status_from(backendd.pid()); }, 60s))
-      << cvo::testing::slurp(backend_err);
+  auto backend_process = start_backend(dir.path(), capture);
+  ASSERT_TRUE(backend_process);
+  DaemonProcess& backendd = *backend_process;
 
   const double cpu_before = cpu_seconds(backendd.pid()), received_before = received_bytes();
   const auto t0 = std::chrono::steady_clock::now();
@@ -214,7 +221,9 @@ TEST(FleetLan, EightReplayedRobotsAllJoinWithNoQueueDropAndStatusListsThemAll) {
   std::cout << kFleet << " robots, " << keyframes.size() << " keyframes, all joined in " << seconds
             << " s: the back end used " << cpu << " CPU s (" << cpu / kFleet << " per robot, each a "
             << "1.7 s clip); its link received " << received / static_cast<double>(keyframes.size()) / 1e3
-            << " kB per keyframe; queue drops " << backend.queue_drops << std::endl;
+            << " kB per keyframe; queue drops " << backend.queue_drops << "; keyframes requested "
+            << backend.keyframes_requested << ", recovered " << backend.keyframes_recovered << ", lost "
+            << backend.keyframes_lost << std::endl;
 
   const auto status = cvo::testing::run_tool("cvo-log", "status " + (dir.path() / "fleet.lcmlog").string(), dir.path());
   EXPECT_EQ(status.exit_code, 0) << status.err;

@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <mutex>
 #include <regex>
 #include <string>
@@ -124,8 +125,11 @@ std::vector<std::uint8_t> map_message(std::uint64_t revision, const std::vector<
 }
 
 // A CVO_MAP_CORRECTION of the back end (epoch 0), of `revision`, for one session's entry.
+// It acknowledges every keyframe (a back end that holds them all): the tracker neither sends them
+// again nor waits for them at its exit.
 std::vector<std::uint8_t> correction_message(std::uint64_t revision, const slam::MapSession& session) {
-  return lcm::encode(lcm::to_message(slam::SessionCorrection{revision, session, {}}, 1, 0));
+  return lcm::encode(lcm::to_message(slam::SessionCorrection{revision, session, {}}, 1, 0,
+                                     std::numeric_limits<std::int64_t>::max()));
 }
 
 // Every message of a replay is of its session, and the open local graph went out at SIGTERM.
