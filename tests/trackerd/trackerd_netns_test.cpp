@@ -128,8 +128,8 @@ std::vector<std::uint8_t> map_message(std::uint64_t revision, const std::vector<
 // It acknowledges every keyframe (a back end that holds them all): the tracker neither sends them
 // again nor waits for them at its exit.
 std::vector<std::uint8_t> correction_message(std::uint64_t revision, const slam::MapSession& session) {
-  return lcm::encode(lcm::to_message(slam::SessionCorrection{revision, session, {}}, 1, 0,
-                                     std::numeric_limits<std::int64_t>::max()));
+  return lcm::encode(
+      lcm::to_message(slam::SessionCorrection{revision, session, {}}, 1, 0, std::numeric_limits<std::int64_t>::max()));
 }
 
 // Every message of a replay is of its session, and the open local graph went out at SIGTERM.
