@@ -121,9 +121,10 @@ class Listener {
       } else if (channel == "CVO_KEYFRAME_CHUNK") {  // the same, in slices (the tracker's default)
         auto c = lcm::decode<cvo_lcm::keyframe_chunk_t>(data, size, nullptr);
         if (c && c->auth.sender != 0 && c->message == cvo_lcm::keyframe_chunk_t::KEYFRAME) {
-          heard_.keyframes.emplace(c->session, c->id);
-          if (auto added = slices_.add(*c); added.outcome == lcm::ChunkAssembly::Added::Outcome::kComplete)
+          if (auto added = slices_.add(*c); added.outcome == lcm::ChunkAssembly::Added::Outcome::kComplete) {
+            heard_.keyframes.emplace(c->session, c->id);
             heard_.newest_keyframe = std::move(added.message);
+          }
         }
       }
     }

@@ -31,6 +31,7 @@
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
+#include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/private_network.hpp"
@@ -138,9 +139,11 @@ class LcmCapture {
       } else if (channel == "CVO_KEYFRAME") {
         if (const auto k = cvo::lcm::decode<cvo_lcm::keyframe_t>(buffer->data, size, nullptr))
           captured_.keyframes.emplace(k->session, k->id);
-      } else if (channel == "CVO_KEYFRAME_CHUNK") {
+      } else if (channel == "CVO_KEYFRAME_CHUNK") {  // sent once every slice of it was (a killed tracker's may not be)
         const auto c = cvo::lcm::decode<cvo_lcm::keyframe_chunk_t>(buffer->data, size, nullptr);
-        if (c && c->message == cvo_lcm::keyframe_chunk_t::KEYFRAME) captured_.keyframes.emplace(c->session, c->id);
+        if (c && c->message == cvo_lcm::keyframe_chunk_t::KEYFRAME &&
+            slices_.add(*c).outcome == cvo::lcm::ChunkAssembly::Added::Outcome::kComplete)
+          captured_.keyframes.emplace(c->session, c->id);
       } else if (channel == "CVO_POSE") {
         if (const auto p = cvo::lcm::decode<cvo_lcm::pose_t>(buffer->data, size, nullptr)) {
           auto& last = captured_.last_frame[p->session];
@@ -162,6 +165,7 @@ class LcmCapture {
   std::mutex mutex_;
   std::condition_variable changed_;
   Captured captured_;
+  cvo::lcm::ChunkAssembly slices_;  // under mutex_
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };
