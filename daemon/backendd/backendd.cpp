@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <thread>
@@ -349,40 +350,33 @@ void Backendd::receive_loop() {
   name_this_thread("cvo-receive");
   ::lcm::LCM lcm(config_.backendd.lcm_url);
   auth::Verifier verifier = bus_.verifier(config_.backendd.lcm_url);  // every buffer, before decoding
-  struct Handler {
+  struct Verified {  // every channel: its buffers verified first, then handed on with their sender
     Backendd* self;
     auth::Verifier* verifier;
-    RecordKind kind;
+    std::function<void(const void*, std::size_t, std::int64_t sender)> then;
     void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
       if (const auto sender = self->authentic(*verifier, channel, buffer->data, buffer->data_size))
-        self->receive(kind, static_cast<const std::uint8_t*>(buffer->data), buffer->data_size, *sender);
+        then(buffer->data, buffer->data_size, *sender);
     }
-  } keyframes{this, &verifier, RecordKind::kKeyframe}, local_graphs{this, &verifier, RecordKind::kLocalGraph};
-  lcm.subscribe("CVO_KEYFRAME", &Handler::handle, &keyframes);
-  lcm.subscribe("CVO_LOCAL_GRAPH", &Handler::handle, &local_graphs);
-  struct Slices {  // CVO_KEYFRAME_CHUNK: verified, then put together into its message
-    Backendd* self;
-    auth::Verifier* verifier;
-    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
-      if (const auto sender = self->authentic(*verifier, channel, buffer->data, buffer->data_size))
-        self->receive_slice(buffer->data, buffer->data_size, *sender);
-    }
-  } slices{this, &verifier};
+  };
+  const auto record = [this](RecordKind kind) {
+    return [this, kind](const void* data, std::size_t size, std::int64_t sender) {
+      receive(kind, static_cast<const std::uint8_t*>(data), size, sender);
+    };
+  };
+  Verified keyframes{this, &verifier, record(RecordKind::kKeyframe)},
+      local_graphs{this, &verifier, record(RecordKind::kLocalGraph)},
+      slices{this, &verifier, [this](const void*d, std::size_t n, std::int64_t s) { receive_slice(d, n, s); }},
+      poses{this, &verifier, [this](const void*d, std::size_t n, std::int64_t) { saw_pose(d, n); }},
+      statuses{this, &verifier, [this](const void*d, std::size_t n, std::int64_t) { saw_status(d, n); }};
+  lcm.subscribe("CVO_KEYFRAME", &Verified::handle, &keyframes);
+  lcm.subscribe("CVO_LOCAL_GRAPH", &Verified::handle, &local_graphs);
   // LCM drops what arrives for a subscription whose queue is full (30 messages by default): a
   // keyframe is a burst of ~200 slices, and several trackers' bursts may meet while a keyframe
   // completed is being stored.
-  lcm.subscribe("CVO_KEYFRAME_CHUNK", &Slices::handle, &slices)->setQueueCapacity(kSliceQueue);
-  struct Heard {  // CVO_POSE and CVO_STATUS: verified, then what the back end learns of a session
-    Backendd* self;
-    auth::Verifier* verifier;
-    void (Backendd::*saw)(const void*, std::size_t);
-    void handle(const ::lcm::ReceiveBuffer* buffer, const std::string& channel) {
-      if (self->authentic(*verifier, channel, buffer->data, buffer->data_size))
-        (self->*saw)(buffer->data, buffer->data_size);
-    }
-  } poses{this, &verifier, &Backendd::saw_pose}, statuses{this, &verifier, &Backendd::saw_status};
-  lcm.subscribe("CVO_POSE", &Heard::handle, &poses);
-  lcm.subscribe("CVO_STATUS", &Heard::handle, &statuses);
+  lcm.subscribe("CVO_KEYFRAME_CHUNK", &Verified::handle, &slices)->setQueueCapacity(kSliceQueue);
+  lcm.subscribe("CVO_POSE", &Verified::handle, &poses);  // what the back end learns of a session
+  lcm.subscribe("CVO_STATUS", &Verified::handle, &statuses);
   const bool log = is_log(config_.backendd.lcm_url);
   while (!stop_) {
     receive_heartbeat_.beat();
