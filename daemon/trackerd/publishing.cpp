@@ -173,13 +173,16 @@ void Publishing::send_unacknowledged() {
     for (const bool graph : {false, true}) {
       const std::int8_t kind = graph ? cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH : cvo_lcm::keyframe_chunk_t::KEYFRAME;
       std::vector<std::uint8_t> spooled;
-      std::span<const std::uint8_t> bytes;
+      KeyframeHistory::Message m;  // from the history (its CRC kept), else from the spool
       if (const auto held = shared_.out.ready ? history().find(session, id) : std::nullopt)
-        bytes = graph ? held->graph.bytes : held->keyframe.bytes;
-      if (bytes.empty())
-        if (auto s = delivery_.spooled(session, id, graph)) bytes = spooled = std::move(*s);
-      if (bytes.empty() || !resend_budget_.take(-1, session, bytes.size(), now_s)) continue;
-      send_record({session, id, kind}, bytes, lcm::content_crc(bytes.data(), bytes.size()), std::nullopt);
+        m = graph ? held->graph : held->keyframe;
+      if (m.bytes.empty())
+        if (auto s = delivery_.spooled(session, id, graph)) {
+          spooled = std::move(*s);
+          m = {spooled, lcm::content_crc(spooled.data(), spooled.size())};
+        }
+      if (m.bytes.empty() || !resend_budget_.take(-1, session, m.bytes.size(), now_s)) continue;
+      send_record({session, id, kind}, m.bytes, m.crc, std::nullopt);
     }
   }
   if (const auto note = delivery_.spool_note(); !note.empty()) shared_.notes.note_limited("spool", note);
