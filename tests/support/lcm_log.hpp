@@ -1,9 +1,11 @@
 #pragma once
 // What a daemon published, read back from an LCM log (the file:// provider's output or
 // lcm-logger's): every message of the cvo-slam channels, decoded with the checking decoder.
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -77,6 +79,38 @@ inline void add_slice(const ::lcm::LogEvent& e, cvo::lcm::ChunkAssembly& slices,
   else
     add_decoded(whole, log.local_graphs, log.undecodable);
 }
+
+/// Records the channels matching `channels` (an LCM regex) from `url` into an LCM log, as
+/// lcm-logger does, in a thread of its own from construction to destruction, but with room for a
+/// burst: lcm-logger keeps LCM's default queue of 30 messages per subscription, and on a loaded
+/// machine misses some of a keyframe's slices (CVO_KEYFRAME_CHUNK) when it falls behind.
+class LcmRecorder {
+ public:
+  LcmRecorder(const std::string& url, const std::string& channels, const std::filesystem::path& file)
+      : lcm_(url), log_(file.string(), "w") {
+    lcm_.subscribe(channels, &LcmRecorder::handle, this)->setQueueCapacity(100000);
+    thread_ = std::thread([this] {
+      while (!stop_) lcm_.handleTimeout(20);
+    });
+  }
+  ~LcmRecorder() {
+    stop_ = true;
+    thread_.join();
+  }
+  LcmRecorder(const LcmRecorder&) = delete;
+  LcmRecorder& operator=(const LcmRecorder&) = delete;
+  [[nodiscard]] bool good() { return lcm_.good() && log_.good(); }
+
+ private:
+  void handle(const ::lcm::ReceiveBuffer* b, const std::string& channel) {
+    ::lcm::LogEvent e{0, b->recv_utime, channel, static_cast<std::int32_t>(b->data_size), b->data};
+    log_.writeEvent(&e);
+  }
+  ::lcm::LCM lcm_;
+  ::lcm::LogFile log_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
 
 inline PublishedLog read_published(const std::filesystem::path& file) {
   PublishedLog log;

@@ -1,5 +1,5 @@
 // cvo-trackerd over real LCM UDP multicast, the way it runs on a robot: a clip converted with
-// tum2lcm is played by lcm-logplayer into a running daemon, whose output lcm-logger records; the
+// tum2lcm is played by lcm-logplayer into a running daemon, whose output is recorded (as lcm-logger would); the
 // recording is decoded and evaluated against ground truth. CVO_MAPs sent mid-replay must correct
 // the map poses that follow only when they place the tracker's own session, are newer than the
 // map applied last and move it plausibly (stale, foreign and implausible maps are counted and
@@ -80,10 +80,9 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
               const std::string& channel = "CVO_MAP") {
   Replay r;
   const auto out = dir / (name + ".lcmlog");
-  DaemonProcess logger(which("lcm-logger"),
-                       {"--lcm-url=" + std::string(kUrl), "-c", "CVO_(POSE|KEYFRAME|KEYFRAME_CHUNK|LOCAL_GRAPH|STATUS)",
-                        "-f", out.string()},
-                       dir / (name + ".logger.txt"));
+  auto logger =
+      std::make_unique<cvo::testing::LcmRecorder>(kUrl, "CVO_(POSE|KEYFRAME|KEYFRAME_CHUNK|LOCAL_GRAPH|STATUS)", out);
+  EXPECT_TRUE(logger->good());
   DaemonProcess trackerd(fs::path(CVO_TOOLS_DIR) / "cvo-trackerd",
                          {"--source", std::string("lcm:") + kUrl, "--lcm-url", kUrl, "--deterministic", "--set",
                           "trackerd.realtime_priority=0", "--set", "trackerd.lock_memory=false"},
@@ -106,8 +105,7 @@ Replay replay(const fs::path& dir, const fs::path& recording, const std::string&
   if (const auto code = trackerd.wait_for(scaled(5s))) r.trackerd_exit = *code;
   r.shutdown_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   std::this_thread::sleep_for(300ms);
-  logger.signal(SIGINT);
-  EXPECT_TRUE(logger.wait_for(5s));
+  logger.reset();  // the log complete
   r.published = cvo::testing::read_published(out);
   return r;
 }
