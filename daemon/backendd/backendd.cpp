@@ -696,8 +696,13 @@ void Backendd::work_loop() {
       process(*queued);
     else if (receiver_done && queue_.size() == 0)
       break;
-    publish_due();
-    if (work_->grid_due && (!work_->grid.last || Clock::now() - *work_->grid.last >= kGridPeriod)) publish_grid(false);
+    try {  // what the map cannot describe now is noted, and described again later: the daemon goes on
+      publish_due();
+      if (work_->grid_due && (!work_->grid.last || Clock::now() - *work_->grid.last >= kGridPeriod))
+        publish_grid(false);
+    } catch (const std::exception& e) {
+      notes_.note_limited("publish failure", std::string("map not published after a failure: ") + e.what());
+    }
     if (Clock::now() - work_->last_status >= status_period)
       publish_status(work_->summary.keyframes == 0 ? cvo_lcm::status_t::STATE_WAITING_FOR_INPUT
                                                    : cvo_lcm::status_t::STATE_RUNNING);
