@@ -16,10 +16,8 @@ struct KindName {
   std::string_view name;
 };
 constexpr std::array kKindNames{
-    KindName{PathKind::orbit, "orbit"},
-    KindName{PathKind::sweep, "sweep"},
-    KindName{PathKind::wall, "wall"},
-    KindName{PathKind::rpy, "rpy"},
+    KindName{PathKind::orbit, "orbit"}, KindName{PathKind::sweep, "sweep"},       KindName{PathKind::wall, "wall"},
+    KindName{PathKind::rpy, "rpy"},     KindName{PathKind::fast_rpy, "fast_rpy"},
 };
 
 // Unit viewing direction from yaw (about world z, from +x) and pitch (up positive).
@@ -78,7 +76,16 @@ std::vector<std::string> path_names() {
   return names;
 }
 
-double path_period(PathKind kind) { return kind == PathKind::wall ? 10.0 : 12.0; }
+double path_period(PathKind kind) {
+  switch (kind) {
+    case PathKind::wall: return 10.0;
+    case PathKind::fast_rpy: return 12.0 / kFastRpyTimeScale;
+    case PathKind::orbit:
+    case PathKind::sweep:
+    case PathKind::rpy: break;
+  }
+  return 12.0;
+}
 
 core::SE3 look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, double roll) {
   // Optical frame: z forward, x right, y down. right = forward x up keeps x horizontal.
@@ -96,6 +103,7 @@ core::SE3 path_pose(PathKind kind, double seconds) {
     case PathKind::sweep: return sweep(seconds);
     case PathKind::wall: return wall(seconds);
     case PathKind::rpy: return rpy(seconds);
+    case PathKind::fast_rpy: return rpy(kFastRpyTimeScale * seconds);
   }
   return {};
 }

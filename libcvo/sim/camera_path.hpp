@@ -2,7 +2,7 @@
 // Canned smooth hand-held camera paths through the simulated room (world z up, see scene.hpp),
 // as closed-form functions of time so ground truth is exact at any timestamp. All are periodic
 // and stay >= 0.5 m from every surface (so every visible point is beyond a sensor's minimum
-// range); speeds stay below 0.5 m/s and, except rpy's, 60 deg/s.
+// range); speeds stay below 0.5 m/s and, except rpy's and fast_rpy's, 60 deg/s.
 //
 //   orbit: the optical centre runs once round a 0.5 m circle at 1.3 m (+-0.1 m bob) while the
 //          camera looks outwards and ~23 degrees down, so it pans a full 360 degrees over walls, floor
@@ -17,6 +17,17 @@
 //          furnished +y side and turns fast about all three axes (yaw +-20 degrees at 5/12 Hz, pitch
 //          +-12 at 7/12 Hz, roll +-15 at 1/2 Hz; up to ~85 deg/s), the motion where a tracker's
 //          rotation, not its translation, is tested. Period 12 s.
+//   fast_rpy: rpy played k = 2.8 times faster (pose(t) = rpy(k t), period 12 / k = 4.29 s): the
+//          same turns at a peak angular rate of 1.5 times fr1/rpy's. fr1/rpy's peak, measured on
+//          its ground truth (100 Hz motion capture) over the span of frames 0-499, as the rotation
+//          angle between the poses 0.05 s before and after each sample divided by 0.1 s (a centred
+//          0.1 s window, three frames at 30 Hz, which smooths the capture's jitter): 158.1 deg/s
+//          (at 3.8 s after frame 0; 165 deg/s over 0.067 s, 138 over 0.2 s). rpy's peak by the same
+//          measure is 87.4 deg/s, so k = 1.5 x 158.1 / 87.4 = 2.80 gives 237 deg/s (about 8 degrees
+//          between frames at 30 Hz; 246 deg/s instantaneous). Render it with a rolling shutter:
+//          --rolling-shutter 0.03, the readout a Kinect v1's colour camera (rolling-shutter CMOS,
+//          rows read continuously at 30 Hz) takes, nearly the whole 33 ms frame; at 237 deg/s the
+//          last row then sees the scene 7 degrees turned from the first.
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -30,7 +41,12 @@
 
 namespace cvo::sim {
 
-enum class PathKind { orbit, sweep, wall, rpy };
+enum class PathKind { orbit, sweep, wall, rpy, fast_rpy };
+
+/// fr1/rpy's peak angular rate (deg/s) over frames 0-499, measured as the header says, and
+/// fast_rpy's time scale relative to rpy.
+inline constexpr double kFr1RpyPeakRateDegS = 158.1;
+inline constexpr double kFastRpyTimeScale = 2.8;
 
 std::string_view path_name(PathKind kind);
 std::optional<PathKind> parse_path_kind(std::string_view name);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "libcvo/core/units.hpp"
+#include "libcvo/sim/colour_noise.hpp"
 #include "libcvo/sim/random.hpp"
 
 namespace cvo::sim {
@@ -18,13 +19,7 @@ namespace {
 
 constexpr std::uint64_t kDropoutTag = 1;
 constexpr std::uint64_t kAxialTag = 2;
-
-// Per-pixel result of the centre ray: z = 0 means no surface within range.
-struct CentreSample {
-  double z = 0;
-  double cos_incidence = 1;  // |cos| of the angle between viewing ray and surface normal
-  int surface = -1;          // whatever the range
-};
+constexpr std::uint64_t kDisparityTag = 4;  // 3 is colour_noise.cpp's
 
 // The ray against the unbounded plane of one surface (for sub-pixel rays whose neighbourhood is
 // known to see only that surface).
@@ -44,11 +39,8 @@ std::optional<Hit> hit_plane(const Scene& scene, int surface, const Ray& ray) {
   return hit;
 }
 
-std::uint8_t to_byte(double c) { return static_cast<std::uint8_t>(std::lround(std::clamp(c, 0.0, 1.0) * 255.0)); }
-cv::Vec3b to_bgr(const Eigen::Vector3d& rgb) { return {to_byte(rgb.z()), to_byte(rgb.y()), to_byte(rgb.x())}; }
-
 // Drops depth next to discontinuities; reads the clean map, writes a mask.
-std::vector<bool> edge_mask(const std::vector<CentreSample>& clean, int width, int height, const NoiseOptions& noise) {
+std::vector<bool> edge_mask(const std::vector<DepthSample>& clean, int width, int height, const NoiseOptions& noise) {
   std::vector<bool> edge(clean.size(), false);
   const int r = noise.edge_band_px;
   if (r <= 0) return edge;
@@ -81,6 +73,16 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const core
 
 core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const PoseAtRow& T_world_camera_at_row,
                        const NoiseOptions& noise, std::uint64_t seed, const RenderOptions& options) {
+  const Radiance radiance = render_radiance(scene, k, T_world_camera_at_row, options);
+  core::RgbdFrame frame;
+  frame.intrinsics = k;
+  frame.bgr = develop_colour(radiance.bgr, 1.0, {}, 0);
+  frame.depth = depth_image(radiance.depth, k, noise, seed);
+  return frame;
+}
+
+Radiance render_radiance(const Scene& scene, const core::Intrinsics& k, const PoseAtRow& T_world_camera_at_row,
+                         const RenderOptions& options) {
   if (const std::string problem = k.validate(); !problem.empty()) throw std::invalid_argument("render: " + problem);
   const int w = k.width, h = k.height;
   std::vector<Eigen::Matrix3d> row_rotation(static_cast<std::size_t>(h));
@@ -98,19 +100,19 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const Pose
   auto colour_of = [&](const std::optional<Hit>& hit) {
     return hit ? surface_colour(scene, *hit) : Eigen::Vector3d::Zero().eval();
   };
+  auto to_bgr = [](const Eigen::Vector3d& rgb) { return cv::Vec3d(rgb.z(), rgb.y(), rgb.x()); };
 
-  core::RgbdFrame frame;
-  frame.intrinsics = k;
-  frame.bgr.create(h, w, CV_8UC3);
-  frame.depth.create(h, w, CV_16UC1);
-  std::vector<CentreSample> clean(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+  Radiance radiance;
+  radiance.bgr.create(h, w, CV_64FC3);
+  radiance.depth.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
+  std::vector<DepthSample>& clean = radiance.depth;
 
   for (int v = 0; v < h; ++v) {
-    auto* bgr = frame.bgr.ptr<cv::Vec3b>(v);
+    auto* bgr = radiance.bgr.ptr<cv::Vec3d>(v);
     for (int u = 0; u < w; ++u) {
       const Ray ray = ray_through(u, v);
       const auto hit = intersect(scene, ray);
-      CentreSample& sample = clean[static_cast<std::size_t>(v * w + u)];
+      DepthSample& sample = clean[static_cast<std::size_t>(v * w + u)];
       if (hit) {
         sample.surface = hit->surface;
         if (hit->t <= options.max_depth) {
@@ -131,7 +133,7 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const Pose
       return u < 0 || v < 0 || u >= w || v >= h ? fallback : clean[static_cast<std::size_t>(v * w + u)].surface;
     };
     for (int v = 0; v < h; ++v) {
-      auto* bgr = frame.bgr.ptr<cv::Vec3b>(v);
+      auto* bgr = radiance.bgr.ptr<cv::Vec3d>(v);
       for (int u = 0; u < w; ++u) {
         const int surface = surface_at(u, v, -1);
         const bool uniform = surface >= 0 && surface_at(u - 1, v, surface) == surface &&
@@ -146,20 +148,29 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const Pose
       }
     }
   }
+  return radiance;
+}
 
+cv::Mat depth_image(const std::vector<DepthSample>& clean, const core::Intrinsics& k, const NoiseOptions& noise,
+                    std::uint64_t seed, const KinectDepthOptions& kinect) {
+  const int w = k.width, h = k.height;
+  cv::Mat image(h, w, CV_16UC1);
+  const bool holes = noise.enabled || kinect.enabled;
   std::vector<bool> edge;
-  if (noise.enabled) edge = edge_mask(clean, w, h, noise);
+  if (holes) edge = edge_mask(clean, w, h, noise);
   const double cos_grazing = std::cos(core::radians(noise.grazing_angle_deg));
   for (int v = 0; v < h; ++v) {
-    auto* depth = frame.depth.ptr<std::uint16_t>(v);
+    auto* depth = image.ptr<std::uint16_t>(v);
     for (int u = 0; u < w; ++u) {
       const auto index = static_cast<std::size_t>(v * w + u);
       double z = clean[index].z;
-      if (noise.enabled && z > 0) {
+      if (holes && z > 0) {
         const std::uint64_t key = hash(seed, index);
         if (clean[index].cos_incidence < cos_grazing || edge[index] ||
             to_unit(hash(key, kDropoutTag)) < noise.dropout_probability)
           z = 0;
+        else if (kinect.enabled)
+          z = kinect_depth(kinect, z, hash(key, kDisparityTag));
         else if (noise.axial)
           z += axial_noise_sigma(z) * gaussian(hash(key, kAxialTag));
       }
@@ -167,7 +178,7 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& k, const Pose
       depth[u] = raw > 0 && raw <= std::numeric_limits<std::uint16_t>::max() ? static_cast<std::uint16_t>(raw) : 0;
     }
   }
-  return frame;
+  return image;
 }
 
 core::RgbdFrame render_separate_depth(const Scene& scene, const core::Intrinsics& colour,

@@ -21,13 +21,24 @@
 //   * random dropout with dropout_probability;
 //   * axial Gaussian noise of std sigma(z) = 0.0012 + 0.0019 (z - 0.4)^2 m (Nguyen, Izadi and
 //     Lovell 2012, Kinect v1, valid for moderate incidence angles).
+// Or, with KinectDepthOptions (kinect_depth.hpp), the sensor's own model instead of the axial
+// noise: disparity noise and 1/8-pixel quantisation, and its range; the holes above (with the
+// NoiseOptions values, enabled or not) come with it.
+//
+// render() is render_radiance() (the linear colour and the centre rays' depth, what the scene
+// sends to the camera) followed by develop_colour() (colour_noise.hpp, gain 1, no noise) and
+// depth_image(): sensor.hpp composes the same steps with exposure, gain and colour noise.
 #include <cstdint>
 #include <functional>
+#include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "libcvo/core/camera.hpp"
 #include "libcvo/core/depth_sensor.hpp"
 #include "libcvo/core/rgbd_frame.hpp"
 #include "libcvo/core/se3.hpp"
+#include "libcvo/sim/kinect_depth.hpp"
 #include "libcvo/sim/scene.hpp"
 
 namespace cvo::sim {
@@ -65,6 +76,27 @@ core::RgbdFrame render(const Scene& scene, const core::Intrinsics& intrinsics, c
 /// T_world_colour through `colour`, depth seen by `depth` from T_world_colour * T_colour_depth, at
 /// the depth sensor's own size and units. frame.intrinsics is the colour camera's. Rendering the
 /// same pose with render() gives the exact registered depth to compare with.
+/// What a pixel's centre ray meets: z = 0 means no surface within range.
+struct DepthSample {
+  double z = 0;
+  double cos_incidence = 1;  // |cos| of the angle between viewing ray and surface normal
+  int surface = -1;          // whatever the range
+};
+
+/// The light reaching the camera, before any sensor: colour (CV_64FC3, BGR, linear, averaged over
+/// the sub-pixel rays when supersampling) and the clean centre-ray depth of every pixel, row-major.
+struct Radiance {
+  cv::Mat bgr;
+  std::vector<DepthSample> depth;
+};
+Radiance render_radiance(const Scene& scene, const core::Intrinsics& intrinsics, const PoseAtRow& T_world_camera_at_row,
+                         const RenderOptions& options = {});
+
+/// The 16-bit depth image (CV_16UC1, intrinsics.depth_scale) of clean samples through the noise
+/// model and, when enabled, the Kinect model (header comment); `seed` drives both.
+cv::Mat depth_image(const std::vector<DepthSample>& clean, const core::Intrinsics& intrinsics,
+                    const NoiseOptions& noise, std::uint64_t seed, const KinectDepthOptions& kinect = {});
+
 core::RgbdFrame render_separate_depth(const Scene& scene, const core::Intrinsics& colour,
                                       const core::DepthSensor& depth, const core::SE3& T_world_colour,
                                       const NoiseOptions& noise = {}, std::uint64_t seed = 0,

@@ -21,12 +21,17 @@ constexpr std::array kKindNames{
     KindName{SceneKind::textured_room, "textured_room"},
     KindName{SceneKind::textureless_room, "textureless_room"},
     KindName{SceneKind::textured_wall, "textured_wall"},
+    KindName{SceneKind::white_room, "white_room"},
 };
 
 // Room interior and furniture (centre x, y; base height; size x, y, z; yaw about z in degrees).
 // Furniture keeps clear of the middle of the room, where the camera paths run.
 const Eigen::Vector3d kRoomMin(-2.0, -2.5, 0.0);
 const Eigen::Vector3d kRoomMax(2.0, 2.5, 2.6);
+const Eigen::Vector3d kWhiteRoomMin(-3.5, -3.2, 0.0);
+const Eigen::Vector3d kWhiteRoomMax(3.5, 3.2, 2.8);
+constexpr double kWhiteRoomSpread = 1.5;  // furniture positions scale with the larger room
+const Eigen::Vector3d kWhiteRoomLight(0.3, -0.4, 2.6);
 
 struct Furniture {
   double x, y, base, sx, sy, sz, yaw_deg;
@@ -60,16 +65,59 @@ void add_box(std::vector<Quad>& quads, const Eigen::Vector3d& centre, const Eige
   }
 }
 
-// Quads grouped by object, for the bounding-box test of intersect().
-std::vector<std::vector<Quad>> room_geometry() {
+// Large enough to fill the view from anywhere in the room, even at +-20 degrees off-axis.
+Quad wall_geometry() {
+  Quad q;
+  q.axis_s = Eigen::Vector3d::UnitX();
+  q.axis_t = Eigen::Vector3d::UnitZ();  // x cross z = -y: faces into the room
+  q.length_s = 12.0;
+  q.length_t = 10.0;
+  q.origin = Eigen::Vector3d(-6.0, kRoomMax.y(), 1.3 - 5.0);
+  return q;
+}
+
+// Quads grouped by object, for the bounding-box test of intersect(): the room box and the
+// furniture, whose floor positions are multiplied by `spread`.
+std::vector<std::vector<Quad>> room_geometry(const Eigen::Vector3d& room_min, const Eigen::Vector3d& room_max,
+                                             double spread) {
   std::vector<std::vector<Quad>> objects(1);
-  add_box(objects[0], (kRoomMin + kRoomMax) / 2, (kRoomMax - kRoomMin) / 2, Eigen::Matrix3d::Identity(), true);
+  add_box(objects[0], (room_min + room_max) / 2, (room_max - room_min) / 2, Eigen::Matrix3d::Identity(), true);
   for (const auto& f : kFurniture) {
     const Eigen::Matrix3d yaw =
         Eigen::AngleAxisd(core::radians(f.yaw_deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    add_box(objects.emplace_back(), {f.x, f.y, f.base + f.sz / 2}, {f.sx / 2, f.sy / 2, f.sz / 2}, yaw, false);
+    add_box(objects.emplace_back(), {spread * f.x, spread * f.y, f.base + f.sz / 2}, {f.sx / 2, f.sy / 2, f.sz / 2},
+            yaw, false);
   }
   return objects;
+}
+
+std::vector<std::vector<Quad>> geometry(SceneKind kind) {
+  switch (kind) {
+    case SceneKind::textured_wall: return {{wall_geometry()}};
+    case SceneKind::white_room: return room_geometry(kWhiteRoomMin, kWhiteRoomMax, kWhiteRoomSpread);
+    case SceneKind::textured_room:
+    case SceneKind::textureless_room: break;
+  }
+  return room_geometry(kRoomMin, kRoomMax, 1.0);
+}
+
+// White paint: grey albedo in [0.85, 0.95], tint within +-0.01 per channel.
+Texture white_texture(std::uint64_t seed) {
+  Draws draws(seed);
+  const double grey = draws.uniform(0.85, 0.95);
+  Eigen::Vector3d rgb;
+  for (int c = 0; c < 3; ++c) rgb[c] = grey + draws.uniform(-0.01, 0.01);
+  return flat_texture(rgb);
+}
+
+Texture surface_texture(SceneKind kind, std::uint64_t seed) {
+  switch (kind) {
+    case SceneKind::textureless_room: return random_flat_texture(seed);
+    case SceneKind::white_room: return white_texture(seed);
+    case SceneKind::textured_room:
+    case SceneKind::textured_wall: break;
+  }
+  return random_texture(seed);
 }
 
 Eigen::AlignedBox3d bounds_of(const std::vector<Quad>& quads) {
@@ -100,17 +148,6 @@ bool ray_meets_box(const Ray& ray, const Eigen::AlignedBox3d& box, double t_max)
   return true;
 }
 
-// Large enough to fill the view from anywhere in the room, even at +-20 degrees off-axis.
-Quad wall_geometry() {
-  Quad q;
-  q.axis_s = Eigen::Vector3d::UnitX();
-  q.axis_t = Eigen::Vector3d::UnitZ();  // x cross z = -y: faces into the room
-  q.length_s = 12.0;
-  q.length_t = 10.0;
-  q.origin = Eigen::Vector3d(-6.0, kRoomMax.y(), 1.3 - 5.0);
-  return q;
-}
-
 }  // namespace
 
 std::string_view scene_name(SceneKind kind) {
@@ -133,19 +170,20 @@ std::vector<std::string> scene_names() {
 
 Eigen::AlignedBox3d room_bounds() { return {kRoomMin, kRoomMax}; }
 
+Eigen::AlignedBox3d room_bounds(SceneKind kind) {
+  return kind == SceneKind::white_room ? Eigen::AlignedBox3d(kWhiteRoomMin, kWhiteRoomMax) : room_bounds();
+}
+
+bool is_textured(SceneKind kind) { return kind == SceneKind::textured_room || kind == SceneKind::textured_wall; }
+
 Scene make_scene(SceneKind kind, std::uint64_t seed) {
   Scene scene;
   scene.kind = kind;
   scene.seed = seed;
-  const auto objects =
-      kind == SceneKind::textured_wall ? std::vector<std::vector<Quad>>{{wall_geometry()}} : room_geometry();
-  for (const auto& quads : objects) {
+  if (kind == SceneKind::white_room) scene.light = kWhiteRoomLight;
+  for (const auto& quads : geometry(kind)) {
     scene.objects.push_back({scene.surfaces.size(), quads.size(), bounds_of(quads)});
-    for (const Quad& q : quads) {
-      const std::uint64_t surface_seed = hash(seed, scene.surfaces.size());
-      scene.surfaces.push_back(
-          {q, kind == SceneKind::textureless_room ? random_flat_texture(surface_seed) : random_texture(surface_seed)});
-    }
+    for (const Quad& q : quads) scene.surfaces.push_back({q, surface_texture(kind, hash(seed, scene.surfaces.size()))});
   }
   return scene;
 }

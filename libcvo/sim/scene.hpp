@@ -6,6 +6,15 @@
 // World frame: z up, floor at z = 0. The room is the box [-2, 2] x [-2.5, 2.5] x [0, 2.6] m seen
 // from inside; furniture boxes (some rotated about z) stand on the floor and on a table.
 //
+// white_room is the texture-less room of a real camera: a larger box, [-3.5, 3.5] x [-3.2, 3.2] x
+// [0, 2.8] m, so that from the paths' centre (orbit, rpy, fast_rpy) the walls are 3-4 m away (where
+// Kinect depth is coarse: 2.6 cm steps at 3 m, kinect_depth.hpp), the same furniture moved out with
+// it (positions times 1.5), every surface white: a grey albedo in [0.85, 0.95] per surface and a
+// tint of at most +-0.01 per channel, no texture. Its light hangs higher (2.6 m, under the
+// ceiling). What varies across the image is Lambert shading, smooth over a surface: rendered
+// exactly, every colour is one of a few levels; with a camera's colour noise (colour_noise.hpp)
+// every pixel differs by a few noise-driven levels, as on a real camera.
+//
 // Colour of a surface point p with front normal n (viewpoint independent, as brightness-constancy
 // methods assume):  rgb = albedo(s, t) * (ambient + (1 - ambient) max(0, n . (light - p)/|light - p|)).
 #include <cstddef>
@@ -26,6 +35,7 @@ enum class SceneKind {
   textured_room,     // room + furniture, rich texture: geometry and appearance
   textureless_room,  // same geometry, one flat colour per surface: geometry only
   textured_wall,     // one large textured plane: appearance only, no structure
+  white_room,        // a larger room, white surfaces (see above): structure, no texture
 };
 
 std::string_view scene_name(SceneKind kind);
@@ -70,9 +80,14 @@ struct Scene {
 /// Builds a scene; textures (and flat colours) are drawn from the seed, geometry is fixed.
 Scene make_scene(SceneKind kind, std::uint64_t seed);
 
-/// The room's interior, shared by all scene kinds (the textured wall stands where the room's
-/// y = +2.5 wall is, so every camera path fits every scene).
+/// The room's interior, shared by all scene kinds but white_room (the textured wall stands where
+/// the room's y = +2.5 wall is, so every camera path fits every scene).
 Eigen::AlignedBox3d room_bounds();
+/// The interior of the room of `kind`: room_bounds(), or white_room's larger box.
+Eigen::AlignedBox3d room_bounds(SceneKind kind);
+
+/// Whether the scene's surfaces carry texture (the textured room and wall) or are flat colours.
+bool is_textured(SceneKind kind);
 
 /// A ray origin + t direction; direction need not be unit length (t is in units of it).
 struct Ray {

@@ -44,6 +44,20 @@ void write_text(const std::filesystem::path& file, const std::string& text) {
   if (!out) throw io::InputError(file, "write failed");
 }
 
+// The cvo-render arguments that give these options (the defaults left out), for the lists' headers.
+std::string command_line(const SequenceOptions& options) {
+  std::string line = "cvo-render --scene " + std::string(scene_name(options.scene)) + " --path " +
+                     std::string(path_name(options.path)) + " --seed " + std::to_string(options.seed);
+  if (options.noise.enabled) line += " --noise";
+  if (options.intrinsics.rolling_shutter())
+    line += " --rolling-shutter " + std::to_string(options.intrinsics.readout_s);
+  if (options.sensor.kinect_depth.enabled) line += " --sensor kinect";
+  if (options.sensor.exposure.exposure_s > 0)
+    line += " --exposure " + std::to_string(options.sensor.exposure.exposure_s);
+  if (options.sensor.auto_exposure.enabled) line += " --auto-exposure";
+  return line;
+}
+
 }  // namespace
 
 std::string stamp_string(double seconds) {
@@ -62,26 +76,23 @@ SequenceSummary write_sequence(const std::filesystem::path& dir, const SequenceO
 
   const Scene scene = make_scene(options.scene, options.seed);
   const core::Trajectory truth = sample_path(options.path, options.frames, options.start_time, options.rate_hz);
-  const std::string source =
-      "# file: 'cvo-render --scene " + std::string(scene_name(options.scene)) + " --path " +
-      std::string(path_name(options.path)) + " --seed " + std::to_string(options.seed) +
-      (options.noise.enabled ? " --noise" : "") +
-      (options.intrinsics.rolling_shutter() ? " --rolling-shutter " + std::to_string(options.intrinsics.readout_s)
-                                            : "") +
-      "'\n";
+  const std::string source = "# file: '" + command_line(options) + "'\n";
   std::string rgb_list = "# color images\n" + source + "# timestamp filename\n";
   std::string depth_list = "# depth maps\n" + source + "# timestamp filename\n";
 
   SequenceSummary summary;
   std::size_t valid = 0;
+  AutoExposure auto_exposure(options.sensor.auto_exposure, options.rate_hz);
   for (std::size_t i = 0; i < truth.size(); ++i) {
     // The ground truth is the middle row's pose; a rolling shutter sees row v at its own time.
     const double seconds = truth[i].timestamp - options.start_time;
     const core::Intrinsics& k = options.intrinsics;
-    const auto pose_at_row = [&](int v) {
-      return path_pose(options.path, seconds + k.readout_s * (v / std::max(k.height - 1.0, 1.0) - 0.5));
+    const auto pose = [&](int v, double offset_s) {
+      return path_pose(options.path, seconds + offset_s + k.readout_s * (v / std::max(k.height - 1.0, 1.0) - 0.5));
     };
-    const core::RgbdFrame frame = render(scene, k, pose_at_row, options.noise, hash(options.seed, i), options.render);
+    const Radiance radiance = expose(scene, k, pose, options.sensor.exposure, options.render);
+    const double gain = options.sensor.auto_exposure.enabled ? auto_exposure.expose(mean_luminance(radiance.bgr)) : 1.0;
+    const core::RgbdFrame frame = develop(radiance, k, gain, options.noise, options.sensor, hash(options.seed, i));
     const std::string stamp = stamp_string(truth[i].timestamp);
     write_image(dir / "rgb" / (stamp + ".png"), frame.bgr);
     write_image(dir / "depth" / (stamp + ".png"), frame.depth);

@@ -7,7 +7,9 @@
 //   camera.yaml        fx fy cx cy width height depth_scale
 // Frame i is stamped start_time + i / rate_hz rounded to the microsecond (STAMP has 6 decimals);
 // depth shares the colour stamp. The textures come from `seed`, the depth noise of frame i from
-// hash(seed, i): the same options give byte-identical files.
+// hash(seed, i): the same options give byte-identical files. The sensor effects (sensor.hpp) apply
+// per frame, the auto-exposure loop across frames in order; the ground truth is the pose at each
+// frame's stamp (the middle row's, mid-exposure).
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -17,6 +19,7 @@
 #include "libcvo/sim/camera_path.hpp"
 #include "libcvo/sim/render.hpp"
 #include "libcvo/sim/scene.hpp"
+#include "libcvo/sim/sensor.hpp"
 
 namespace cvo::sim {
 
@@ -26,6 +29,7 @@ struct SequenceOptions {
   std::size_t frames = 360;
   std::uint64_t seed = 0;
   NoiseOptions noise;
+  SensorOptions sensor;
   RenderOptions render;
   core::Intrinsics intrinsics{525.0, 525.0, 319.5, 239.5, 640, 480, 5000.0};  // the "synthetic" preset
   double start_time = 1000.0;
