@@ -19,18 +19,21 @@ double colour_noise_sigma(const ColourNoiseOptions& options, double level) {
 cv::Mat develop_colour(const cv::Mat& linear, double gain, const ColourNoiseOptions& options, std::uint64_t seed) {
   CV_Assert(linear.type() == CV_64FC3);
   cv::Mat out(linear.size(), CV_8UC3);
+  const double common = std::sqrt(options.channel_correlation), own = std::sqrt(1.0 - options.channel_correlation);
   for (int v = 0; v < linear.rows; ++v) {
     const auto* in = linear.ptr<cv::Vec3d>(v);
     auto* bytes = out.ptr<cv::Vec3b>(v);
-    for (int u = 0; u < linear.cols; ++u)
+    for (int u = 0; u < linear.cols; ++u) {
+      const auto index = static_cast<std::uint64_t>(v) * static_cast<std::uint64_t>(linear.cols) + u;
+      const double shared = options.enabled ? gaussian(hash(seed, index, kColourTag, 3)) : 0.0;
       for (int c = 0; c < 3; ++c) {
         double level = std::clamp(gain * in[u][c], 0.0, 1.0) * 255.0;
-        if (options.enabled) {
-          const auto index = static_cast<std::uint64_t>(v) * static_cast<std::uint64_t>(linear.cols) + u;
-          level += colour_noise_sigma(options, level) * gaussian(hash(seed, index, kColourTag, c));
-        }
+        if (options.enabled)
+          level += colour_noise_sigma(options, level) *
+                   (common * shared + own * gaussian(hash(seed, index, kColourTag, static_cast<std::uint64_t>(c))));
         bytes[u][c] = static_cast<std::uint8_t>(std::clamp(std::lround(level), 0L, 255L));
       }
+    }
   }
   return out;
 }

@@ -10,11 +10,19 @@
 //                                        variance grows with the signal, plus signal-independent
 //                                        read noise; Foi et al. 2008, "Practical Poissonian-Gaussian
 //                                        noise modeling and fitting for single-image raw-data")
-//     level = clamp(round(I + sigma(I) n), 0, 255),  n standard normal from (seed, pixel, channel).
-// read = 1 level, shot = 0.02 level: about 2.2 levels on a white wall (I ~ 200) and 1.4 on a dark
-// one, "a few levels" of a webcam-class sensor at indoor exposure (chosen, not measured: the
-// Kinect v1's colour camera has no published noise figures). Channels are independent (no Bayer
-// demosaicing correlation).
+//     level_c = clamp(round(I_c + sigma(I_c) (sqrt(rho) n + sqrt(1 - rho) n_c)), 0, 255)
+// with n, n_c standard normals from (seed, pixel): n common to the channels, n_c each its own.
+// rho is the channels' noise correlation: a Bayer sensor measures one colour per pixel and
+// demosaicing fills the other two from the neighbours, mostly from green, so the channels share
+// most of their high-frequency noise; rho = 0.9 (chosen; the grey image's noise is then 0.97
+// sigma, with independent channels it would be 0.67 sigma).
+// read = 2 levels, shot = 0.25 level: 5.7 levels at mid-grey (I ~ 115, where auto-exposure puts
+// a white wall), 7.4 at I = 200. Not measured on a Kinect (its colour camera has no published
+// noise figures): chosen so that on a white wall the noise alone passes the point selector's
+// DSO-style threshold (region median of |gradient| + 7 levels, registration/point_selection.hpp)
+// in about 1 % of the pixels: 3000+ candidates spread over the uniform surfaces, as the issue
+// measured on a real Kinect recording of white structure (~3000 points a frame). Less noise
+// (2 levels, say) gives a few dozen points, a scene a real camera does not produce.
 #include <cstdint>
 
 #include <opencv2/core.hpp>
@@ -23,8 +31,9 @@ namespace cvo::sim {
 
 struct ColourNoiseOptions {
   bool enabled = false;
-  double read_sigma_levels = 1.0;
-  double shot_levels = 0.02;  // variance per level of signal
+  double read_sigma_levels = 2.0;
+  double shot_levels = 0.25;         // variance per level of signal
+  double channel_correlation = 0.9;  // rho
 };
 
 /// Noise std (8-bit levels) at signal `level` (0-255), the model above.

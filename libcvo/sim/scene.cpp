@@ -44,6 +44,13 @@ constexpr std::array kFurniture{
     Furniture{-1.25, -1.6, 0.0, 0.9, 0.5, 0.45, -15.0},  // bench
 };
 
+// white_room's own furniture, against the +-x walls, which the room's furniture leaves bare: without
+// it a view of that wall holds two planes only, and motion along their common line is unobservable.
+constexpr std::array kWhiteRoomFurniture{
+    Furniture{3.0, 0.3, 0.0, 0.6, 1.2, 1.0, 10.0},      // sideboard at the +x wall
+    Furniture{-2.95, -0.2, 0.0, 0.5, 0.9, 1.4, -20.0},  // shelf at the -x wall
+};
+
 // Faces of the box centre + R diag(half) [-1, 1]^3. Face normals point out of the box (furniture)
 // or into it (a room seen from inside); the bottom face is left out for furniture, which stands on
 // something.
@@ -78,23 +85,30 @@ Quad wall_geometry() {
 
 // Quads grouped by object, for the bounding-box test of intersect(): the room box and the
 // furniture, whose floor positions are multiplied by `spread`.
+void add_furniture(std::vector<std::vector<Quad>>& objects, const Furniture& f, double spread) {
+  const Eigen::Matrix3d yaw = Eigen::AngleAxisd(core::radians(f.yaw_deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  add_box(objects.emplace_back(), {spread * f.x, spread * f.y, f.base + f.sz / 2}, {f.sx / 2, f.sy / 2, f.sz / 2}, yaw,
+          false);
+}
+
 std::vector<std::vector<Quad>> room_geometry(const Eigen::Vector3d& room_min, const Eigen::Vector3d& room_max,
                                              double spread) {
   std::vector<std::vector<Quad>> objects(1);
   add_box(objects[0], (room_min + room_max) / 2, (room_max - room_min) / 2, Eigen::Matrix3d::Identity(), true);
-  for (const auto& f : kFurniture) {
-    const Eigen::Matrix3d yaw =
-        Eigen::AngleAxisd(core::radians(f.yaw_deg), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    add_box(objects.emplace_back(), {spread * f.x, spread * f.y, f.base + f.sz / 2}, {f.sx / 2, f.sy / 2, f.sz / 2},
-            yaw, false);
-  }
+  for (const auto& f : kFurniture) add_furniture(objects, f, spread);
+  return objects;
+}
+
+std::vector<std::vector<Quad>> white_room_geometry() {
+  auto objects = room_geometry(kWhiteRoomMin, kWhiteRoomMax, kWhiteRoomSpread);
+  for (const auto& f : kWhiteRoomFurniture) add_furniture(objects, f, 1.0);
   return objects;
 }
 
 std::vector<std::vector<Quad>> geometry(SceneKind kind) {
   switch (kind) {
     case SceneKind::textured_wall: return {{wall_geometry()}};
-    case SceneKind::white_room: return room_geometry(kWhiteRoomMin, kWhiteRoomMax, kWhiteRoomSpread);
+    case SceneKind::white_room: return white_room_geometry();
     case SceneKind::textured_room:
     case SceneKind::textureless_room: break;
   }
