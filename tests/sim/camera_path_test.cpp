@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -51,17 +52,40 @@ TEST(ScenePath, StaysClearOfSurfacesAtHandHeldSpeeds) {
     }
     EXPECT_GE(clearance, 0.5) << name;
     EXPECT_LE(max_speed, 0.5) << name;
-    const bool turns_in_place = kind == PathKind::rpy;
-    EXPECT_LE(max_rate_deg, turns_in_place ? 90.0 : 60.0) << name;
+    const bool turns_in_place = kind == PathKind::rpy || kind == PathKind::fast_rpy;
+    EXPECT_LE(max_rate_deg, kind == PathKind::fast_rpy ? 250.0 : turns_in_place ? 90.0 : 60.0) << name;
     if (turns_in_place) {
       EXPECT_GT(max_rate_deg, 60.0) << name << " turns slowly";
-      EXPECT_LT(max_speed, 0.1) << name << " does not stay in place";
+      EXPECT_LT(max_speed, kind == PathKind::fast_rpy ? 0.3 : 0.1) << name << " does not stay in place";
     } else {
       EXPECT_GT(max_speed, 0.1) << name << " hardly moves";
     }
     const core::SE3 back = path_pose(kind, 0).inverse() * path_pose(kind, path_period(kind));
     EXPECT_LT(back.translation().norm(), 1e-9) << name;
     EXPECT_LT(back.angle(), 1e-9) << name;
+  }
+}
+
+// Peak angular rate as camera_path.hpp measures fr1/rpy's: the angle between the poses 0.05 s
+// before and after, over 0.1 s, at every millisecond of one period.
+double peak_rate_deg_s(PathKind kind) {
+  double peak = 0;
+  for (double t = 0; t < path_period(kind); t += 1e-3) {
+    const core::SE3 step = path_pose(kind, t - 0.05).inverse() * path_pose(kind, t + 0.05);
+    peak = std::max(peak, step.angle() / 0.1 * 180.0 / std::numbers::pi);
+  }
+  return peak;
+}
+
+TEST(ScenePath, FastRpyTurnsAtOneAndAHalfTimesFr1RpysPeakRate) {
+  EXPECT_DOUBLE_EQ(kFr1RpyPeakRateDegS, 158.1);
+  const double fast = peak_rate_deg_s(PathKind::fast_rpy), slow = peak_rate_deg_s(PathKind::rpy);
+  std::cout << "peak rate (0.1 s window): rpy " << slow << " deg/s, fast_rpy " << fast << " deg/s\n";
+  EXPECT_NEAR(fast, 1.5 * kFr1RpyPeakRateDegS, 0.01 * 1.5 * kFr1RpyPeakRateDegS);
+  // The same turns, only faster.
+  for (const double t : {0.3, 1.7, 3.1}) {
+    const core::SE3 e = path_pose(PathKind::rpy, kFastRpyTimeScale * t).inverse() * path_pose(PathKind::fast_rpy, t);
+    EXPECT_LT(e.angle() + e.translation().norm(), 1e-12) << t;
   }
 }
 

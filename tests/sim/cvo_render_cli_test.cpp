@@ -67,6 +67,26 @@ TEST(CvoRenderCli, WritesADeterministicTumFolder) {
   fs::remove_all(b);
 }
 
+// The stress options: the same arguments give the same bytes (noise, blur and the auto-exposure
+// loop all follow the seed), and the lists' header names them.
+TEST(CvoRenderCli, SensorEffectsAreDeterministicAndNamedInTheLists) {
+  const fs::path a = temp_path("cvo_render_cli_stress_a"), b = temp_path("cvo_render_cli_stress_b");
+  const std::string args =
+      " --scene white_room --path fast_rpy --frames 2 --seed 3 --sensor kinect --exposure 0.01 --auto-exposure"
+      " --rolling-shutter 0.03";
+  ASSERT_EQ(run(a.string() + args), 0);
+  ASSERT_EQ(run(b.string() + args), 0);
+  for (const auto& entry : fs::directory_iterator(a / "rgb"))
+    EXPECT_EQ(contents(entry.path()), contents(b / "rgb" / entry.path().filename()));
+  for (const auto& entry : fs::directory_iterator(a / "depth"))
+    EXPECT_EQ(contents(entry.path()), contents(b / "depth" / entry.path().filename()));
+  const std::string list = contents(a / "rgb.txt");
+  EXPECT_NE(list.find("--scene white_room --path fast_rpy --seed 3 --rolling-shutter"), std::string::npos) << list;
+  EXPECT_NE(list.find("--sensor kinect --exposure 0.010000 --auto-exposure"), std::string::npos) << list;
+  fs::remove_all(a);
+  fs::remove_all(b);
+}
+
 TEST(CvoRenderCli, BadArgumentsExitTwoIoErrorsExitOne) {
   const fs::path out = temp_path("cvo_render_cli_bad");
   EXPECT_EQ(run("--help"), 0);
@@ -78,6 +98,8 @@ TEST(CvoRenderCli, BadArgumentsExitTwoIoErrorsExitOne) {
   EXPECT_EQ(run(out.string() + " --seed -1"), 2);
   EXPECT_EQ(run(out.string() + " --frames"), 2);
   EXPECT_EQ(run(out.string() + " --bogus"), 2);
+  EXPECT_EQ(run(out.string() + " --sensor kinect2"), 2);
+  EXPECT_EQ(run(out.string() + " --exposure -0.01"), 2);
   EXPECT_EQ(run(out.string() + " other"), 2);
   EXPECT_FALSE(fs::exists(out));
   const fs::path file = temp_path("cvo_render_cli_file");
@@ -89,7 +111,9 @@ TEST(CvoRenderCli, BadArgumentsExitTwoIoErrorsExitOne) {
 TEST(CvoRenderCli, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   const fs::path scratch = temp_path("cvo_render_cli_contract");
   fs::create_directories(scratch);
-  cvo::testing::expect_cli_contract("cvo-render", "", {"OUTDIR", "--scene", "--path", "--frames", "--seed", "--noise"},
+  cvo::testing::expect_cli_contract("cvo-render", "",
+                                    {"OUTDIR", "--scene", "--path", "--frames", "--seed", "--noise",
+                                     "--rolling-shutter", "--sensor", "--exposure", "--auto-exposure"},
                                     scratch);
   fs::remove_all(scratch);
 }

@@ -140,7 +140,7 @@ TEST(RenderTexture, TexturedHasGradientEverywhereTexturelessOnlyAtEdges) {
     for (const double t : {0.0, 0.5 * path_period(default_path(kind))}) {
       const core::SE3 pose = path_pose(default_path(kind), t);
       const cv::Mat mag = gradient_magnitude(render(scene, k, pose).bgr);
-      if (kind != SceneKind::textureless_room) {
+      if (is_textured(kind)) {
         constexpr int kBlock = 32;
         int blocks = 0, weak = 0;
         double weakest = 1e9;
