@@ -9,11 +9,11 @@
 // white_room is the texture-less room of a real camera: a larger box, [-3.5, 3.5] x [-3.2, 3.2] x
 // [0, 2.8] m, so that from the paths' centre (orbit, rpy, fast_rpy) the walls are 3-4 m away (where
 // Kinect depth is coarse: 2.6 cm steps at 3 m, kinect_depth.hpp), the same furniture moved out with
-// it (positions times 1.5) and two more boxes against the +-x walls, every surface white: a grey albedo in [0.85, 0.95] per surface and a
-// tint of at most +-0.01 per channel, no texture. Its light hangs higher (2.6 m, under the
-// ceiling). What varies across the image is Lambert shading, smooth over a surface: rendered
-// exactly, every colour is one of a few levels; with a camera's colour noise (colour_noise.hpp)
-// every pixel differs by a few noise-driven levels, as on a real camera.
+// it (positions times 1.5) and two more boxes against the +-x walls, every surface white: a grey albedo in [0.85, 0.95]
+// per surface and a tint of at most +-0.01 per channel, no texture. Its light hangs higher (2.6 m, under the ceiling).
+// What varies across the image is Lambert shading, smooth over a surface: rendered exactly, every colour is one of a
+// few levels; with a camera's colour noise (colour_noise.hpp) every pixel differs by a few noise-driven levels, as on a
+// real camera.
 //
 // Colour of a surface point p with front normal n (viewpoint independent, as brightness-constancy
 // methods assume):  rgb = albedo(s, t) * (ambient + (1 - ambient) max(0, n . (light - p)/|light - p|)).
