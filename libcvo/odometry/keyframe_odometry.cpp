@@ -199,10 +199,10 @@ bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {
 
 // Eq. 7 and 8: frame to frame from the constant velocity, keyframe to frame from the chain; then
 // T̄_m^n, the keyframe result fused with the chain (see the header; the raw one goes to the graph).
-KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& result, double f2f_ell_start) {
+KeyframeOdometry::Registrations KeyframeOdometry::register_frame(TrackResult& result, const FrameStart& f2f_start) {
   Registrations r;
   const auto start = Clock::now();
-  r.f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_ell_start);
+  r.f2f = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_start.ell, f2f_start.reuse);
   result.frame_registration_ms += ms_since(start);
   const bool f2f_ok = r.f2f.converged, separate = keyframe_ != previous_;
   r.kf = r.f2f;  // the keyframe is the previous frame: one registration
@@ -317,22 +317,29 @@ std::optional<core::Matrix6d> KeyframeOdometry::fill_covariances(const Registrat
 // measures T_{n-1}^n, and the frame is selected again with it; so is frame n-1 when it was
 // selected without a motion (a session's first frame, the first after a failure). Returns where
 // the frame-to-frame registration of those points starts: at ℓ_min from the first one's result,
-// or (nothing to compensate, or the first registration failed: the points stand) as without.
-double KeyframeOdometry::select_with_own_motion(const core::RgbdFrame& frame, TrackResult& result) {
-  if (!compensates(frame)) return f2f_ell_start();
+// keeping its grid and candidate pairs when frame n-1's points stand (the same pixels, moved by
+// millimetres, need no new search: registration.hpp, "Reuse"); or (nothing to compensate, or the
+// first registration failed: the points stand) as without.
+KeyframeOdometry::FrameStart KeyframeOdometry::select_with_own_motion(const core::RgbdFrame& frame,
+                                                                      TrackResult& result) {
+  if (!compensates(frame)) return {f2f_ell_start()};
   const auto start = Clock::now();
   const auto first = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_ell_start());
   result.frame_registration_ms = ms_since(start);
-  if (!first.converged) return f2f_ell_start();
+  if (!first.converged) return {f2f_ell_start()};
   const auto selection_start = Clock::now();
   compensation_velocity_ = first.transform;
   compensation_dt_ = frame.timestamp - previous_timestamp_;
   if (reselect(frame, current_)) current_uncompensated_ = false;
-  if (previous_uncompensated_ && reselect(previous_images_, previous_)) previous_uncompensated_ = false;
+  bool previous_stands = true;
+  if (previous_uncompensated_) {
+    previous_stands = false;
+    if (reselect(previous_images_, previous_)) previous_uncompensated_ = false;
+  }
   result.selection_ms += ms_since(selection_start);
   result.points = clouds_[current_].size();
   velocity_ = first.transform;
-  return parameters_.cvo.ell_min;
+  return {parameters_.cvo.ell_min, previous_stands ? registration::Reuse::kCandidates : registration::Reuse::kNothing};
 }
 
 // `frame` selected again into clouds_[cloud] with the compensations' velocity; where that leaves

@@ -155,8 +155,14 @@ class KeyframeOdometry {
     core::SE3 chain, T_mn;
     core::Matrix6d chain_information = core::Matrix6d::Zero();  // what the fusion gave the chain (0: not fused)
   };
-  Registrations register_frame(TrackResult& result, double f2f_ell_start);
-  double select_with_own_motion(const core::RgbdFrame& frame, TrackResult& result);
+  // Where the frame-to-frame registration starts: its first length-scale (0: ℓ_init) and what it
+  // keeps of the registration before it.
+  struct FrameStart {
+    double ell = 0;
+    registration::Reuse reuse = registration::Reuse::kNothing;
+  };
+  Registrations register_frame(TrackResult& result, const FrameStart& f2f_start);
+  FrameStart select_with_own_motion(const core::RgbdFrame& frame, TrackResult& result);
   bool reselect(const core::RgbdFrame& frame, int cloud);
   [[nodiscard]] double f2f_ell_start() const;
   bool keyframe_trips(const Registrations& r, TrackResult& result);

@@ -90,12 +90,25 @@ std::size_t collect_avx2(const FixedCloudView& fixed, const Range* ranges, int r
                          float* colour, std::size_t capacity);
 #endif
 
+/// The pairs of one moving point at w with its candidates (registration.hpp): fixed point
+/// index[k] and its colour term colour[k], k < count; the sums as a PointFunction's.
+using CandidateFunction = PointSums (*)(const FixedCloudView& fixed, const std::uint32_t* index, const float* colour,
+                                        std::size_t count, const float w[3], const Constants& k);
+
+PointSums candidates_scalar(const FixedCloudView& fixed, const std::uint32_t* index, const float* colour,
+                            std::size_t count, const float w[3], const Constants& k);
+#if defined(CVO_HAVE_AVX2)
+PointSums candidates_avx2(const FixedCloudView& fixed, const std::uint32_t* index, const float* colour,
+                          std::size_t count, const float w[3], const Constants& k);
+#endif
+
 enum class Isa { kScalar, kAvx2, kNeon };
 /// The best kernel this CPU runs (AVX2+FMA when built in and supported; NEON on AArch64, where it
 /// is always present), or the requested one.
 Isa best_isa();
 PointFunction point_function(Isa isa);
-CollectFunction collect_function(Isa isa);  // NEON: the scalar one (collection is rare)
+CollectFunction collect_function(Isa isa);      // NEON: the scalar one (collection is rare)
+CandidateFunction candidate_function(Isa isa);  // NEON: the scalar one
 const char* to_string(Isa isa);
 
 }  // namespace cvo::registration::kernel

@@ -97,6 +97,39 @@ PointSums point_avx2(const FixedCloudView& fixed, const Range* ranges, int range
   return {horizontal_sum(sa), horizontal_sum(sx), horizontal_sum(sy), horizontal_sum(sz), pairs};
 }
 
+// Eight candidates at a time: their positions gathered by index (the candidates of one point lie
+// in a few neighbouring cells, so the gathers hit cache), their colour terms loaded.
+PointSums candidates_avx2(const FixedCloudView& fixed, const std::uint32_t* index, const float* colour,
+                          std::size_t count, const float w[3], const Constants& k) {
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 wx = _mm256_set1_ps(w[0]), wy = _mm256_set1_ps(w[1]), wz = _mm256_set1_ps(w[2]);
+  const __m256 inv_s = _mm256_set1_ps(k.inv_two_ell_sq);
+  const __m256 log_amp = _mm256_set1_ps(k.log_amplitude), log_thr = _mm256_set1_ps(k.log_threshold);
+  __m256 sa = _mm256_setzero_ps(), sx = _mm256_setzero_ps(), sy = _mm256_setzero_ps(), sz = _mm256_setzero_ps();
+  std::uint32_t pairs = 0;
+  for (std::size_t c = 0; c < count; c += 8) {
+    const __m256i mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(static_cast<int>(count - c)), lane);
+    const __m256 fmask = _mm256_castsi256_ps(mask);
+    const __m256i i = _mm256_maskload_epi32(reinterpret_cast<const int*>(index + c), mask);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 dx = _mm256_sub_ps(_mm256_mask_i32gather_ps(zero, fixed.x, i, fmask, 4), wx);
+    const __m256 dy = _mm256_sub_ps(_mm256_mask_i32gather_ps(zero, fixed.y, i, fmask, 4), wy);
+    const __m256 dz = _mm256_sub_ps(_mm256_mask_i32gather_ps(zero, fixed.z, i, fmask, 4), wz);
+    const __m256 r2 = _mm256_fmadd_ps(dz, dz, _mm256_fmadd_ps(dy, dy, _mm256_mul_ps(dx, dx)));
+    const __m256 log_a = _mm256_sub_ps(_mm256_fnmadd_ps(r2, inv_s, log_amp), _mm256_maskload_ps(colour + c, mask));
+    const __m256 keep = _mm256_and_ps(_mm256_cmp_ps(log_a, log_thr, _CMP_GE_OQ), fmask);
+    const int bits = _mm256_movemask_ps(keep);
+    if (bits == 0) continue;
+    pairs += static_cast<std::uint32_t>(__builtin_popcount(static_cast<unsigned>(bits)));
+    const __m256 a = _mm256_and_ps(exp256(log_a), keep);
+    sa = _mm256_add_ps(sa, a);
+    sx = _mm256_fmadd_ps(a, dx, sx);
+    sy = _mm256_fmadd_ps(a, dy, sy);
+    sz = _mm256_fmadd_ps(a, dz, sz);
+  }
+  return {horizontal_sum(sa), horizontal_sum(sx), horizontal_sum(sy), horizontal_sum(sz), pairs};
+}
+
 std::size_t collect_avx2(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
                          const float feature[kFeatureDim], const Constants& k, float reach_sq, std::uint32_t* index,
                          float* colour, std::size_t capacity) {

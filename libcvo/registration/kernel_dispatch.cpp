@@ -31,6 +31,14 @@ CollectFunction collect_function(Isa isa) {
   return &collect_scalar;
 }
 
+CandidateFunction candidate_function(Isa isa) {
+#if defined(CVO_HAVE_AVX2)
+  if (isa == Isa::kAvx2 && best_isa() == Isa::kAvx2) return &candidates_avx2;
+#endif
+  (void)isa;
+  return &candidates_scalar;
+}
+
 const char* to_string(Isa isa) {
   switch (isa) {
     case Isa::kAvx2: return "avx2";

@@ -23,6 +23,17 @@ PointSums point_scalar(const FixedCloudView& fixed, const Range* ranges, int ran
   return sums;
 }
 
+PointSums candidates_scalar(const FixedCloudView& fixed, const std::uint32_t* index, const float* colour,
+                            std::size_t count, const float w[3], const Constants& k) {
+  PointSums sums;
+  for (std::size_t c = 0; c < count; ++c) {
+    const std::uint32_t i = index[c];
+    const float dx = fixed.x[i] - w[0], dy = fixed.y[i] - w[1], dz = fixed.z[i] - w[2];
+    add_pair(sums, k.log_amplitude - (dx * dx + dy * dy + dz * dz) * k.inv_two_ell_sq - colour[c], dx, dy, dz, k);
+  }
+  return sums;
+}
+
 std::size_t collect_scalar(const FixedCloudView& fixed, const Range* ranges, int range_count, const float w[3],
                            const float feature[kFeatureDim], const Constants& k, float reach_sq, std::uint32_t* index,
                            float* colour, std::size_t capacity) {

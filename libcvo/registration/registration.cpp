@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <omp.h>
+
 namespace cvo::registration {
 namespace {
 
@@ -18,7 +20,7 @@ constexpr double kSlackFraction = 0.25;
 // Moving points per cluster of the gradient scatter (registration.hpp): consecutive points of the
 // semi-dense selection, a run along one image row about as long as the kernel's reach at depth.
 constexpr std::size_t kScatterCluster = 8;
-constexpr std::uint16_t kUncollected = 0xFFFF, kTooMany = 0xFFFE;
+constexpr std::uint16_t kUncollected = 0xFFFF;
 constexpr float kFar = 1e15f;  // where a hidden fixed point is put: beyond every kernel's reach
 
 std::size_t next_power_of_two(std::size_t v) {
@@ -88,6 +90,7 @@ void Registration::Sums::add(const Sums& o) {
   scatter += o.scatter;
   pairs += o.pairs;
   collections += o.collections;
+  full_searches += o.full_searches;
 }
 
 core::Matrix6d Registration::Sums::hessian() const {
@@ -104,23 +107,35 @@ Registration::Registration(const Capacities& capacities, const core::CvoParamete
       isa_(isa),
       point_(kernel::point_function(isa)),
       collect_(kernel::collect_function(isa)),
+      candidates_(kernel::candidate_function(isa)),
       capacity_(capacities.max_points),
       bucket_mask_(next_power_of_two(std::max<std::size_t>(1024, 2 * capacities.max_points)) - 1),
       slot_key_(bucket_mask_ + 1),
       bucket_start_(bucket_mask_ + 2),
       bucket_of_(capacities.max_points),
+      px_(capacities.max_points),
+      py_(capacities.max_points),
+      pz_(capacities.max_points),
       sx_(capacities.max_points),
       sy_(capacities.max_points),
       sz_(capacities.max_points),
-      input_of_(capacities.max_points),
-      slots_(std::min<std::size_t>(capacities.candidates_per_point, kTooMany - 1)),
+      slots_(std::min<std::size_t>(capacities.candidates_per_point, kUncollected - 1)),
       candidate_fixed_(capacities.max_points * slots_),
       candidate_colour_(capacities.max_points * slots_),
       candidate_count_(capacities.max_points, kUncollected),
+      candidate_weight_(capacities.max_points, 1.0f),
+      collected_label_(slots_ > 0 ? capacities.max_points * kFeatureDim : 0),
+      scratch_fixed_(slots_ > 0 ? capacities.max_points * static_cast<std::size_t>(std::max(parameters.threads, 1))
+                                : 0),
+      scratch_colour_(scratch_fixed_.size()),
       collected_at_(4 * capacities.max_points),
       chunk_sums_((capacities.max_points + kChunk - 1) / kChunk + 1),
       pairs_log_(static_cast<std::size_t>(std::max(parameters.max_iterations, 0)) + 1) {
   for (auto& channel : sf_) channel.resize(capacities.max_points);
+  hashed_ = {
+      px_.data(), py_.data(), pz_.data(), {sf_[0].data(), sf_[1].data(), sf_[2].data(), sf_[3].data(), sf_[4].data()}};
+  summed_ = {
+      sx_.data(), sy_.data(), sz_.data(), {sf_[0].data(), sf_[1].data(), sf_[2].data(), sf_[3].data(), sf_[4].data()}};
   if (isa_ != kernel::Isa::kScalar && kernel::best_isa() != isa_) isa_ = kernel::Isa::kScalar;  // what really runs
 }
 
@@ -158,6 +173,9 @@ bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell
   if (!set_length_scale(ell, slack_fraction)) return false;
   cell_ = static_cast<double>(r_max_) + static_cast<double>(slack_);
   inv_cell_ = 1.0 / cell_;
+  grid_ell_ = ell;
+  grid_cloud_ = &fixed;
+  grid_points_ = n;
   std::fill(candidate_count_.begin(), candidate_count_.end(), kUncollected);
 
   // Each occupied cell gets a slot of an open-addressing table (linear probing on the exact
@@ -178,14 +196,28 @@ bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell
   // Scatter, using bucket_start_[b] as a cursor, then shift back so it holds the starts again.
   for (std::size_t i = 0; i < n; ++i) {
     const auto dst = bucket_start_[bucket_of_[i]]++;
-    input_of_[dst] = static_cast<std::uint32_t>(i);
-    sx_[dst] = fixed.x()[i];
-    sy_[dst] = fixed.y()[i];
-    sz_[dst] = fixed.z()[i];
+    px_[dst] = sx_[dst] = fixed.x()[i];
+    py_[dst] = sy_[dst] = fixed.y()[i];
+    pz_[dst] = sz_[dst] = fixed.z()[i];
     for (std::size_t c = 0; c < kFeatureDim; ++c) sf_[c][dst] = fixed.feature_channel(c)[i];
   }
   for (std::size_t b = bucket_start_.size() - 1; b > 0; --b) bucket_start_[b] = bucket_start_[b - 1];
   bucket_start_[0] = 0;
+  return true;
+}
+
+// Reuse::kCandidates (see the header): the grid stays when it was built from this cloud for a
+// length-scale at least as wide (cells as wide as the reach); the candidates of moving points whose label changed are
+// dropped.
+bool Registration::keep_grid(const PointCloud& fixed, std::size_t n, double ell, const PointCloud& moving,
+                             std::size_t nm) {
+  if (grid_cloud_ != &fixed || grid_points_ != n || !(ell <= grid_ell_) || slots_ == 0) return false;
+  if (!set_length_scale(ell, kSlackFraction) || static_cast<double>(reach_sq_) > cell_ * cell_) return false;
+  for (std::size_t j = 0; j < nm; ++j) {
+    if (candidate_count_[j] == kUncollected) continue;
+    for (std::size_t c = 0; c < kFeatureDim; ++c)
+      if (collected_label_[kFeatureDim * j + c] != moving.feature_channel(c)[j]) candidate_count_[j] = kUncollected;
+  }
   return true;
 }
 
@@ -209,23 +241,20 @@ Registration::View Registration::view_of(const PointCloud& cloud, std::size_t n)
   return v;
 }
 
-// Fixed points the moving camera (at T) does not see are moved out of every kernel's reach, in the
-// grid's copy (a hidden point then adds nothing to any sum). Candidates are collected again when
-// a point hidden before is seen now: no list holds it.
-void Registration::hide_fixed_unseen(const PointCloud& fixed, std::size_t n, const core::SE3& T) {
-  bool newly_seen = false;
+// Fixed points the moving camera (at T) does not see are moved out of every kernel's reach in the
+// copy the sums read (a hidden point then adds nothing to any sum). Candidates are collected from
+// the other copy, which keeps every point where it is: a point seen again is in the lists already.
+void Registration::hide_fixed_unseen(std::size_t n, const core::SE3& T) {
   const core::SE3 T_inv = T.inverse();
   const Eigen::Matrix3f R = T_inv.rotation_matrix().cast<float>();
   const Eigen::Vector3f t = T_inv.translation().cast<float>();
   for (std::size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3f x = fixed.position(input_of_[k]);
+    const Eigen::Vector3f x(px_[k], py_[k], pz_[k]);
     const bool seen = moving_view_.sees(R * x + t);
-    newly_seen |= seen && sx_[k] == kFar;
     sx_[k] = seen ? x.x() : kFar;
     sy_[k] = seen ? x.y() : kFar;
     sz_[k] = seen ? x.z() : kFar;
   }
-  if (newly_seen) std::fill(candidate_count_.begin(), candidate_count_.end(), kUncollected);
 }
 
 void Registration::find_cells(const Eigen::Vector3f& w, Cells& cells) const {
@@ -250,64 +279,72 @@ void Registration::find_cells(const Eigen::Vector3f& w, Cells& cells) const {
       }
 }
 
-// Moving point j's candidates at w (kernel::CollectFunction), or kTooMany when they outnumber its
-// slots.
-void Registration::collect_candidates(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
-                                      const float* feature, const Cells& cells) {
+// Moving point j's candidates at w (kernel::CollectFunction, into this thread's scratch, which
+// holds every fixed point): all of them when they fit its slots; else the budget (see the header):
+// every m-th from phase j mod m, each weighted by how many it stands for.
+void Registration::collect_candidates(std::size_t j, const Eigen::Vector3f& w, const float* feature,
+                                      const Cells& cells) {
   const float wf[3] = {w.x(), w.y(), w.z()};
+  const std::size_t scratch = static_cast<std::size_t>(omp_get_thread_num()) * capacity_;
+  std::uint32_t* found = &scratch_fixed_[scratch];
+  float* found_colour = &scratch_colour_[scratch];
+  const std::size_t count =
+      collect_(hashed_, cells.ranges, cells.count, wf, feature, constants_, reach_sq_, found, found_colour, capacity_);
+  const std::size_t m = std::max<std::size_t>(1, (count + slots_ - 1) / slots_);
   const std::size_t base = j * slots_;
-  const std::size_t count = collect_(view, cells.ranges, cells.count, wf, feature, constants_, reach_sq_,
-                                     &candidate_fixed_[base], &candidate_colour_[base], slots_);
-  candidate_count_[j] = count > slots_ ? kTooMany : static_cast<std::uint16_t>(count);
+  std::size_t kept = 0;
+  for (std::size_t k = m > 1 ? j % m : 0; k < count; k += m, ++kept) {
+    candidate_fixed_[base + kept] = found[k];
+    candidate_colour_[base + kept] = found_colour[k];
+  }
+  candidate_count_[j] = static_cast<std::uint16_t>(kept);
+  for (std::size_t c = 0; c < kFeatureDim; ++c) collected_label_[kFeatureDim * j + c] = feature[c];
+  candidate_weight_[j] = kept > 0 ? static_cast<float>(count) / static_cast<float>(kept) : 1.0f;
   collected_at_[4 * j] = w.x();
   collected_at_[4 * j + 1] = w.y();
   collected_at_[4 * j + 2] = w.z();
   collected_at_[4 * j + 3] = std::sqrt(reach_sq_);
 }
 
-// The kernel over point j's candidates (kernel_scalar.cpp's arithmetic).
+// The kernel over point j's candidates, each pair weighted by what its candidate stands for (1
+// unless the budget thinned them).
 kernel::PointSums Registration::candidate_sums(std::size_t j, const Eigen::Vector3f& w) const {
-  kernel::PointSums p;
-  const std::size_t base = j * slots_, count = candidate_count_[j];
-  for (std::size_t k = base; k < base + count; ++k) {
-    const std::uint32_t i = candidate_fixed_[k];
-    const float dx = sx_[i] - w.x(), dy = sy_[i] - w.y(), dz = sz_[i] - w.z();
-    kernel::add_pair(
-        p, constants_.log_amplitude - (dx * dx + dy * dy + dz * dz) * constants_.inv_two_ell_sq - candidate_colour_[k],
-        dx, dy, dz, constants_);
-  }
+  const float wf[3] = {w.x(), w.y(), w.z()};
+  const std::size_t base = j * slots_;
+  kernel::PointSums p =
+      candidates_(summed_, &candidate_fixed_[base], &candidate_colour_[base], candidate_count_[j], wf, constants_);
+  const float weight = candidate_weight_[j];
+  p.a *= weight, p.dx *= weight, p.dy *= weight, p.dz *= weight;
   return p;
 }
 
-// Σ_i a_ij and Σ_i a_ij (x_i - w) for moving point j at w: from its candidates while they hold
-// (collected again once it moved more than the slack), else by searching the cells.
-kernel::PointSums Registration::point_sums(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
-                                           const float* feature, Cells& cells, bool candidates,
-                                           std::size_t& collections) {
-  if (candidates && slots_ > 0 && candidate_count_[j] != kTooMany) {
+// Σ_i a_ij and Σ_i a_ij (x_i - w) for moving point j at w: from its candidates, collected again
+// once it moved more than the slack; without slots, by searching the cells.
+kernel::PointSums Registration::point_sums(std::size_t j, const Eigen::Vector3f& w, const float* feature, Cells& cells,
+                                           bool candidates, Sums& counts) {
+  if (candidates && slots_ > 0) {
     // Valid while every fixed point now within r_max was within the reach at collection.
     const float* at = &collected_at_[4 * j];
     const float mx = w.x() - at[0], my = w.y() - at[1], mz = w.z() - at[2];
     const float margin = at[3] - r_max_;
     if (candidate_count_[j] == kUncollected || mx * mx + my * my + mz * mz > margin * margin) {
       find_cells(w, cells);
-      collect_candidates(view, j, w, feature, cells);
-      ++collections;
+      collect_candidates(j, w, feature, cells);
+      ++counts.collections;
     }
-    if (candidate_count_[j] != kTooMany) return candidate_sums(j, w);
+    return candidate_sums(j, w);
   }
   find_cells(w, cells);
   if (cells.count == 0) return {};
+  if (candidates) ++counts.full_searches;
   const float wf[3] = {w.x(), w.y(), w.z()};
-  return point_(view, cells.ranges, cells.count, wf, feature, constants_);
+  return point_(summed_, cells.ranges, cells.count, wf, feature, constants_);
 }
 
 void Registration::accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total,
                               std::size_t stride, bool candidates) {
   const Eigen::Matrix3f R = T.rotation_matrix().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
-  const kernel::FixedCloudView view{
-      sx_.data(), sy_.data(), sz_.data(), {sf_[0].data(), sf_[1].data(), sf_[2].data(), sf_[3].data(), sf_[4].data()}};
   const auto chunks = static_cast<std::ptrdiff_t>((n + kChunk - 1) / kChunk);
 
 #pragma omp parallel for schedule(static) num_threads(parameters_.threads) if (parameters_.threads > 1)
@@ -325,7 +362,7 @@ void Registration::accumulate(const PointCloud& moving, std::size_t n, const cor
       if (candidates && visibility_ && !fixed_view_.sees(w)) continue;
       float feature[kFeatureDim];
       for (std::size_t c = 0; c < kFeatureDim; ++c) feature[c] = moving.feature_channel(c)[j];
-      const kernel::PointSums p = point_sums(view, j, w, feature, cells, candidates, sums.collections);
+      const kernel::PointSums p = point_sums(j, w, feature, cells, candidates, sums);
       if (p.pairs == 0) continue;
       const Eigen::Vector3d wd = w.cast<double>();
       const Eigen::Vector3d D(p.dx, p.dy, p.dz);
@@ -358,11 +395,12 @@ double Registration::inner_product(const PointCloud& fixed, const PointCloud& mo
 }
 
 RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial,
-                                       double ell_start) {
+                                       double ell_start, Reuse reuse) {
   RegistrationResult result;
   result.transform = initial;
   pairs_logged_ = 0;
   collections_ = 0;
+  full_searches_ = 0;
   result.status = check(fixed, moving);
   if (result.status == RegistrationStatus::kOk && !initial.is_finite()) result.status = RegistrationStatus::kNonFinite;
   if (result.status != RegistrationStatus::kOk && result.status != RegistrationStatus::kCapacityExceeded) return result;
@@ -371,12 +409,13 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
 
   const double ell_min = std::min(parameters_.ell_min, parameters_.ell_init);
   double ell = ell_start > 0 ? std::max(ell_start, ell_min) : parameters_.ell_init;
-  build_grid(fixed, nf, ell, slots_ > 0 ? kSlackFraction : 0.0);
+  if (reuse != Reuse::kCandidates || !keep_grid(fixed, nf, ell, moving, nm))
+    build_grid(fixed, nf, ell, slots_ > 0 ? kSlackFraction : 0.0);
   visibility_ = parameters_.mutual_visibility;
   if (visibility_) {
     fixed_view_ = view_of(fixed, nf);
     moving_view_ = view_of(moving, nm);
-    hide_fixed_unseen(fixed, nf, initial);
+    hide_fixed_unseen(nf, initial);
   }
   core::SE3 T = initial;
   Sums sums;
@@ -384,6 +423,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
   for (int it = 0; it < parameters_.max_iterations; ++it) {
     accumulate(moving, nm, T, sums, 1, true);
     collections_ += sums.collections;
+    full_searches_ += sums.full_searches;
     result.iterations = it + 1;
     result.pairs = sums.pairs;
     result.inner_product = sums.s0;
@@ -422,7 +462,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
         set_length_scale(ell, kSlackFraction);
       else
         build_grid(fixed, nf, ell, 0.0);
-      if (visibility_) hide_fixed_unseen(fixed, nf, T);
+      if (visibility_) hide_fixed_unseen(nf, T);
     }
   }
   result.transform = T;

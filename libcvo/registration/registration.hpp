@@ -50,10 +50,32 @@
 // reach - r_max since, no other fixed point can reach the threshold: the iteration sums its
 // candidates alone, which is exact and far cheaper than searching 27 cells again. A point that
 // moved farther collects again. When ℓ shrinks, r_max does: the grid and candidates stay, and
-// last longer. A point with more candidates than its slots is searched in full each iteration. Fixed memory: every
-// buffer is sized at construction from the capacities; after construction align() and inner_product() do not allocate.
-// Threads (optional) split the moving cloud into fixed chunks reduced in a fixed order, so the result does not depend
-// on the thread count.
+// last longer.
+//
+// The pair budget. Where colours differ, the colour term leaves a point a few candidates; where
+// they are alike (white walls, a texture-less room) it leaves every fixed point within reach, and
+// the cost of a sum would follow the scene's colours (registration/README.md has the figures). So a point sums at most
+// `candidates_per_point` candidates: when it has n > B of them it keeps every m-th, m = ⌈n/B⌉, from the phase j mod m
+// (neighbouring moving points keep different ones), and each kept pair is weighted n / kept. Then
+//   - a point with n ≤ B is summed exactly (the pairs of a search every iteration);
+//   - otherwise A_j and D_j are a systematic sample's estimates of the full sums, unbiased over
+//     the phase; the pairs they stand for lie on one surface of one colour within reach, where
+//     neighbouring fixed points repeat each other (the spatial kernel is smooth at ℓ);
+//   - the pairs summed per point and iteration are at most B whatever the colours.
+// `tests/registration` checks the exact case against a search every iteration and the budgeted
+// one against it on a texture-less frame.
+//
+// Reuse. A second align() of the same fixed cloud with the moving points moved a little (the
+// frame selected again at its own motion) needs no new grid and no new candidates: a candidate
+// list depends on the point's label and on where it was collected, and the validity test above
+// already catches a point that moved beyond its margin. So with Reuse::kCandidates align() keeps
+// the grid (when it is at least as wide as the start's reach) and every candidate list whose
+// point still has its label. Where no point's candidates exceed the budget, the same pairs count
+// as in a fresh align().
+//
+// Fixed memory: every buffer is sized at construction from the capacities; after construction
+// align() and inner_product() do not allocate. Threads (optional) split the moving cloud into
+// fixed chunks reduced in a fixed order, so the result does not depend on the thread count.
 #include <array>
 #include <cstddef>
 #include <vector>
@@ -90,10 +112,20 @@ struct RegistrationResult {
   core::Matrix6d gradient_scatter = core::Matrix6d::Zero();  // B (see above), the same order
 };
 
+/// What align() may keep of the last align() (see "Reuse" above).
+enum class Reuse {
+  kNothing,
+  // `fixed` is the last align()'s fixed cloud, unchanged, and `moving` holds (some of) the last
+  // moving cloud's points, each at its index with its label, moved a little: a frame selected
+  // again with another motion (odometry/keyframe_odometry.hpp). The grid and the candidates of
+  // every point whose label is the same stay; the rest collect as usual.
+  kCandidates
+};
+
 struct Capacities {
   std::size_t max_points;  // per cloud: the caller's core::OdometryParameters::max_points
-  // Candidate pairs kept per moving point on average (align(); see above); 0: none, every
-  // iteration searches the cells in full.
+  // B, the pair budget: candidate pairs kept per moving point (align(); see above); 0: none,
+  // every iteration searches the cells in full (exact, at any cost).
   std::size_t candidates_per_point = 32;
 };
 
@@ -107,7 +139,7 @@ class Registration {
   /// wide basin: starting at ℓ_min saves the coarse iterations; a guess with no motion model
   /// behind it may need a wider one than ℓ_init.
   RegistrationResult align(const PointCloud& fixed, const PointCloud& moving, const core::SE3& initial,
-                           double ell_start = 0);
+                           double ell_start = 0, Reuse reuse = Reuse::kNothing);
 
   /// <f_X, T.f_Z> at length-scale `ell` (the keyframe test γ and the loop test α use it). With
   /// `stride` > 1 only every stride-th moving point is summed: about 1/stride of the whole, for a
@@ -127,6 +159,9 @@ class Registration {
   /// How often the last align() collected a moving point's candidates (diagnostics): once per
   /// point, and again for those that moved beyond their reach.
   [[nodiscard]] std::size_t collections() const { return collections_; }
+  /// How often the last align() searched a moving point's cells in full (diagnostics): a point
+  /// whose candidates outnumbered its slots.
+  [[nodiscard]] std::size_t full_searches() const { return full_searches_; }
 
  private:
   // Σ over moving points of what the step needs:
@@ -139,7 +174,8 @@ class Registration {
     Eigen::Vector3d bt = Eigen::Vector3d::Zero(), br = Eigen::Vector3d::Zero();
     core::Matrix6d scatter = core::Matrix6d::Zero();  // Σ_c G_c G_cᵀ of the raw terms [D_j; w_j × D_j]
     std::size_t pairs = 0;
-    std::size_t collections = 0;  // candidate collections
+    std::size_t collections = 0;    // candidate collections
+    std::size_t full_searches = 0;  // points summed by searching their cells (align())
     void add(const Sums& o);
     [[nodiscard]] core::Matrix6d hessian() const;
   };
@@ -153,13 +189,13 @@ class Registration {
   };
   bool set_length_scale(double ell, double slack_fraction);
   bool build_grid(const PointCloud& fixed, std::size_t n, double ell, double slack_fraction);
+  bool keep_grid(const PointCloud& fixed, std::size_t n, double ell, const PointCloud& moving, std::size_t nm);
   void find_cells(const Eigen::Vector3f& w, Cells& cells) const;
   void accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total, std::size_t stride = 1,
                   bool candidates = false);
-  kernel::PointSums point_sums(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
-                               const float* feature, Cells& cells, bool candidates, std::size_t& collections);
-  void collect_candidates(const kernel::FixedCloudView& view, std::size_t j, const Eigen::Vector3f& w,
-                          const float* feature, const Cells& cells);
+  kernel::PointSums point_sums(std::size_t j, const Eigen::Vector3f& w, const float* feature, Cells& cells,
+                               bool candidates, Sums& counts);
+  void collect_candidates(std::size_t j, const Eigen::Vector3f& w, const float* feature, const Cells& cells);
   [[nodiscard]] kernel::PointSums candidate_sums(std::size_t j, const Eigen::Vector3f& w) const;
   RegistrationStatus check(const PointCloud& fixed, const PointCloud& moving) const;
   // What a camera saw: the extent of its points' image coordinates x/z, y/z.
@@ -168,36 +204,46 @@ class Registration {
     [[nodiscard]] bool sees(const Eigen::Vector3f& p) const;
   };
   static View view_of(const PointCloud& cloud, std::size_t n);
-  void hide_fixed_unseen(const PointCloud& fixed, std::size_t n, const core::SE3& T);
+  void hide_fixed_unseen(std::size_t n, const core::SE3& T);
 
   core::CvoParameters parameters_;
   kernel::Isa isa_;
   kernel::PointFunction point_;
   kernel::CollectFunction collect_;
+  kernel::CandidateFunction candidates_;
   std::size_t capacity_;
   // Hash grid over the fixed cloud, SoA in bucket order.
   std::size_t bucket_mask_;  // slots - 1; slots = power of two ≥ 2 × max_points, so probing stays short
   double cell_ = 1, inv_cell_ = 1;
+  double grid_ell_ = 0;                     // the length-scale the grid was built for (0: none)
+  const PointCloud* grid_cloud_ = nullptr;  // the fixed cloud it was built from
+  std::size_t grid_points_ = 0;
   std::vector<std::uint64_t> slot_key_;      // cell key of each slot, or empty
   std::vector<std::uint32_t> bucket_start_;  // size slots + 1
   std::vector<std::uint32_t> bucket_of_;     // per input point
-  std::vector<float> sx_, sy_, sz_;
-  std::vector<std::uint32_t> input_of_;  // bucket order -> the fixed cloud's index
-  bool visibility_ = false;              // align() with mutual visibility: moving points X's view does not see skipped
+  std::vector<float> px_, py_, pz_;          // the fixed cloud where it is (candidates are collected here)
+  std::vector<float> sx_, sy_, sz_;  // ... as summed: a point the moving camera does not see is put out of reach
+  bool visibility_ = false;          // align() with mutual visibility: moving points X's view does not see skipped
   View fixed_view_, moving_view_;
   std::array<std::vector<float>, kFeatureDim> sf_;
+  kernel::FixedCloudView hashed_{}, summed_{};  // the two copies with the labels, as the kernels read them
   kernel::Constants constants_;
   // Candidate pairs per moving point (see the header): slots [j * slots_, +count).
   std::size_t slots_;
   float r_max_ = 0, slack_ = 0, reach_sq_ = 0;  // at the present ℓ: r_max, s, and (r_max + s)²
   std::vector<std::uint32_t> candidate_fixed_;  // the fixed point (bucket order)
   std::vector<float> candidate_colour_;         // its colour term |Δf|² / 2ℓ_c²
-  std::vector<std::uint16_t> candidate_count_;  // or kUncollected / kTooMany
-  std::vector<float> collected_at_;             // 4 per moving point: where it was when collected, the reach then
+  std::vector<std::uint16_t> candidate_count_;  // or kUncollected
+  std::vector<float> candidate_weight_;         // fixed points each candidate stands for (the budget)
+  std::vector<float> collected_label_;          // kFeatureDim per moving point: its label when collected
+  std::vector<std::uint32_t> scratch_fixed_;    // per thread: every candidate of one point, before the budget
+  std::vector<float> scratch_colour_;
+  std::vector<float> collected_at_;  // 4 per moving point: where it was when collected, the reach then
   std::vector<Sums> chunk_sums_;
   std::vector<std::size_t> pairs_log_;
   std::size_t pairs_logged_ = 0;
   std::size_t collections_ = 0;
+  std::size_t full_searches_ = 0;
 };
 
 }  // namespace cvo::registration
