@@ -59,8 +59,8 @@ std::array<T, 2> distort(const std::array<double, 5>& d, T x, T y) {
 /// 5000 units/m, with the published distortion of fr1 and fr2, whose images are distorted; fr3's
 /// images were undistorted before release, so its coefficients are zero) and "synthetic" (the
 /// renderer's default camera, distortion-free, global shutter). fr1 and fr2 are Kinects (v1)
-/// with rolling shutters; their readout (not published by TUM) is a lower bound measured here
-/// (bench/odometry-tuning.md, "Rolling shutter").
+/// with rolling shutters; their readout (not published by TUM) is measured here, chosen on one half
+/// of fr1/rpy and confirmed on the other, within a 30 Hz frame's 33 ms (bench/odometry-tuning.md).
 std::optional<Intrinsics> camera_preset(std::string_view name);
 std::vector<std::string> camera_preset_names();
 

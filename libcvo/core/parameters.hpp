@@ -24,14 +24,15 @@ struct SelectionParameters {
   std::size_t target_points = 3000;  // per 640x480 frame (paper section 6)
   double min_depth_m = 0.1;          // valid depth range
   double max_depth_m = 5.0;
-  // Scale of the gradient part of each point's label (0: RGB only). Below 1 because the gradients
-  // of edge points change with viewpoint and blur far more than their colour: at full scale they
-  // dominate the colour kernel and keyframe-to-frame registrations keep too few pairs.
+  // Scale of the gradient part of each point's label (0: RGB only). The label's gradient is a central
+  // difference of [0, 1] intensities, spanning [-1, 1]; halved it is the derivative per pixel, which
+  // spans 1 as each colour channel does, so the one colour length-scale ℓ_c weighs every dimension alike.
   double gradient_weight = 0.5;
   // Depth-time compensation (KF-CVO). A point's depth is read where its colour pixel's ray was when
   // the depth image was taken, at the last measured velocity, and moved back to the colour image's
   // time. The depth image is taken at its stamp plus this offset, relative to the colour stamps:
-  // -10 ms fits the Kinect v1 / OpenNI recordings of TUM, whose depth stamps are late.
+  // -10 ms, a timing property of the Kinect v1 / OpenNI recordings of TUM, whose depth stamps are
+  // late (the depth image is computed on the sensor after its exposure).
   // Frames whose two stamps are equal (rendered frames, synchronised sensors) are taken as
   // simultaneous and left as they are.
   double depth_time_offset_s = -0.010;
@@ -61,9 +62,9 @@ struct SelectionParameters {
 /// [-1, 1] (registration/feature.hpp).
 struct CvoParameters {
   double ell_init = 0.1;  // ℓ_init: spatial kernel initial length-scale (m)
-  // Smallest length-scale of the schedule (m); not in Table 1. 0.07 ends the schedule one step
-  // earlier than 0.05 (0.1 -> 0.07, not 0.1 -> 0.07 -> 0.05): a little accuracy traded for
-  // realtime at 30 Hz on one core.
+  // Smallest length-scale of the schedule (m); not in Table 1: one decay step below ℓ_init (0.1 ->
+  // 0.07). A further step (0.05) resolves textured frames' rotation a little better, but where the
+  // pairs come from structure alone (texture-less scenes) a narrower kernel keeps too few of them.
   double ell_min = 0.07;
   double ell_decay = 0.7;                      // ℓ <- ℓ · decay each time the step has converged
   double sigma = 0.1;                          // σ: spatial kernel signal (standard deviation)
@@ -104,8 +105,9 @@ struct KeyframeParameters {
 struct KeyframeTrackingParameters {
   std::size_t local_graph_capacity = 300;  // frames per keyframe before one is forced (10 s at 30 Hz)
   // The inner products of γ (eq. 9) use their own, looser spatial kernel: with the tracker's tight
-  // one (σ = 0.1) γ rests on a few hundred pairs and jumps from frame to frame. σ = 0.316 (σ² ≈ 0.1)
-  // lets pairs count from a normalised kernel product of about 0.083: γ sums many more and is smooth.
+  // one (σ = 0.1) γ, a ratio of two sums, rests on a few hundred pairs and jumps from frame to frame
+  // (spurious keyframes). σ = 0.316 is Table 1's "signal variance" 0.1 read as a variance (σ² = 0.1):
+  // pairs count from a normalised kernel product of about 0.083, γ sums ~10^5 of them and is smooth.
   double gamma_ell = 0.1;      // length-scale of γ's inner products (m)
   double gamma_sigma = 0.316;  // spatial signal of γ's inner products (std. dev.)
   // γ is a ratio of two such sums over the same kind of cloud: every stride-th point of the frame
@@ -113,9 +115,11 @@ struct KeyframeTrackingParameters {
   std::size_t gamma_stride = 4;
   // Fusion of the keyframe result with the chain: the chain edge's information is scaled by
   // chain_weight, ramped as (θ / chain_full_weight_deg)² up to it (θ: rotation from the keyframe).
-  // Keyframe-to-frame registrations of only a few dozen kernel pairs jitter on real sensors, so the
-  // ramp reaches full weight early; exact rendered data would rather have it later.
-  double chain_weight = 2.0;           // 0: the keyframe edge alone
+  // 1 weighs both edges by their CVO Hessians, the paper's local graph; the chain is no more certain
+  // than its Hessian says (it also carries frame n-1's own error). Near the keyframe the keyframe
+  // edge alone drifts least, so the chain comes in as the rotation grows; the ramp reaches full weight
+  // early, as keyframe-to-frame registrations of a few dozen kernel pairs jitter on real sensors.
+  double chain_weight = 1.0;           // 0: the keyframe edge alone
   double chain_full_weight_deg = 3.0;  // 0: full weight at every rotation
 
   bool operator==(const KeyframeTrackingParameters&) const = default;

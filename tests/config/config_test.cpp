@@ -242,7 +242,7 @@ TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
   EXPECT_EQ(c.keyframe_tracking.gamma_ell, 0.1);
   EXPECT_EQ(c.keyframe_tracking.gamma_sigma, 0.316);
   EXPECT_EQ(c.keyframe_tracking.gamma_stride, 4u);
-  EXPECT_EQ(c.keyframe_tracking.chain_weight, 2.0);
+  EXPECT_EQ(c.keyframe_tracking.chain_weight, 1.0);
   EXPECT_EQ(c.keyframe_tracking.chain_full_weight_deg, 3.0);
   EXPECT_EQ(c.loop_verification.max_refinements, 3);
   EXPECT_EQ(c.loop_verification.ransac_iterations, 300);
