@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include <Eigen/Cholesky>
+
 #include <omp.h>
 
 namespace cvo::registration {
@@ -56,6 +58,16 @@ inline std::size_t slot_hash(std::uint64_t key, std::size_t mask) {
 // The product of the two kernels' signal variances: Table 1's σ and σ_c read as standard
 // deviations, so the amplitude is σ² σ_c² (see core::CvoParameters for the measurements).
 double kernel_amplitude(const core::CvoParameters& p) { return p.sigma * p.sigma * p.sigma_color * p.sigma_color; }
+
+// Whether the Gauss-Newton step ξ = H⁻¹ b is within one standard deviation of the estimate
+// (registration.hpp, "Convergence"): ξᵀ Σ⁻¹ ξ = bᵀ B⁻¹ b < 1 with Σ = H⁻¹ B H⁻¹. False when B
+// does not say (singular: too few clusters).
+bool within_noise(const core::Vector6d& b, const core::Matrix6d& scatter) {
+  const Eigen::LDLT<core::Matrix6d> ldlt(scatter);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) return false;
+  const double score = b.dot(ldlt.solve(b));
+  return std::isfinite(score) && score < 1.0;
+}
 
 bool all_finite(const PointCloud& cloud, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
@@ -450,12 +462,13 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
     xi *= scale;
     T = core::SE3::exp(xi) * T;
     const double step = xi.head<3>().norm() + xi.tail<3>().norm();
-    if (ell <= ell_min && step < parameters_.min_step) {
+    const bool settled = within_noise(b, sums.scatter);
+    if (ell <= ell_min && (step < parameters_.min_step || settled)) {
       result.converged = true;
       result.status = input_status;
       break;
     }
-    if (ell > ell_min && step < kShrinkFraction * ell) {
+    if (ell > ell_min && (step < kShrinkFraction * ell || settled)) {
       ell = std::max(ell * parameters_.ell_decay, ell_min);
       // The grid and the candidates of the wider kernel serve the narrower one (a superset).
       if (slots_ > 0)

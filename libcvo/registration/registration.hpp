@@ -16,6 +16,15 @@
 // The length-scale ℓ starts at ℓ_init and shrinks by `ell_decay` each time the step falls below
 // 1 % of ℓ, down to ℓ_min, where the iteration stops once |ξ| < min_step (coarse-to-fine: a wide
 // kernel gives a wide basin, a narrow one precision).
+// Convergence. The points' depth noise and the pairs that cross the sparsification threshold from
+// one iteration to the next make F rough at the scale of the estimate's own uncertainty: where the
+// scene constrains T weakly (white walls, geometry alone) the steps then wander within it for tens
+// of iterations without converging further. A step below that uncertainty is noise: with the
+// sandwich covariance Σ = H⁻¹ B H⁻¹ (below, "The gradient scatter") the step's Mahalanobis length
+// is ξᵀ Σ⁻¹ ξ = bᵀ B⁻¹ b, the gradient's length against its own scatter, and once it is below 1
+// (the step within one standard deviation) the length-scale shrinks, or at ℓ_min the iteration
+// stops, as when the step falls below the fixed thresholds above. Where the scene constrains T
+// well the thresholds stop it first.
 // The reported Hessian is H / ℓ² at the final ℓ, the Gauss-Newton approximation of -∇²F, used as
 // the information of the estimate (pose-graph edges).
 //

@@ -146,12 +146,12 @@ TEST(Registration, ReusedCandidatesGiveTheResultOfAFreshAlign) {
   Registration reusing(Capacities{8192}, parameters), fresh(Capacities{8192}, parameters);
   const auto first = reusing.align(pair.first, pair.second, core::SE3());
   ASSERT_TRUE(first.converged);
-  // Moved as a compensation moves them (2 mm), and one label changed.
+  // Moved as a compensation moves them (2 mm), and every 50th label changed.
   PointCloud again(8192);
   const Eigen::Vector3f shift(0.002f, -0.001f, 0.001f);
   for (std::size_t i = 0; i < pair.second.size(); ++i) {
     auto label = pair.second.feature(i);
-    if (i == 7) label[0] += 0.5f;
+    if (i % 50 == 0) label[0] += 0.5f;
     again.push_back(pair.second.position(i) + shift, label);
   }
   const double ell_min = parameters.ell_min;
@@ -163,14 +163,14 @@ TEST(Registration, ReusedCandidatesGiveTheResultOfAFreshAlign) {
     EXPECT_EQ(fresh.pairs_per_iteration()[i], reusing.pairs_per_iteration()[i]) << "iteration " << i;
   EXPECT_LT((a.transform.inverse() * b.transform).translation().norm(), 1e-5);
   EXPECT_LT(deg((a.transform.inverse() * b.transform).angle()), 1e-3);
-  EXPECT_GE(fresh.collections(), again.size());
-  EXPECT_GE(reusing.collections(), 1u);  // the point whose label changed
-  // Measured: 980 collections against 7149 for 3398 points (asserted: fewer than half the points).
+  EXPECT_GT(10 * fresh.collections(), 9 * again.size());    // all but those neither view sees
+  EXPECT_GT(2 * reusing.collections(), again.size() / 50);  // at least half of those whose label changed
+  // Measured: 66 collections (the changed labels) against 3269 for 3398 points (asserted: fewer than half the points).
   EXPECT_LT(reusing.collections(), again.size() / 2);
   // Another fixed cloud: nothing is kept.
   const auto c = reusing.align(again, pair.first, first.transform.inverse(), ell_min, Reuse::kCandidates);
   EXPECT_TRUE(c.converged);
-  EXPECT_GE(reusing.collections(), pair.first.size());
+  EXPECT_GT(10 * reusing.collections(), 9 * pair.first.size());
 }
 
 // Where two views differ, points near the edge of one view find partners on one side only, and
