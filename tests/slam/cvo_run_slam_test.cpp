@@ -56,8 +56,9 @@ TEST(CvoRunSlam, LoopsCloseARenderedOrbitAndLowerTheAte) {
   EXPECT_GE(tried, accepted);
   // The slam run's tracker is kf-cvo itself: the same poses, the same ATE.
   EXPECT_NEAR(ate_odometry, ate_kf, 1e-9);
-  // Measured: 4.3 mm -> 1.4 mm.
-  EXPECT_LT(ate, 0.7 * ate_kf);
+  // Measured: 1.15 mm -> 0.94 mm. (With keyframe.chain_weight 2 the odometry was 1.49 mm and SLAM
+  // the same 0.94 mm: the loops' floor; the bound follows the better odometry, not a worse map.)
+  EXPECT_LT(ate, 0.9 * ate_kf);
 
   // A loop closes the orbit: a keyframe of the last 30° (frames 120+) to one of the first 60°.
   const std::string list = r.out.substr(r.out.find("\"loop_list\""));
