@@ -22,6 +22,8 @@ constexpr std::size_t kFrames = 40;
 struct Data {
   std::vector<core::RgbdFrame> frames;
   std::vector<std::unique_ptr<registration::PointCloud>> clouds;
+  // The same points with every label alike: a white room's worst case, geometry alone (issue 47).
+  std::vector<std::unique_ptr<registration::PointCloud>> alike;
   std::vector<core::SE3> guesses;  // guess for pair (i, i+1): the motion found for (i-1, i)
 };
 
@@ -37,6 +39,10 @@ const Data& data() {
       if (!frame) break;
       out.clouds.push_back(std::make_unique<registration::PointCloud>(8192));
       selector.select(*frame, *out.clouds.back());
+      const auto& cloud = *out.clouds.back();
+      out.alike.push_back(std::make_unique<registration::PointCloud>(8192));
+      for (std::size_t i = 0; i < cloud.size(); ++i)
+        out.alike.back()->push_back(cloud.position(i), registration::Feature{0.8f, 0.8f, 0.8f, 0.0f, 0.0f});
       out.frames.push_back(std::move(*frame));
     }
     registration::Registration reg(registration::Capacities{8192}, core::CvoParameters{});
@@ -70,7 +76,8 @@ BENCHMARK(BM_PointSelection)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Args: {isa: 0 scalar / 1 SIMD, threads, reading: 0 = σ, σ_c as standard deviations (default),
 //        1 = as variances (σ = sqrt(0.1), the looser reading compared in core/parameters.hpp),
-//        candidate pairs per point (registration.hpp; 0: every iteration searches the cells)}
+//        2 = the default with every label alike (Data::alike),
+//        candidate pairs per point (registration.hpp's budget; 0: every iteration searches the cells)}
 void BM_Align(benchmark::State& state) {
   const auto& d = data();
   // 1: the SIMD kernel this machine has (AVX2+FMA or NEON).
@@ -88,7 +95,8 @@ void BM_Align(benchmark::State& state) {
   double iterations = 0, pairs = 0;
   for (auto _ : state) {
     const std::size_t k = i++ % d.guesses.size();
-    const auto r = reg.align(*d.clouds[k], *d.clouds[k + 1], d.guesses[k]);
+    const auto& clouds = state.range(2) == 2 ? d.alike : d.clouds;
+    const auto r = reg.align(*clouds[k], *clouds[k + 1], d.guesses[k]);
     iterations += r.iterations;
     for (std::size_t q = 0; q < reg.pairs_logged(); ++q) pairs += static_cast<double>(reg.pairs_per_iteration()[q]);
   }
@@ -100,6 +108,7 @@ void BM_Align(benchmark::State& state) {
   state.counters["pairs_per_s"] = benchmark::Counter(pairs, benchmark::Counter::kIsRate);
   state.SetLabel(std::string(registration::kernel::to_string(isa)) + ", " + std::to_string(parameters.threads) +
                  " thread(s)" + (state.range(2) == 1 ? ", variance reading" : "") +
+                 (state.range(2) == 2 ? ", every label alike" : "") +
                  (state.range(3) == 0 ? ", no candidate pairs" : ""));
 }
 BENCHMARK(BM_Align)
@@ -108,6 +117,8 @@ BENCHMARK(BM_Align)
     ->Args({1, 1, 0, 32})
     ->Args({1, 2, 0, 32})
     ->Args({1, 1, 1, 32})
+    ->Args({1, 1, 2, 0})
+    ->Args({1, 1, 2, 32})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
