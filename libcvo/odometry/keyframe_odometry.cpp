@@ -172,14 +172,17 @@ core::SE3 KeyframeOdometry::colour_T_depth(const core::RgbdFrame& frame) const {
 }
 
 // The camera's motion per second at the last measured velocity, for a rolling-shutter camera's
-// rows (PointSelector::select): zero before there is one, for a global shutter, and where the
-// first or last row would turn more than kMaxCompensationDeg (a wrong velocity would feed back).
+// rows (PointSelector::select): zero before there is one and for a global shutter. A rate beyond
+// kMaxRateDegS is no camera's motion but a wrong velocity (it would feed back): the twist is then
+// scaled down to it, never dropped. (It used to be dropped where the first or last row turned
+// more than 2°: at a 20 ms readout from 200 °/s on, the fast turns the compensation is for.)
 core::Vector6d KeyframeOdometry::twist(const core::RgbdFrame& frame) const {
-  constexpr double kMaxCompensationDeg = 2.0;
+  constexpr double kMaxRateDegS = 1000.0;  // 2.8 turns a second
   if (!frame.intrinsics.rolling_shutter() || !have_previous_ || !(compensation_dt_ > 0)) return core::Vector6d::Zero();
   const core::Vector6d xi = compensation_velocity_.log() / compensation_dt_;
-  const double edge_deg = core::degrees(xi.tail<3>().norm() * 0.5 * frame.intrinsics.readout_s);
-  return xi.allFinite() && edge_deg <= kMaxCompensationDeg ? xi : core::Vector6d::Zero();
+  if (!xi.allFinite()) return core::Vector6d::Zero();
+  const double rate_deg_s = core::degrees(xi.tail<3>().norm());
+  return rate_deg_s > kMaxRateDegS ? core::Vector6d(xi * (kMaxRateDegS / rate_deg_s)) : xi;
 }
 
 bool KeyframeOdometry::trips_threshold(const core::SE3& T_mn, double gamma) {

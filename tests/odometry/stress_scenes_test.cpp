@@ -87,9 +87,10 @@ TEST(StressScenes, WhiteRoomWithAKinectLikeCameraIsTracked) {
 }
 
 // textured_room along fast_rpy (237 deg/s peak), a 30 ms rolling shutter declared in the
-// intrinsics, Kinect depth and colour noise, 10 ms exposure. Measured at this
-// commit: worst 38.7 mm and 1.89 deg over 12 frames (0.4 s, ~60 degrees turned), no failure; bounds
-// about 1.5 times that.
+// intrinsics, Kinect depth and colour noise, 10 ms exposure. Measured: worst 8.6 mm and 0.27 deg
+// over 12 frames (0.4 s, ~60 degrees turned), no failure; bounds about 1.5 times that. (38.7 mm and
+// 1.89 deg while the rolling-shutter compensation was dropped beyond 2 deg at the edge rows, i.e.
+// on every frame of this turn: keyframe_odometry.cpp, twist().)
 TEST(StressScenes, FastTurnsUnderARollingShutterAreTracked) {
   sim::SensorOptions sensor = sim::kinect_sensor();
   sensor.exposure.exposure_s = 0.01;
@@ -97,8 +98,8 @@ TEST(StressScenes, FastTurnsUnderARollingShutterAreTracked) {
   const auto s = render_stress(sim::SceneKind::textured_room, sim::PathKind::fast_rpy, camera(0.03), sensor, 12);
   const Drift drift = track(s);
   EXPECT_EQ(drift.failed, 0);
-  EXPECT_LT(drift.worst_translation_mm, 60.0);
-  EXPECT_LT(drift.worst_rotation_deg, 3.0);
+  EXPECT_LT(drift.worst_translation_mm, 13.0);
+  EXPECT_LT(drift.worst_rotation_deg, 0.4);
 }
 
 }  // namespace
