@@ -10,21 +10,13 @@
 #include "libcvo/eval/rpe.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "tests/odometry/odometry_fixtures.hpp"
+#include "tests/support/small_camera.hpp"
 
 namespace cvo::odometry {
 namespace {
 
 // A half-size synthetic camera keeps these tests fast.
-core::Intrinsics small_camera() {
-  core::Intrinsics k = *core::camera_preset("synthetic");
-  k.fx /= 2;
-  k.fy /= 2;
-  k.cx = 159.5;
-  k.cy = 119.5;
-  k.width = 320;
-  k.height = 240;
-  return k;
-}
+core::Intrinsics small_camera() { return cvo::testing::small_synthetic_camera(2); }
 
 /// Frames seen from start * step^i in the textured room: a constant motion per frame.
 std::vector<core::RgbdFrame> constant_motion(const core::SE3& step, int n) {

@@ -10,21 +10,13 @@
 #include "libcvo/sim/render.hpp"
 #include "libcvo/sim/scene.hpp"
 #include "libcvo/sim/sensor.hpp"
+#include "tests/support/small_camera.hpp"
 
 namespace cvo::sim {
 namespace {
 
 // A quarter-size synthetic camera: these tests compare images, not registration.
-core::Intrinsics small_camera() {
-  core::Intrinsics k = *core::camera_preset("synthetic");
-  k.fx /= 4;
-  k.fy /= 4;
-  k.cx = 79.5;
-  k.cy = 59.5;
-  k.width = 160;
-  k.height = 120;
-  return k;
-}
+core::Intrinsics small_camera() { return cvo::testing::small_synthetic_camera(4); }
 
 TEST(MotionBlur, SubExposuresAreTheMidpointsOfEqualSlicesOfTheExposure) {
   EXPECT_EQ(sub_exposure_offsets({}), std::vector<double>{0.0});

@@ -13,6 +13,7 @@
 #include "libcvo/core/camera.hpp"
 #include "libcvo/sim/camera_path.hpp"
 #include "libcvo/sim/scene.hpp"
+#include "tests/support/small_camera.hpp"
 
 namespace cvo::sim {
 namespace {
@@ -20,16 +21,7 @@ namespace {
 core::Intrinsics synthetic() { return *core::camera_preset("synthetic"); }
 
 // A quarter-size camera for tests that only need image statistics.
-core::Intrinsics small_camera() {
-  core::Intrinsics k = synthetic();
-  k.fx /= 4;
-  k.fy /= 4;
-  k.cx = (k.cx + 0.5) / 4 - 0.5;
-  k.cy = (k.cy + 0.5) / 4 - 0.5;
-  k.width /= 4;
-  k.height /= 4;
-  return k;
-}
+core::Intrinsics small_camera() { return cvo::testing::small_synthetic_camera(4); }
 
 PathKind default_path(SceneKind kind) { return kind == SceneKind::textured_wall ? PathKind::wall : PathKind::orbit; }
 
