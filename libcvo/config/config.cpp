@@ -171,6 +171,8 @@ const std::vector<Field>& table() {
       row("keyframe.chain_full_weight_deg", &Config::keyframe_tracking,
           &KeyframeTrackingParameters::chain_full_weight_deg, kHalfTurnDegOrZero,
           "rotation from the keyframe (degrees) at which the chain weight, ramped as θ², is full (0: always full)"),
+      row("keyframe.max_turn_rate_deg_s", &Config::keyframe_tracking, &KeyframeTrackingParameters::max_turn_rate_deg_s,
+          kNonNegative, "fastest turn (deg/s) a session's first pair of frames is registered across (0: ℓ_init)"),
       row("loop_closure.similarity_threshold", &Config::loop_closure, &LoopClosureParameters::similarity_threshold,
           kUnit, "η_thres, normalised bag-of-words score"),
       row("loop_closure.match_ratio", &Config::loop_closure, &LoopClosureParameters::match_ratio, kUnitNonZero,

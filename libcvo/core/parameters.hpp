@@ -121,6 +121,11 @@ struct KeyframeTrackingParameters {
   // early, as keyframe-to-frame registrations of a few dozen kernel pairs jitter on real sensors.
   double chain_weight = 1.0;           // 0: the keyframe edge alone
   double chain_full_weight_deg = 3.0;  // 0: full weight at every rotation
+  // The fastest turn the camera may already make at a session's first pair, when no motion is known
+  // yet: that pair's registration starts with a kernel wide enough to reach the pairs such a turn
+  // moves over one frame interval (keyframe_odometry.hpp). A property of the robot, not a fit: the
+  // default is 1.5 times fr1/rpy's measured peak (158 deg/s), issue 47's stated envelope.
+  double max_turn_rate_deg_s = 240.0;
 
   bool operator==(const KeyframeTrackingParameters&) const = default;
 };

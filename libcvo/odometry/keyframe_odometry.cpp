@@ -39,6 +39,13 @@ core::CvoParameters gamma_parameters(const KeyframeOdometryParameters& p) {
   return c;
 }
 
+double mean_depth(const registration::PointCloud& cloud) {
+  if (cloud.size() == 0) return 0.0;
+  double sum = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) sum += cloud.z()[i];
+  return sum / static_cast<double>(cloud.size());
+}
+
 }  // namespace
 
 const char* to_string(KeyframeReason reason) {
@@ -325,14 +332,15 @@ std::optional<core::Matrix6d> KeyframeOdometry::fill_covariances(const Registrat
 // first registration failed: the points stand) as without.
 KeyframeOdometry::FrameStart KeyframeOdometry::select_with_own_motion(const core::RgbdFrame& frame,
                                                                       TrackResult& result) {
-  if (!compensates(frame)) return {f2f_ell_start()};
+  const double dt = frame.timestamp - previous_timestamp_;
+  if (!compensates(frame)) return {f2f_ell_start(dt)};
   const auto start = Clock::now();
-  const auto first = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_ell_start());
+  const auto first = registration_.align(clouds_[previous_], clouds_[current_], velocity_, f2f_ell_start(dt));
   result.frame_registration_ms = ms_since(start);
-  if (!first.converged) return {f2f_ell_start()};
+  if (!first.converged) return {f2f_ell_start(dt)};
   const auto selection_start = Clock::now();
   compensation_velocity_ = first.transform;
-  compensation_dt_ = frame.timestamp - previous_timestamp_;
+  compensation_dt_ = dt;
   if (reselect(frame, current_)) current_uncompensated_ = false;
   bool previous_stands = true;
   if (previous_uncompensated_) {
@@ -357,10 +365,20 @@ bool KeyframeOdometry::reselect(const core::RgbdFrame& frame, int cloud) {
   return false;
 }
 
-// Where the frame-to-frame registration starts: ℓ_init after a measured motion; twice that without
-// one (a session's first pair), when the camera may already turn at full speed and no
-// constant-velocity guess has taken the frame's motion out of the basin the kernel must span.
-double KeyframeOdometry::f2f_ell_start() const { return velocity_dt_ > 0 ? 0.0 : 2 * parameters_.cvo.ell_init; }
+// Where the frame-to-frame registration starts: ℓ_init (0: align()'s own start) after a measured
+// motion. Without one (a session's first pair) the camera may already turn at full speed and no
+// constant-velocity guess has taken that turn out of what the kernel must span: a pair farther
+// apart than r_max(ℓ) never counts, so the registration starts at the ℓ whose reach covers the
+// displacement ω dt z of a point at the previous cloud's mean depth z under the fastest turn ω
+// (at most θ_thres: a larger turn leaves no keyframe to track against).
+double KeyframeOdometry::f2f_ell_start(double dt) const {
+  if (velocity_dt_ > 0) return 0.0;
+  const double turn = std::min(core::radians(parameters_.tracking.max_turn_rate_deg_s) * std::max(dt, 0.0),
+                               core::radians(parameters_.keyframe.rotation_threshold_deg));
+  const double unit_reach = registration::kernel_reach(parameters_.cvo, 1.0);
+  const double ell = unit_reach > 0 ? turn * mean_depth(clouds_[previous_]) / unit_reach : 0.0;
+  return std::max(ell, parameters_.cvo.ell_init);
+}
 
 // A frame with a previous one: registered, then tracked against the keyframe, made the start of a
 // new keyframe at n-1, or (neither registration converged) predicted and a restart; the motion

@@ -39,6 +39,12 @@
 // selection, the frame-to-frame one from the first's result at ℓ_min. A frame with nothing to
 // compensate (a global shutter, depth stamped with the colour) is selected and registered once.
 //
+// A session's first pair has no constant-velocity guess: the camera may already turn at full speed,
+// and a kernel at ℓ_init reaches only pairs 6 cm apart (registration::kernel_reach), a 2-degree turn
+// at 2 m. That pair starts at the ℓ whose reach covers the fastest turn over the frame interval at
+// the scene's mean depth (KeyframeTrackingParameters::max_turn_rate_deg_s); the pair budget keeps
+// the wide kernel's cost that of a frame. Later frames start at ℓ_init from the prediction.
+//
 // Failures never crash and never jump: a frame whose points cannot be selected, or whose two
 // registrations both fail, keeps the constant-velocity prediction, is marked, and the next usable
 // frame starts a new keyframe at its predicted pose. When only the keyframe registration fails
@@ -164,7 +170,7 @@ class KeyframeOdometry {
   Registrations register_frame(TrackResult& result, const FrameStart& f2f_start);
   FrameStart select_with_own_motion(const core::RgbdFrame& frame, TrackResult& result);
   bool reselect(const core::RgbdFrame& frame, int cloud);
-  [[nodiscard]] double f2f_ell_start() const;
+  [[nodiscard]] double f2f_ell_start(double dt) const;
   bool keyframe_trips(const Registrations& r, TrackResult& result);
   core::SE3 track_registered(const core::RgbdFrame& frame, const core::SE3& predicted, TrackStep& result);
   core::SE3 add_to_local_graph(const core::RgbdFrame& frame, const Registrations& r, TrackStep& result);

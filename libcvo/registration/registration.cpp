@@ -80,6 +80,11 @@ bool all_finite(const PointCloud& cloud, std::size_t n) {
 
 }  // namespace
 
+double kernel_reach(const core::CvoParameters& parameters, double ell) {
+  const double log_ratio = std::log(kernel_amplitude(parameters) / parameters.sparsification_threshold);
+  return log_ratio > 0 ? ell * std::sqrt(2.0 * log_ratio) : 0.0;
+}
+
 const char* to_string(RegistrationStatus status) {
   switch (status) {
     case RegistrationStatus::kOk: return "ok";
@@ -166,9 +171,9 @@ RegistrationStatus Registration::check(const PointCloud& fixed, const PointCloud
 // The kernel constants at length-scale ℓ, r_max, and the slack s = slack_fraction r_max.
 bool Registration::set_length_scale(double ell, double slack_fraction) {
   const double amplitude = kernel_amplitude(parameters_);
-  const double log_ratio = std::log(amplitude / parameters_.sparsification_threshold);
-  if (!(log_ratio > 0)) return false;
-  r_max_ = static_cast<float>(ell * std::sqrt(2.0 * log_ratio));  // no pair farther apart can reach the threshold
+  const double reach = kernel_reach(parameters_, ell);
+  if (!(reach > 0)) return false;
+  r_max_ = static_cast<float>(reach);
   slack_ = static_cast<float>(slack_fraction) * r_max_;
   reach_sq_ = (r_max_ + slack_) * (r_max_ + slack_);
   constants_.inv_two_ell_sq = static_cast<float>(1.0 / (2.0 * ell * ell));

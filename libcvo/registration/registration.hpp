@@ -108,6 +108,11 @@ enum class RegistrationStatus {
 };
 const char* to_string(RegistrationStatus status);
 
+/// r_max at length-scale ℓ: no pair farther apart than this can reach the sparsification threshold,
+/// even of identical colours, r_max = ℓ √(2 ln(σ² σ_c² / threshold)) (0.61 ℓ at Table 1's values).
+/// 0 when the kernel amplitude is not above the threshold (no pair ever counts).
+double kernel_reach(const core::CvoParameters& parameters, double ell);
+
 struct RegistrationResult {
   core::SE3 transform;  // T: Z's frame -> X's frame
   int iterations = 0;

@@ -203,7 +203,7 @@ TEST(Config, DumpRoundTripsEveryKey) {
     const auto member = key.substr(key.find('.') + 1);
     EXPECT_NE(text.find(member + ": "), std::string::npos) << key << " missing from\n" << text;
   }
-  EXPECT_EQ(config_keys().size(), 99u) << "a new parameter? add a row to the table and regenerate default.yaml";
+  EXPECT_EQ(config_keys().size(), 100u) << "a new parameter? add a row to the table and regenerate default.yaml";
 }
 
 // The values the code was tuned with are keys too (issue 15): the trackers' capacities, KF-CVO's
@@ -219,6 +219,7 @@ TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
                                        "keyframe.gamma_stride",
                                        "keyframe.chain_weight",
                                        "keyframe.chain_full_weight_deg",
+                                       "keyframe.max_turn_rate_deg_s",
                                        "loop_closure.max_refinements",
                                        "loop_closure.ransac_iterations",
                                        "loop_closure.ransac_inlier_m",
@@ -244,6 +245,7 @@ TEST(Config, TunedValuesAreKeysWithTheirDefaults) {
   EXPECT_EQ(c.keyframe_tracking.gamma_stride, 4u);
   EXPECT_EQ(c.keyframe_tracking.chain_weight, 1.0);
   EXPECT_EQ(c.keyframe_tracking.chain_full_weight_deg, 3.0);
+  EXPECT_EQ(c.keyframe_tracking.max_turn_rate_deg_s, 240.0);
   EXPECT_EQ(c.loop_verification.max_refinements, 3);
   EXPECT_EQ(c.loop_verification.ransac_iterations, 300);
   EXPECT_EQ(c.loop_verification.ransac_inlier_m, 0.03);

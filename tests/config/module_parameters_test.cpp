@@ -276,6 +276,8 @@ TEST(ConfigModuleParameters, EveryKeyReachesItsModules) {
        [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_weight == 0; }},
       {"keyframe.chain_full_weight_deg=10",
        [](const Config& c) { return keyframe_odometry_parameters(c).tracking.chain_full_weight_deg == 10; }},
+      {"keyframe.max_turn_rate_deg_s=90",
+       [](const Config& c) { return keyframe_odometry_parameters(c).tracking.max_turn_rate_deg_s == 90; }},
       {"loop_closure.similarity_threshold=0.4",
        [](const Config& c) { return mapper_parameters(c).detector.loop.similarity_threshold == 0.4; }},
       {"loop_closure.max_refinements=0",

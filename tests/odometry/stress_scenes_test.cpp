@@ -3,6 +3,7 @@
 // rolling shutter. Short (12 frames, 3 sub-exposures) to keep CI fast; the bounds are the errors
 // measured on the code of this commit with a margin, stated beside each.
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <vector>
 
@@ -23,9 +24,10 @@ core::Intrinsics camera(double readout_s) {
   return k;
 }
 
-// n frames along `path` through `scene` with the sensor effects, as write_sequence renders them.
+// n frames along `path` through `scene` with the sensor effects, as write_sequence renders them;
+// frame i's sensor noise drawn from seed noise_seed * 1000 + i.
 testing::RenderedSequence render_stress(sim::SceneKind scene_kind, sim::PathKind path, const core::Intrinsics& k,
-                                        const sim::SensorOptions& sensor, std::size_t n) {
+                                        const sim::SensorOptions& sensor, std::size_t n, std::uint64_t noise_seed = 0) {
   const sim::Scene scene = sim::make_scene(scene_kind, 42);
   testing::RenderedSequence s;
   s.truth = sim::sample_path(path, n);
@@ -37,7 +39,7 @@ testing::RenderedSequence render_stress(sim::SceneKind scene_kind, sim::PathKind
     };
     const sim::Radiance radiance = sim::expose(scene, k, pose, sensor.exposure, testing::fast_render());
     const double gain = auto_exposure.expose(sim::mean_luminance(radiance.bgr));
-    core::RgbdFrame frame = sim::develop(radiance, k, gain, {}, sensor, i);
+    core::RgbdFrame frame = sim::develop(radiance, k, gain, {}, sensor, noise_seed * 1000 + i);
     frame.index = i;
     frame.timestamp = frame.depth_timestamp = s.truth[i].timestamp;
     s.frames.push_back(std::move(frame));
@@ -86,20 +88,27 @@ TEST(StressScenes, WhiteRoomWithAKinectLikeCameraIsTracked) {
   EXPECT_LT(drift.worst_rotation_deg, 0.6);
 }
 
-// textured_room along fast_rpy (237 deg/s peak), a 30 ms rolling shutter declared in the
-// intrinsics, Kinect depth and colour noise, 10 ms exposure. Measured: worst 8.6 mm and 0.27 deg
-// over 12 frames (0.4 s, ~60 degrees turned), no failure; bounds about 1.5 times that. (38.7 mm and
-// 1.89 deg while the rolling-shutter compensation was dropped beyond 2 deg at the edge rows, i.e.
-// on every frame of this turn: keyframe_odometry.cpp, twist().)
-TEST(StressScenes, FastTurnsUnderARollingShutterAreTracked) {
+// textured_room along fast_rpy (237 deg/s peak, 6.4 degrees between the first two frames), a 30 ms
+// rolling shutter declared in the intrinsics, Kinect depth and colour noise, 10 ms exposure; three
+// draws of the sensor noise. Measured over noise seeds 0-7: worst 7.8-16.5 mm and 0.22-0.41 deg over
+// 12 frames (0.4 s, ~60 degrees turned), no failure; the bounds are 1.5 times the worst. Before the
+// session's first pair started from a kernel that reaches the turn (keyframe_odometry.hpp), seed 0
+// alone passed: 274 and 535 mm, 2.2 and 8.2 deg for seeds 1 and 2, the first pair converging to
+// a 0.2 m translation that the constant velocity then carried on. (38.7 mm and 1.89 deg at seed 0
+// while the rolling-shutter compensation was dropped beyond 2 deg at the edge rows: twist().)
+TEST(StressScenes, FastTurnsUnderARollingShutterAreTrackedFromTheFirstFrame) {
   sim::SensorOptions sensor = sim::kinect_sensor();
   sensor.exposure.exposure_s = 0.01;
   sensor.exposure.samples = 3;
-  const auto s = render_stress(sim::SceneKind::textured_room, sim::PathKind::fast_rpy, camera(0.03), sensor, 12);
-  const Drift drift = track(s);
-  EXPECT_EQ(drift.failed, 0);
-  EXPECT_LT(drift.worst_translation_mm, 13.0);
-  EXPECT_LT(drift.worst_rotation_deg, 0.4);
+  for (const std::uint64_t noise_seed : {0, 1, 2}) {
+    SCOPED_TRACE(noise_seed);
+    const auto s =
+        render_stress(sim::SceneKind::textured_room, sim::PathKind::fast_rpy, camera(0.03), sensor, 12, noise_seed);
+    const Drift drift = track(s);
+    EXPECT_EQ(drift.failed, 0);
+    EXPECT_LT(drift.worst_translation_mm, 25.0);
+    EXPECT_LT(drift.worst_rotation_deg, 0.6);
+  }
 }
 
 }  // namespace
