@@ -6,6 +6,7 @@ namespace cvo::daemon::trackerd {
 
 void Acknowledgements::ready(std::int64_t session, std::int64_t id, Clock::time_point now) {
   Session& s = sessions_[session];
+  s.newest = std::max(s.newest, id);
   if (id >= s.prefix) s.waiting.try_emplace(id, Waiting{now + kFirstWait, 0});
 }
 
@@ -46,6 +47,12 @@ std::vector<std::int64_t> Acknowledgements::unacknowledged(std::int64_t session)
 std::int64_t Acknowledgements::prefix(std::int64_t session) const {
   const auto it = sessions_.find(session);
   return it == sessions_.end() ? 0 : it->second.prefix;
+}
+
+std::optional<std::int64_t> Acknowledgements::newest(std::int64_t session) const {
+  const auto it = sessions_.find(session);
+  if (it == sessions_.end()) return std::nullopt;
+  return it->second.newest;
 }
 
 std::vector<std::int64_t> Acknowledgements::sessions() const {

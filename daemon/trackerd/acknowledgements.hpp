@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <set>
 #include <vector>
 
@@ -27,7 +28,8 @@ class Acknowledgements {
   /// Keyframe `id` of `session` and its local graph are out: from now on it can be acknowledged.
   void ready(std::int64_t session, std::int64_t id, Clock::time_point now);
   /// The back end said keyframes below `prefix` of `session` are held (its newest word counts: a back
-  /// end that restarted without its store says less than before).
+  /// end that restarted without its store says less than before). The caller passes a prefix no
+  /// further than newest() + 1: keyframes made later are waited for whatever a word said before.
   void acknowledged(std::int64_t session, std::int64_t prefix, Clock::time_point now);
 
   /// Keyframes of `session` due to be sent again now (at most `max`), each counted sent.
@@ -36,6 +38,8 @@ class Acknowledgements {
   [[nodiscard]] std::vector<std::int64_t> unacknowledged(std::int64_t session) const;
   [[nodiscard]] std::int64_t prefix(std::int64_t session) const;
   [[nodiscard]] std::vector<std::int64_t> sessions() const;  // every session with keyframes ready
+  /// The newest keyframe of `session` ever ready (acknowledged or not); nullopt: none (not ours).
+  [[nodiscard]] std::optional<std::int64_t> newest(std::int64_t session) const;
 
  private:
   struct Waiting {
@@ -44,6 +48,7 @@ class Acknowledgements {
   };
   struct Session {
     std::int64_t prefix = 0;
+    std::int64_t newest = -1;   // the newest keyframe ready
     Clock::time_point heard{};  // the last acknowledgement
     bool ever_heard = false;
     std::map<std::int64_t, Waiting> waiting;  // ready, at or past the prefix

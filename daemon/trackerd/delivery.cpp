@@ -42,15 +42,24 @@ void Delivery::published(std::int64_t session, std::int64_t id, bool graph, std:
   if (graph) acks_.ready(session, id, now);  // the back end acknowledges a keyframe with its graph
 }
 
-void Delivery::acknowledged(std::int64_t session, std::int64_t prefix, Clock::time_point now) {
-  const auto ours = acks_.sessions();
-  const bool handed_over_lone =
-      std::any_of(lone_.begin(), lone_.end(), [&](const auto& name) { return name.first == session; });
-  if (std::find(ours.begin(), ours.end(), session) == ours.end() && !handed_over_lone) return;
-  acks_.acknowledged(session, prefix, now);
+std::optional<std::int64_t> Delivery::acknowledged(std::int64_t session, std::int64_t prefix, Clock::time_point now) {
+  const auto newest = newest_published(session);
+  if (!newest) return std::nullopt;
+  // A word that claims more than went out is no back end's (a forger's, or a fault): it must not
+  // delete from the spool, nor count as held, keyframes made after it.
+  const std::int64_t taken = std::min(prefix, *newest + 1);
+  acks_.acknowledged(session, taken, now);
   ever_acknowledged_ = true;
-  const bool lone = lone_.contains({session, prefix});  // handed over without its graph, all before it held
-  if (spool_) spool_->acknowledged(session, lone ? prefix + 1 : prefix);
+  const bool lone = lone_.contains({session, taken});  // handed over without its graph, all before it held
+  if (spool_) spool_->acknowledged(session, lone ? taken + 1 : taken);
+  return taken;
+}
+
+std::optional<std::int64_t> Delivery::newest_published(std::int64_t session) const {
+  auto newest = acks_.newest(session);
+  for (auto it = lone_.lower_bound({session, 0}); it != lone_.end() && it->first == session; ++it)
+    newest = std::max(newest.value_or(it->second), it->second);
+  return newest;
 }
 
 std::vector<std::pair<std::int64_t, std::int64_t>> Delivery::due(Clock::time_point now) {

@@ -31,8 +31,14 @@ class Delivery {
   /// A message of keyframe `id` went out for the first time (graph: its local graph).
   void published(std::int64_t session, std::int64_t id, bool graph, std::span<const std::uint8_t> message,
                  Clock::time_point now);
-  /// The back end acknowledged keyframes below `prefix` of `session`.
-  void acknowledged(std::int64_t session, std::int64_t prefix, Clock::time_point now);
+  /// The back end acknowledged keyframes below `prefix` of `session` (a word the tracker trusts:
+  /// libcvo/lcm/map_decision.hpp). Taken no further than just past the newest keyframe published of
+  /// it, since a back end cannot hold what never went out; the spool deletes only what is taken.
+  /// Returns the prefix taken (below `prefix` when it claimed more), or nullopt: not a session of ours.
+  std::optional<std::int64_t> acknowledged(std::int64_t session, std::int64_t prefix, Clock::time_point now);
+  /// The newest keyframe of `session` published with its local graph, or handed over without it;
+  /// nullopt: none (a session not ours).
+  [[nodiscard]] std::optional<std::int64_t> newest_published(std::int64_t session) const;
   /// Keyframes to send again unasked now: (session, id), keyframe then graph each.
   std::vector<std::pair<std::int64_t, std::int64_t>> due(Clock::time_point now);
 

@@ -413,7 +413,7 @@ void Publishing::apply_map(const std::string& channel, const void* data, int siz
   const lcm::MapContext context{core::wall_utime(), sender, own_keyframes_};
   const auto decide = channel == "CVO_MAP" ? lcm::decide_map_correction : lcm::decide_session_correction;
   const lcm::CorrectionDecision d = decide(data, size, session, applied_, limits, context);
-  if (d.acknowledged) delivery_.acknowledged(d.acknowledged->first, d.acknowledged->second, Delivery::Clock::now());
+  take_acknowledgement(d);
   if (d.ignored) return;
   if (!d.apply) return shared_.count_bad(static_cast<int>(d.refusal), "skipped " + channel, d.why);
   const bool was_placed = applied_.session == session && applied_.placed;
@@ -425,6 +425,24 @@ void Publishing::apply_map(const std::string& channel, const void* data, int siz
   const auto& c = d.correction;
   shared_.correction.set(session, {c.T_map_odom, c.placed, c.epoch, c.revision, c.last_match_time,
                                    c.keyframe_covariance, c.covariance_keyframe});
+}
+
+// What a CVO_MAP_CORRECTION the decision trusts acknowledges (map_decision.hpp), taken no further
+// than what was published (Delivery::acknowledged). A word that claims more, and another session's
+// whose epoch or sender the rules refuse, are counted when the session is ours: a forger on an open
+// bus, or a faulty back end, for an operator to see.
+void Publishing::take_acknowledgement(const lcm::CorrectionDecision& d) {
+  const std::string what = "skipped the acknowledgement of a CVO_MAP_CORRECTION";
+  if (d.acknowledgement_refused && delivery_.newest_published(*d.acknowledgement_refused))
+    return shared_.count_bad(static_cast<int>(d.refusal), what, d.why);
+  if (!d.acknowledged) return;
+  const auto [session, prefix] = *d.acknowledged;
+  const auto taken = delivery_.acknowledged(session, prefix, Delivery::Clock::now());
+  if (!taken || *taken == prefix) return;
+  shared_.count_bad(static_cast<int>(core::BadKind::kImplausible), what,
+                    "it acknowledges keyframes below " + std::to_string(prefix) + " of session " +
+                        core::session_name(session) + ", beyond the newest published (" + std::to_string(*taken - 1) +
+                        "): taken below " + std::to_string(*taken));
 }
 
 }  // namespace cvo::daemon::trackerd

@@ -58,6 +58,7 @@ class Publishing {
   /// `channel`: CVO_MAP_CORRECTION or CVO_MAP; `sender`: its verified sender (auth_t; 0 on an open
   /// bus, unsigned).
   void apply_map(const std::string& channel, const void* data, int size, std::int64_t sender);
+  void take_acknowledgement(const lcm::CorrectionDecision& d);
   KeyframeHistory& history();
 
   Shared& shared_;

@@ -7,6 +7,7 @@
 
 #include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
+#include "libcvo/core/session.hpp"
 #include "libcvo/core/units.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/map_check.hpp"
@@ -69,14 +70,15 @@ std::string implausible_jump(const core::SE3& from, const core::SE3& to, const C
          " deg)";
 }
 
-// The order of words: "" when `w` may follow `last` (newer, from a present epoch, a plausible
-// revision, the same sender within an epoch); otherwise why not, and the kind.
-std::string out_of_order(const SessionWord& w, const AppliedCorrection& last, const CorrectionLimits& limits,
-                         const MapContext& context, BadKind& kind) {
+// The epoch and sender rules: "" when `w` may come from the back end whose word was applied last
+// (or from a newer one): not of an older epoch, an epoch not from the future, within its epoch a
+// plausible revision from the same sender; otherwise why not, and the kind. Whether it is newer
+// than `last` is not asked: another session's word may be of an earlier revision.
+std::string untrusted_origin(const SessionWord& w, const AppliedCorrection& last, const CorrectionLimits& limits,
+                             const MapContext& context, BadKind& kind) {
   kind = BadKind::kStale;
-  if (w.epoch < last.epoch || (w.epoch == last.epoch && w.revision <= last.revision))
-    return name(w) + ", not newer than the applied revision " + std::to_string(last.revision) + " of epoch " +
-           std::to_string(last.epoch);
+  if (w.epoch < last.epoch)
+    return name(w) + ": of an older back end than the applied word's (epoch " + std::to_string(last.epoch) + ")";
   kind = BadKind::kImplausible;
   const double ahead_s = static_cast<double>(w.epoch - context.now_utime) * 1e-6;
   if (ahead_s > limits.epoch_slack_s)
@@ -91,6 +93,17 @@ std::string out_of_order(const SessionWord& w, const AppliedCorrection& last, co
   kind = BadKind::kConflict;
   if (context.sender != last.sender) return name(w) + ": another sender than the applied word of its epoch";
   return {};
+}
+
+// The order of words: "" when `w` may follow `last` (newer, and untrusted_origin's rules);
+// otherwise why not, and the kind.
+std::string out_of_order(const SessionWord& w, const AppliedCorrection& last, const CorrectionLimits& limits,
+                         const MapContext& context, BadKind& kind) {
+  kind = BadKind::kStale;
+  if (w.epoch < last.epoch || (w.epoch == last.epoch && w.revision <= last.revision))
+    return name(w) + ", not newer than the applied revision " + std::to_string(last.revision) + " of epoch " +
+           std::to_string(last.epoch);
+  return untrusted_origin(w, last, limits, context, kind);
 }
 
 // The session's loops to keyframes of other sessions that the word carries (poses that do not
@@ -191,6 +204,21 @@ CorrectionDecision decide(const SessionWord& w, std::int64_t session, const Appl
   return d;
 }
 
+// Another session's CVO_MAP_CORRECTION: ignored (every tracker hears every session's), and what it
+// acknowledges taken only when the word may come from the back end the tracker trusts (the header).
+CorrectionDecision another_sessions(const SessionWord& w, std::pair<std::int64_t, std::int64_t> acknowledged,
+                                    const AppliedCorrection& last, const CorrectionLimits& limits,
+                                    const MapContext& context) {
+  auto d = ignore("another session's correction");
+  if (std::string bad = untrusted_origin(w, last, limits, context, d.refusal); !bad.empty()) {
+    d.why = "its acknowledgement of session " + core::session_name(acknowledged.first) + ": " + bad;
+    d.acknowledgement_refused = acknowledged.first;
+    return d;
+  }
+  d.acknowledged = acknowledged;
+  return d;
+}
+
 }  // namespace
 
 CorrectionDecision decide_map_correction(const void* data, int size, std::int64_t session,
@@ -216,14 +244,13 @@ CorrectionDecision decide_session_correction(const void* data, int size, std::in
   if (!message) return refuse(failure, error);
   const std::pair acknowledged{message->session.session, message->acknowledged};
   if (message->session.session != session) {
-    auto d = ignore("another session's correction");
-    d.acknowledged = acknowledged;
-    return d;
+    const SessionWord word{message->epoch, message->revision, &message->session, {}, nullptr, &*message};
+    return another_sessions(word, acknowledged, last, limits, context);
   }
   const SessionWord word{message->epoch, message->revision, &message->session, correction_error(*message),
                          nullptr,        &*message};
   auto d = decide(word, session, last, limits, context);
-  d.acknowledged = acknowledged;
+  if (d.apply || d.ignored) d.acknowledged = acknowledged;  // ignored: the applied word again, from its sender
   return d;
 }
 

@@ -36,6 +36,13 @@
 // its sender (the back end re-sends corrections, and a CVO_MAP repeats the CVO_MAP_CORRECTION of its
 // revision), and another session's CVO_MAP_CORRECTION (every tracker hears every session's; that
 // check comes first, before any other).
+// What a CVO_MAP_CORRECTION acknowledges (the keyframes the back end holds, which the tracker then
+// deletes from its spool) is taken only from a word the tracker trusts (issue 48): of its session,
+// one applied or the applied one again; of another session (one it handed over from its spool, or
+// left at a camera re-initialisation), one that passes the epoch and sender rules above against the
+// word applied last (not of an older epoch, nor from the future, nor a revision leap, nor another
+// sender within its epoch). Anything else acknowledges nothing, so that a forger on an open bus
+// deletes no keyframe with a word the tracker would not apply.
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -88,10 +95,14 @@ struct CorrectionDecision {
   AppliedCorrection correction;                     // when apply: the new state
   core::BadKind refusal = core::BadKind::kContent;  // when refused: CVO_STATUS's bad_messages index
   std::string why;                                  // when refused or ignored: for the daemon's note
-  // A CVO_MAP_CORRECTION that decoded, whatever the decision: its session and what the back end
+  // A CVO_MAP_CORRECTION the tracker trusts (see the header): its session and what the back end
   // acknowledged of it (map_correction_t.acknowledged), for the tracker's delivery (any session of
   // its own, the running one or one it handed over).
   std::optional<std::pair<std::int64_t, std::int64_t>> acknowledged;
+  // Another session's CVO_MAP_CORRECTION whose acknowledgement the epoch and sender rules refuse:
+  // that session (`refusal` and `why` say why), for a tracker that counts it when the session is
+  // one of its own. Its own session's refused word is refused whole, and counted as such.
+  std::optional<std::int64_t> acknowledgement_refused;
 };
 
 /// The decision for the CVO_MAP bytes `data` (as received) for `session`, given the correction

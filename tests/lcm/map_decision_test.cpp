@@ -1,9 +1,11 @@
 // What a tracker makes of a received CVO_MAP (lcm::decide_map_correction) or CVO_MAP_CORRECTION
 // (lcm::decide_session_correction), without LCM: only a newer word with a finite, plausible entry
 // for its own session moves its map poses; a stale, a foreign, an implausible or a non-finite one is
-// refused by its own kind and changes nothing; both channels are one decision.
+// refused by its own kind and changes nothing; both channels are one decision; and only a word the
+// tracker trusts acknowledges what the back end holds (its spool deletes what is acknowledged).
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -332,6 +334,82 @@ TEST(MapDecision, AFirstPlacementByACorrectionAgreesWithItsLoops) {
   EXPECT_FALSE(off.apply);
   EXPECT_EQ(off.refusal, BadKind::kImplausible);
   EXPECT_NE(off.why.find("disagrees with the loop of keyframe 2"), std::string::npos) << off.why;
+}
+
+// A correction of `revision` (of a back end started at `epoch`) for `session`'s entry, that says the
+// back end holds keyframes below a million: a forger's, on an open bus, wanting the spool deleted.
+std::vector<std::uint8_t> acknowledging_a_million(std::int64_t revision, const slam::MapSession& session,
+                                                  std::int64_t epoch = 0) {
+  return encode(
+      to_message(slam::SessionCorrection{static_cast<std::uint64_t>(revision), session, {}}, 1, epoch, 1'000'000));
+}
+
+// Issue 48: the tracker deletes from its spool what a correction acknowledges, so only a word it
+// applies (or the applied one again, from its sender) acknowledges anything; one the sender, epoch
+// or plausibility rules refuse acknowledges nothing.
+TEST(MapDecision, OnlyACorrectionTheTrackerAppliesAcknowledgesAnything) {
+  AppliedCorrection last{0, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  last.applied_utime = kNow - 1'000'000;
+  const std::int64_t in_a_year = kNow + 365LL * 86400 * 1'000'000;
+  struct Case {
+    const char* what;
+    std::int64_t revision, epoch, sender;
+    core::SE3 correction;
+  };
+  const Case refused[] = {{"an epoch from the future", 1, in_a_year, 0, kOneMetre},
+                          {"stale", 6, 0, 0, kOneMetre},
+                          {"a revision leap", 7 + 1'000'000, 0, 0, kOneMetre},
+                          {"another sender within the epoch", 8, 0, 6, kOneMetre},
+                          {"a jump of 9 m", 8, 0, 0, core::SE3::from_translation({10, 0, 0})}};
+  for (const auto& c : refused) {
+    const auto d = decide_correction(acknowledging_a_million(c.revision, placed(kSession, c.correction), c.epoch), last,
+                                     {kNow, c.sender, {}});
+    EXPECT_FALSE(d.apply || d.ignored) << c.what;
+    EXPECT_EQ(d.acknowledged, std::nullopt) << c.what << ": " << d.why;
+  }
+  const auto applied = decide_correction(acknowledging_a_million(8, placed(kSession, kOneMetre)), last);
+  ASSERT_TRUE(applied.apply) << applied.why;
+  EXPECT_EQ(applied.acknowledged, std::pair(kSession, std::int64_t{1'000'000}));
+  const auto again = decide_correction(acknowledging_a_million(8, placed(kSession, kOneMetre)), applied.correction);
+  ASSERT_TRUE(again.ignored) << again.why;
+  EXPECT_EQ(again.acknowledged, std::pair(kSession, std::int64_t{1'000'000})) << "the back end re-sends its word";
+}
+
+// Another session's correction (one the tracker handed over from its spool, say) is ignored, and
+// acknowledges only when it may come from the back end whose word was applied, or a newer one:
+// not an older epoch, one from the future, a revision leap or another sender within the epoch.
+TEST(MapDecision, AnotherSessionsCorrectionAcknowledgesOnlyUnderTheEpochAndSenderRules) {
+  AppliedCorrection last{5, 7, kSession, true, kOneMetre, -1, std::nullopt, -1};
+  last.applied_utime = kNow - 1'000'000;
+  const auto others = [&](std::int64_t revision, std::int64_t epoch, std::int64_t sender) {
+    return decide_correction(acknowledging_a_million(revision, placed(kOther, kOneMetre), epoch), last,
+                             {kNow, sender, {}});
+  };
+  struct Case {
+    const char* what;
+    std::int64_t revision, epoch, sender;
+    BadKind kind;
+  };
+  const Case refused[] = {{"an older back end", 9, 4, 0, BadKind::kStale},
+                          {"an epoch from the future", 1, kNow + 3600'000'000LL, 0, BadKind::kImplausible},
+                          {"a revision leap", 7 + 1'000'000, 5, 0, BadKind::kImplausible},
+                          {"another sender within the epoch", 8, 5, 6, BadKind::kConflict}};
+  for (const auto& c : refused) {
+    const auto d = others(c.revision, c.epoch, c.sender);
+    EXPECT_TRUE(d.ignored) << c.what << ": not this session's word, nothing to refuse of it";
+    EXPECT_EQ(d.acknowledged, std::nullopt) << c.what;
+    EXPECT_EQ(d.acknowledgement_refused, kOther) << c.what;
+    EXPECT_EQ(d.refusal, c.kind) << c.what << ": " << d.why;
+  }
+  const Case trusted[] = {{"an earlier revision of the applied epoch", 3, 5, 0, {}},
+                          {"a later one", 9, 5, 0, {}},
+                          {"a newer back end", 1, 6, 6, {}}};
+  for (const auto& c : trusted) {
+    const auto d = others(c.revision, c.epoch, c.sender);
+    EXPECT_TRUE(d.ignored) << c.what;
+    EXPECT_EQ(d.acknowledged, std::pair(kOther, std::int64_t{1'000'000})) << c.what << ": " << d.why;
+    EXPECT_EQ(d.acknowledgement_refused, std::nullopt) << c.what;
+  }
 }
 
 // What the tracker cannot use of a correction is refused whole by its kind: more loops than

@@ -5,6 +5,7 @@
 // a lower prefix believed, another tracker's session ignored, and `max` bounding a round.
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -101,6 +102,19 @@ TEST(Acknowledgements, AnAcknowledgementRemovesWhatIsBelowItsPrefix) {
   EXPECT_TRUE(acks.unacknowledged(kSession).empty());
   acks.ready(kSession, 6, t0 + 7s);
   EXPECT_EQ(acks.unacknowledged(kSession), (Ids{6}));
+}
+
+// What an acknowledgement may cover (Delivery::acknowledged takes no more): the newest keyframe
+// ever ready, whatever was acknowledged since.
+TEST(Acknowledgements, TheNewestKeyframeReadyIsKnownWhateverWasAcknowledged) {
+  Acknowledgements acks;
+  EXPECT_EQ(acks.newest(kSession), std::nullopt);
+  acks.ready(kSession, 4, t0);
+  acks.ready(kSession, 2, t0);
+  EXPECT_EQ(acks.newest(kSession), 4);
+  acks.acknowledged(kSession, 5, t0 + 1s);
+  EXPECT_EQ(acks.newest(kSession), 4);
+  EXPECT_EQ(acks.newest(kOther), std::nullopt);
 }
 
 TEST(Acknowledgements, ALowerPrefixLaterIsBelievedButWhatWasAcknowledgedIsNotWaitedForAgain) {

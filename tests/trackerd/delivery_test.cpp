@@ -2,7 +2,8 @@
 // clock of its own: what is published is spooled, a keyframe is waited for once its local graph is
 // out, what is sent again unasked, when a done publisher may exit (at once with no back end ever
 // heard, else once all is acknowledged or the linger has passed), the closing note, what an earlier
-// run left for the next to hand over, and the spool's notes of drops and failed writes.
+// run left for the next to hand over, the spool's notes of drops and failed writes, and that an
+// acknowledgement covers nothing beyond what was published.
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
@@ -113,6 +114,53 @@ TEST(Delivery, AnAcknowledgementRemovesWhatTheBackEndHoldsFromTheSpool) {
   EXPECT_EQ(delivery.spooled(kSession, 3, true), message(3, true));
   EXPECT_EQ(delivery.spooled(kOther, 0, false), message(0, false)) << "another session's";
   EXPECT_EQ(delivery.due(t0 + 5s), (Due{{kSession, 3}})) << "kOther's back end was never heard";
+}
+
+// Issue 48: a word that says the back end holds keyframes below a million, when keyframes 0-2 are
+// out, covers those three only: the spool keeps what is made after it, and that is waited for.
+TEST(Delivery, AnAcknowledgementBeyondWhatWasPublishedCoversOnlyWhatWas) {
+  test::TempDir dir;
+  auto delivery = spooling(dir.path());
+  publish(delivery, 0, 3, t0);
+  EXPECT_EQ(delivery.acknowledged(kSession, 1'000'000, t0 + 1s), 3) << "taken below the newest published, 2";
+  EXPECT_EQ(delivery.spooled(kSession, 2, true), std::nullopt) << "what it covers leaves the spool";
+  publish(delivery, 3, 5, t0 + 2s);
+  for (std::int64_t k = 3; k < 5; ++k)
+    for (const bool graph : {false, true}) EXPECT_EQ(delivery.spooled(kSession, k, graph), message(k, graph)) << k;
+  EXPECT_NE(delivery.unacknowledged_note().find("keyframes 3-4 of session " + kName), std::string::npos)
+      << delivery.unacknowledged_note();
+  EXPECT_FALSE(delivery.may_exit(t0 + 3s, t0 + 3s)) << "they are waited for";
+  EXPECT_EQ(delivery.acknowledged(kOther, 1'000'000, t0 + 3s), std::nullopt) << "not a session of ours";
+}
+
+// The open keyframe (its local graph not out yet) cannot be held by any back end: whatever a word
+// claims, it stays in the spool, and once its graph is out it is waited for.
+TEST(Delivery, TheSpoolKeepsTheOpenKeyframeWhateverAnAcknowledgementClaims) {
+  test::TempDir dir;
+  auto delivery = spooling(dir.path());
+  publish(delivery, 0, 4, t0, kSession, false);  // keyframe 3's graph not out yet
+  EXPECT_EQ(delivery.acknowledged(kSession, 1'000'000, t0 + 1s), 3);
+  EXPECT_EQ(delivery.spooled(kSession, 3, false), message(3, false));
+  delivery.published(kSession, 3, true, message(3, true), t0 + 2s);
+  EXPECT_EQ(delivery.spooled(kSession, 3, true), message(3, true));
+  EXPECT_NE(delivery.unacknowledged_note().find("keyframes 3 of session " + kName), std::string::npos)
+      << delivery.unacknowledged_note();
+}
+
+// A session handed over is published as far as the spool held it: its newest keyframe, even one
+// without its graph (a killed session's last), bounds what may be acknowledged of it.
+TEST(Delivery, AHandedOverSessionIsAcknowledgedNoFurtherThanWhatWasHandedOver) {
+  test::TempDir dir;
+  {
+    auto killed = spooling(dir.path());
+    publish(killed, 0, 3, t0, kOther, false);  // keyframes 0-2, the graph of 2 never out
+  }
+  auto delivery = spooling(dir.path());
+  EXPECT_EQ(delivery.newest_published(kOther), std::nullopt) << "not handed over yet";
+  delivery.handed_over(delivery.left_over(kSession), t0);
+  EXPECT_EQ(delivery.newest_published(kOther), 2);
+  EXPECT_EQ(delivery.acknowledged(kOther, 1'000'000, t0 + 1s), 3);
+  EXPECT_EQ(delivery.acknowledged(kOther, 2, t0 + 2s), 2) << "a word within it is taken whole";
 }
 
 TEST(Delivery, SendsAgainAtMostTwoKeyframesOfEachSessionARound) {
