@@ -82,6 +82,14 @@ std::optional<std::vector<std::uint8_t>> Delivery::spooled(std::int64_t session,
   return spool_->read({session, id, graph, 0});
 }
 
+bool Delivery::spool(const Spool::Entry& entry, std::span<const std::uint8_t> message) {
+  if (!spool_) return false;
+  auto why = spool_->keep(entry, message);
+  if (why.empty()) return true;
+  failures_.push_back(std::move(why));
+  return false;
+}
+
 // A keyframe handed over with its graph waits for acknowledgement; one without (the killed session's
 // newest, whose graph never went out) cannot be acknowledged: it goes from the spool once all before
 // it are (acknowledged()).

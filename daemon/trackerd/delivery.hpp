@@ -47,6 +47,9 @@ class Delivery {
   /// A message the spool holds (graph: the local graph), or nullopt.
   [[nodiscard]] std::optional<std::vector<std::uint8_t>> spooled(std::int64_t session, std::int64_t id,
                                                                  bool graph) const;
+  /// Keeps a message made at the hand-over (killed_graph.hpp) in the spool; false when it is not
+  /// (why: in spool_note()).
+  bool spool(const Spool::Entry& entry, std::span<const std::uint8_t> message);
   /// Marks the left-over messages handed over: their keyframes wait for acknowledgement as this run's do.
   void handed_over(const std::vector<Spool::Entry>& entries, Clock::time_point now);
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <set>
 #include <span>
 #include <thread>
 #include <utility>
@@ -18,6 +19,7 @@
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/status.hpp"
+#include "daemon/trackerd/killed_graph.hpp"
 #include "libcvo/auth/lcm_publish.hpp"
 #include "libcvo/config/config.hpp"
 #include "libcvo/core/session.hpp"
@@ -148,7 +150,7 @@ bool Publishing::finished() {
 // What earlier runs left in the spool (a tracker killed, or out of power, before the back end
 // acknowledged it) goes out first, and waits for acknowledgement as this run's keyframes do.
 void Publishing::hand_over() {
-  const auto left = delivery_.left_over(shared_.session.load());
+  const auto left = with_killed_graphs(delivery_.left_over(shared_.session.load()));
   if (left.empty()) return;
   std::size_t keyframes = 0;
   for (const auto& e : left) {
@@ -161,6 +163,33 @@ void Publishing::hand_over() {
   delivery_.handed_over(left, Delivery::Clock::now());
   shared_.notes.note("handing over " + std::to_string(keyframes) + " keyframes (" + std::to_string(left.size()) +
                      " messages) that an earlier run left in the spool unacknowledged");
+}
+
+// A killed session's newest keyframe is in the spool without its local graph (which would have
+// gone out with the next keyframe): it gets one of itself alone (killed_graph.hpp), spooled before
+// it is sent, so that the back end holds it with a graph and acknowledges it, and it leaves the
+// spool only then. One whose graph cannot be made or kept is handed over alone, as before.
+std::vector<Spool::Entry> Publishing::with_killed_graphs(const std::vector<Spool::Entry>& left) {
+  std::set<std::pair<std::int64_t, std::int64_t>> graphs;
+  for (const auto& e : left)
+    if (e.graph) graphs.emplace(e.session, e.id);
+  std::vector<Spool::Entry> out;
+  std::size_t made = 0;
+  for (const auto& e : left) {
+    out.push_back(e);
+    if (e.graph || graphs.contains({e.session, e.id})) continue;
+    const auto keyframe = delivery_.spooled(e.session, e.id, false);
+    const auto graph = keyframe ? graph_of_killed_keyframe(*keyframe, core::wall_utime()) : std::nullopt;
+    const Spool::Entry entry{e.session, e.id, true, graph ? graph->size() : 0};
+    if (!graph || !delivery_.spool(entry, *graph)) continue;
+    out.push_back(entry);
+    ++made;
+  }
+  if (made > 0)
+    shared_.notes.note(std::to_string(made) +
+                       " killed sessions' newest keyframes given a local graph of the keyframe " +
+                       "alone (the frames tracked against them died with their tracker)");
+  return out;
 }
 
 // Keyframes the back end has not acknowledged long after they went out are sent again unasked,

@@ -49,6 +49,7 @@ class Publishing {
   void send_slices();
   bool finished();
   void hand_over();
+  std::vector<Spool::Entry> with_killed_graphs(const std::vector<Spool::Entry>& left);
   void send_unacknowledged();
   void answer_from_spool(const cvo_lcm::keyframe_request_t& request, const std::vector<KeyframeHistory::Wanted>& ranges,
                          const KeyframeHistory::Afford& afford);

@@ -4,8 +4,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cinttypes>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <stdexcept>
@@ -31,25 +33,51 @@ std::optional<Spool::Entry> parse_name(const std::string& name) {
   return Spool::Entry{static_cast<std::int64_t>(session), id, kind == 'g', 0};
 }
 
-bool write_durably(const fs::path& path, std::span<const std::uint8_t> bytes) {
+// The bytes to `path`, flushed to the disk: 0, or the errno of the first step that failed.
+int write_durably(const fs::path& path, std::span<const std::uint8_t> bytes) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
-  if (fd < 0) return false;
-  std::size_t done = 0;
-  while (done < bytes.size()) {
+  if (fd < 0) return errno;
+  int error = 0;
+  for (std::size_t done = 0; done < bytes.size() && error == 0;) {
     const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n <= 0) break;
-    done += static_cast<std::size_t>(n);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) error = n < 0 ? errno : EIO;  // a write of nothing: the disk gave no room, nor a reason
+    done += n > 0 ? static_cast<std::size_t>(n) : 0;
   }
-  const bool ok = done == bytes.size() && ::fdatasync(fd) == 0;
-  return ::close(fd) == 0 && ok;
+  if (error == 0 && ::fdatasync(fd) != 0) error = errno;
+  if (::close(fd) != 0 && error == 0) error = errno;
+  return error;
+}
+
+// "cannot <what> <path>: Read-only file system (EROFS)": what an operator needs to act on it.
+std::string failure(const std::string& what, const fs::path& path, int error) {
+  return "cannot " + what + " " + path.string() + ": " + errno_text(error);
 }
 
 }  // namespace
 
+std::string errno_text(int error) {
+  const char* name = ::strerrorname_np(error);
+  return std::error_code(error, std::generic_category()).message() + " (" +
+         (name != nullptr ? std::string(name) : "errno " + std::to_string(error)) + ")";
+}
+
+std::string Spool::unusable(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return failure("create the directory", dir, ec.value());
+  if (!fs::is_directory(dir, ec)) return failure("use", dir, ENOTDIR);
+  // Root writes through a directory's mode bits: only trying shows a read-only mount or a full disk.
+  const fs::path probe = dir / (".probe-" + std::to_string(::getpid()) + kTemporary);
+  if (const int error = write_durably(probe, {}); error != 0) return failure("write in", dir, error);
+  if (::unlink(probe.c_str()) != 0) return failure("remove", probe, errno);
+  return {};
+}
+
 Spool::Spool(fs::path dir, std::uintmax_t max_bytes) : dir_(std::move(dir)), max_bytes_(max_bytes) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
-  if (ec) throw std::runtime_error("trackerd.spool " + dir_.string() + ": " + ec.message());
+  if (ec) throw std::runtime_error("trackerd.spool: " + failure("create the directory", dir_, ec.value()));
   std::vector<std::pair<fs::file_time_type, Entry>> found;
   for (const auto& file : fs::directory_iterator(dir_, ec)) {
     const std::string name = file.path().filename().string();
@@ -62,7 +90,7 @@ Spool::Spool(fs::path dir, std::uintmax_t max_bytes) : dir_(std::move(dir)), max
     entry->bytes = file.file_size(ec);
     found.emplace_back(file.last_write_time(ec), *entry);
   }
-  if (ec) throw std::runtime_error("trackerd.spool " + dir_.string() + ": " + ec.message());
+  if (ec) throw std::runtime_error("trackerd.spool: " + failure("read", dir_, ec.value()));
   // Oldest first; files written within the clock's resolution by name (a keyframe before its graph).
   std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) {
     return std::tie(a.first, a.second.session, a.second.id, a.second.graph) <
@@ -97,10 +125,14 @@ std::string Spool::keep(const Entry& entry, std::span<const std::uint8_t> messag
   const fs::path path = path_of(entry);
   fs::path temporary = path;
   temporary += kTemporary;
-  std::error_code ec;
-  if (!write_durably(temporary, message) || (fs::rename(temporary, path, ec), ec)) {
+  if (const int error = write_durably(temporary, message); error != 0) {
+    std::error_code ignored;
+    fs::remove(temporary, ignored);
+    return failure("write", temporary, error);
+  }
+  if (std::error_code ec; (fs::rename(temporary, path, ec), ec)) {
     fs::remove(temporary, ec);
-    return "cannot write " + path.string() + " (a full or failing disk?)";
+    return failure("rename into place", temporary, ec.value());
   }
   entries_.push_back({entry.session, entry.id, entry.graph, message.size()});
   bytes_ += message.size();

@@ -19,6 +19,9 @@
 
 namespace cvo::daemon::trackerd {
 
+/// An errno's text and name: "Read-only file system (EROFS)".
+std::string errno_text(int error);
+
 class Spool {
  public:
   struct Entry {
@@ -28,12 +31,16 @@ class Spool {
     std::uintmax_t bytes = 0;
   };
 
+  /// Why `dir` cannot be a spool ("" when it can): it cannot be created, or a file cannot be written
+  /// and removed there (a read-only mount, a full disk, a file in the way), with the errno's text.
+  static std::string unusable(const std::filesystem::path& dir);
+
   /// Opens (creates) the directory and takes in what it holds, oldest first; throws
   /// std::runtime_error naming the directory when it cannot be made or read.
   Spool(std::filesystem::path dir, std::uintmax_t max_bytes);
 
-  /// Keeps a message; empty when kept, else why not (a full or failing disk: it is not kept, and
-  /// the tracker goes on).
+  /// Keeps a message; empty when kept, else why not, naming the errno (a full or failing disk: it
+  /// is not kept, and the tracker goes on).
   std::string keep(const Entry& entry, std::span<const std::uint8_t> message);
   /// The message of an entry held, or nullopt (gone, or unreadable).
   [[nodiscard]] std::optional<std::vector<std::uint8_t>> read(const Entry& entry) const;

@@ -11,6 +11,7 @@
 #include "daemon/common/signals.hpp"
 #include "daemon/common/supervise.hpp"
 #include "daemon/trackerd/publishing.hpp"
+#include "daemon/trackerd/spool.hpp"
 #include "daemon/trackerd/tracking.hpp"
 #include "libcvo/core/session.hpp"
 #include "libcvo/io/input_error.hpp"
@@ -29,6 +30,10 @@ Trackerd::Trackerd(config::Config config, SourceFactory open_source) : open_sour
   if (!lcm::parse_colour_encoding(t.keyframe_colour_encoding))
     throw io::InputError("trackerd.keyframe_colour_encoding",
                          "'" + t.keyframe_colour_encoding + "': expected raw, jpeg or png");
+  // A spool that cannot be written would keep nothing across a crash, each write failing later:
+  // refused at the start, as any unusable setting.
+  if (!t.spool.empty() && t.spool != "none")
+    if (const auto why = Spool::unusable(t.spool); !why.empty()) throw io::InputError("trackerd.spool", why);
   ::lcm::LCM probe(t.lcm_url);  // the publisher opens its own; a bad URL should fail at start-up
   if (!probe.good()) throw io::InputError("trackerd.lcm_url", "cannot open LCM provider '" + t.lcm_url + "'");
   shared_ = std::make_unique<Shared>(std::move(config));  // reads the key file

@@ -26,9 +26,9 @@ namespace cvo::daemon::trackerd {
 
 class Trackerd {
  public:
-  /// Checks the configuration and opens the LCM output; throws io::InputError (with a message
-  /// that names the key or URL) when that cannot work. The frame source is opened by the
-  /// acquisition thread, so a camera that is not plugged in yet is waited for, not fatal.
+  /// Checks the configuration, the spool directory (Spool::unusable) and opens the LCM output;
+  /// throws io::InputError (with a message that names the key or URL) when that cannot work. The frame source is opened
+  /// by the acquisition thread, so a camera that is not plugged in yet is waited for, not fatal.
   explicit Trackerd(config::Config config);
   /// The same with another frame source than trackerd.source names (opened by the acquisition
   /// thread, as above): how tests drive the daemon with a camera that goes away and comes back.

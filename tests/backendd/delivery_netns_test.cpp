@@ -9,12 +9,15 @@
 #include <chrono>
 #include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -91,6 +94,8 @@ class Delivery : public ::testing::Test {
         60s));
     return session;
   }
+  std::map<std::int64_t, std::set<KeyframeName>> kill_trackers(int n, const fs::path& spool);
+
   cvo::test::TempDir dir_;
   std::unique_ptr<LcmCapture> capture_;
 };
@@ -160,6 +165,87 @@ TEST_F(Delivery, ATrackerKilledAndStartedAgainHandsItsKeyframesOver) {
   EXPECT_TRUE(said(second_err, "handing over")) << cvo::testing::slurp(second_err);
   std::cout << made.size() << " keyframes of the killed session named by its poses: all in the map" << std::endl;
   EXPECT_EQ(cvo::testing::stop(second, 60s).value_or(-9), 0);
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+}
+
+// The keyframes (graph false) and local graphs (graph true) a spool directory holds, by name
+// (trackerd/spool.hpp: <session: 16 hex digits>-<id>-<k|g>.lcm).
+std::set<std::tuple<std::int64_t, std::int64_t, bool>> spooled(const fs::path& spool) {
+  std::set<std::tuple<std::int64_t, std::int64_t, bool>> out;
+  for (const auto& file : fs::directory_iterator(spool)) {
+    unsigned long long session = 0;
+    long long id = 0;
+    char kind = 0;
+    if (std::sscanf(file.path().filename().c_str(), "%16llx-%lld-%c.lcm", &session, &id, &kind) == 3)
+      out.emplace(static_cast<std::int64_t>(session), id, kind == 'g');
+  }
+  return out;
+}
+
+// Trackers on one spool, each SIGKILLed (a power cut) once its clip has ended, while no back end
+// runs: every keyframe their sessions' poses named, by session.
+std::map<std::int64_t, std::set<KeyframeName>> Delivery::kill_trackers(int n, const fs::path& spool) {
+  std::map<std::int64_t, std::set<KeyframeName>> made;
+  std::set<std::int64_t> before;
+  for (int i = 1; i <= n; ++i) {
+    const auto err = dir_.path() / ("killed-" + std::to_string(i) + ".txt");
+    auto tracker = cvo::testing::start_trackerd(kClip, err, false, {"trackerd.spool=" + spool.string()});
+    EXPECT_TRUE(wait_for_text(err, "end of tum:", 60s)) << cvo::testing::slurp(err);
+    // Its last pose heard, so that every keyframe its poses name is counted.
+    std::this_thread::sleep_for(500ms);
+    tracker.signal(SIGKILL);
+    tracker.wait_for(10s);
+    const auto c = capture_->snapshot();
+    const std::int64_t session = session_of(c, before);
+    EXPECT_NE(session, 0) << cvo::testing::slurp(err);
+    before.insert(session);
+    made[session] = named_by(c, session);
+  }
+  return made;
+}
+
+// Issue 48: trackers SIGKILLed five times in a row while the back end is down hold every keyframe
+// their sessions' poses name in the spool, each session's newest (whose local graph never went
+// out) too, and all of them reach the store once a back end is up and a tracker starts again.
+TEST_F(Delivery, TrackersKilledFiveTimesWhileTheBackEndIsDownHoldEveryKeyframeTheirPosesName) {
+  const auto spool = dir_.path() / "spool";
+  const auto made = kill_trackers(5, spool);
+  ASSERT_EQ(made.size(), 5u);
+  std::set<KeyframeName> all;
+  const auto held = spooled(spool);
+  for (const auto& [session, names] : made)
+    for (const auto& [s, id] : names) {
+      all.emplace(s, id);
+      EXPECT_TRUE(held.contains({s, id, false})) << "keyframe " << id << " of session " << core::session_name(s)
+                                                 << " (of " << names.size() << ") is not in the spool";
+    }
+  auto backend = start_backend("backend");
+  const auto err = dir_.path() / "trackerd.txt";
+  auto tracker = cvo::testing::start_trackerd(kClip, err, true, {"trackerd.spool=" + spool.string()});
+  // Held: in the map, and in the store with its local graph (what the back end acknowledges).
+  const auto all_held = [&](const Captured& c) {
+    for (const auto& [session, names] : made)
+      if (!c.acknowledged.contains(session) || c.acknowledged.at(session) < static_cast<std::int64_t>(names.size()))
+        return false;
+    return c.map_holds(all);
+  };
+  EXPECT_TRUE(capture_->wait_until(all_held, 90s))
+      << "the killed sessions' keyframes are not all held\n"
+      << cvo::testing::slurp(err) << cvo::testing::slurp(dir_.path() / "backend.txt");
+  const auto acknowledged = capture_->snapshot().acknowledged;
+  for (const auto& [session, names] : made) {
+    const auto it = acknowledged.find(session);
+    EXPECT_EQ(it == acknowledged.end() ? 0 : it->second, static_cast<std::int64_t>(names.size()))
+        << "keyframes acknowledged of session " << core::session_name(session) << ", whose poses named "
+        << names.size();
+  }
+  EXPECT_EQ(tracker.wait_for(90s).value_or(-9), 0) << cvo::testing::slurp(err);
+  for (const auto& [session, id, graph] : spooled(spool))
+    EXPECT_FALSE(made.contains(session)) << "acknowledged, yet still in the spool: "
+                                         << (graph ? "local graph " : "keyframe ") << id << " of session "
+                                         << core::session_name(session);
+  std::cout << all.size() << " keyframes named by the poses of five killed sessions: all spooled, all in the map"
+            << std::endl;
   EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
 }
 

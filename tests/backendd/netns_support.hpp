@@ -28,6 +28,7 @@
 
 #include "cvo_lcm/keyframe_chunk_t.hpp"
 #include "cvo_lcm/keyframe_t.hpp"
+#include "cvo_lcm/map_correction_t.hpp"
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
@@ -69,6 +70,7 @@ struct Captured {
   std::set<KeyframeName> keyframes;                      // every CVO_KEYFRAME seen, whole or a slice of it
   std::map<std::int64_t, std::int64_t> last_frame;       // CVO_POSE: each session's newest frame index
   std::map<std::int64_t, std::int64_t> newest_keyframe;  // CVO_POSE: each session's newest keyframe id
+  std::map<std::int64_t, std::int64_t> acknowledged;     // CVO_MAP_CORRECTION: each session's, the highest
   // CVO_POSE: each session's states as they changed (pose_t STATE_*), sessions in the order seen.
   std::vector<std::pair<std::int64_t, std::vector<std::int8_t>>> state_changes;
 
@@ -136,6 +138,11 @@ class LcmCapture {
       } else if (channel == "CVO_STATUS") {
         auto s = cvo::lcm::decode<cvo_lcm::status_t>(buffer->data, size, nullptr);
         if (s && s->process == "cvo-backendd") captured_.backend_statuses.push_back(std::move(*s));
+      } else if (channel == "CVO_MAP_CORRECTION") {
+        if (const auto m = cvo::lcm::decode<cvo_lcm::map_correction_t>(buffer->data, size, nullptr)) {
+          auto& acknowledged = captured_.acknowledged[m->session.session];
+          acknowledged = std::max(acknowledged, m->acknowledged);
+        }
       } else if (channel == "CVO_KEYFRAME") {
         if (const auto k = cvo::lcm::decode<cvo_lcm::keyframe_t>(buffer->data, size, nullptr))
           captured_.keyframes.emplace(k->session, k->id);

@@ -214,6 +214,7 @@ TEST(Spool, AWriteThatFailsIsNotKeptAndSaysWhy) {
   const auto why = spool.keep(keyframe(1), message(1, false));
   EXPECT_NE(why.find("cannot write " + (dir.path() / "spool" / "005e551000000001-1-k.lcm").string()), std::string::npos)
       << why;
+  EXPECT_NE(why.find("No such file or directory (ENOENT)"), std::string::npos) << "its errno, named: " << why;
   EXPECT_EQ(spool.entries().size(), 1u) << "keyframe 1 not kept";
   EXPECT_EQ(spool.bytes(), 100u);
 }
@@ -262,6 +263,22 @@ TEST(Spool, AFolderThatCannotBeMadeThrowsNamingIt) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
   }
+}
+
+// Issue 48: the daemon checks its spool at the start (trackerd.cpp); what is wrong names its errno.
+TEST(Spool, AFolderUnderAFileIsUnusableNamingItsErrno) {
+  test::TempDir dir;
+  const auto path = dir.write("a-file", "in the way") / "spool";
+  const auto why = Spool::unusable(path);
+  EXPECT_NE(why.find(path.string()), std::string::npos) << why;
+  EXPECT_NE(why.find("Not a directory (ENOTDIR)"), std::string::npos) << why;
+}
+
+TEST(Spool, AWritableFolderIsUsableAndItsCheckLeavesNothingThere) {
+  test::TempDir dir;
+  EXPECT_EQ(Spool::unusable(dir.path() / "spool"), "") << "made, written in, emptied";
+  EXPECT_TRUE(fs::is_directory(dir.path() / "spool"));
+  EXPECT_TRUE(files(dir.path() / "spool").empty());
 }
 
 }  // namespace

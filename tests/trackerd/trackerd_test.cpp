@@ -1,14 +1,18 @@
 // cvo-trackerd end to end, as systemd and scripts run it: the real executable, real LCM (file://
 // providers here, so no packet leaves the process; the UDP multicast replay is in
 // trackerd_netns_test.cpp), real recordings made by tum2lcm or written event by event.
+#include <sys/mount.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -499,6 +503,45 @@ TEST(Trackerd, UnusableSourceOrSettingsFailWithAMessage) {
   EXPECT_EQ(help.exit_code, 0);
   for (const char* option : {"--config", "--source", "--lcm-url", "--exit-on-eof"})
     EXPECT_NE(help.out.find(option), std::string::npos) << option;
+}
+
+// Issue 48: a spool the tracker cannot write in is refused at the start (exit 1, as any unusable
+// setting) naming the key and the errno, rather than each keyframe failing to be kept later.
+// `spool`: the directory; `error`: the errno's text and name expected.
+void expect_spool_refused_at_start(const fs::path& spool, const std::string& error) {
+  cvo::test::TempDir dir;
+  DaemonProcess d(kTrackerd,
+                  with(base_args(dir.path() / "out.lcmlog"), {"--source", "tum:" + kClip.string(), "--exit-on-eof",
+                                                              "--set", "trackerd.spool=" + spool.string()}),
+                  dir.path() / "stderr.txt");
+  const auto code = d.wait_for(60s);
+  ASSERT_TRUE(code) << "still running";
+  const auto err = cvo::testing::slurp(dir.path() / "stderr.txt");
+  EXPECT_EQ(*code, 1) << err;
+  EXPECT_NE(err.find("trackerd.spool"), std::string::npos) << err;
+  EXPECT_NE(err.find(spool.string()), std::string::npos) << err;
+  EXPECT_NE(err.find(error), std::string::npos) << err;
+}
+
+TEST(Trackerd, ASpoolUnderAFileIsRefusedAtStartNamingItsErrno) {
+  cvo::test::TempDir dir;
+  expect_spool_refused_at_start(dir.write("a-file", "in the way") / "spool", "Not a directory (ENOTDIR)");
+}
+
+// A read-only mount, which root cannot write through either (mode 0555 alone does not stop root):
+// bound inside the private mount namespace of tests/support/in-private-mountns (CVO_SMALL_FS), so
+// no other process sees it (trackerd_read_only_spool in CMakeLists.txt).
+TEST(Trackerd, AReadOnlySpoolIsRefusedAtStartNamingItsErrno) {
+  const char* small = std::getenv("CVO_SMALL_FS");
+  if (small == nullptr) GTEST_SKIP() << "needs tests/support/in-private-mountns (CVO_SMALL_FS)";
+  const fs::path spool = fs::path(small) / "spool";
+  fs::create_directories(spool);
+  fs::permissions(spool, fs::perms(0555));
+  ASSERT_EQ(::mount(spool.c_str(), spool.c_str(), nullptr, MS_BIND, nullptr), 0) << std::strerror(errno);
+  ASSERT_EQ(::mount(nullptr, spool.c_str(), nullptr, MS_REMOUNT | MS_BIND | MS_RDONLY, nullptr), 0)
+      << std::strerror(errno);
+  expect_spool_refused_at_start(spool, "Read-only file system (EROFS)");
+  ::umount(spool.c_str());
 }
 
 TEST(Trackerd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
