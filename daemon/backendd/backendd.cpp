@@ -710,60 +710,63 @@ void Backendd::work_loop() {
   finish();
 }
 
-// One record into the mapper. What it cannot apply changed nothing (slam::Mapper's promise): it is
-// noted and the daemon goes on with the next.
+// One record into the mapper, and what follows it, each a step of its own (record_guard.hpp): a
+// record the mapper refuses changed nothing (slam::Mapper's promise), one it fails on costs that
+// record, and either way settling and the next record go on.
 void Backendd::process(QueuedRecord& queued) {
-  // Localization starts once the stored map is in: its records are queued before any live one.
-  const auto localize_when_stored = [&] {
-    if (localization() && !work_->mapper.localizing_only() && replayed_pending_ == 0) start_localizing();
-  };
-  if (queued.arrived) localize_when_stored();
-  process_record(queued);
+  if (queued.arrived) guard_.run("the start of localization", [&] { localize_when_stored(); });
+  guard_.run("record", [&] { process_record(queued); });
   // A service for months: merged keyframes older than their session's newest are forgotten
   // (slam::Mapper::settle), and their records become settled records (store_merges.hpp).
-  if (!work_->mapper.localizing_only())
-    if (const auto settlement = work_->mapper.settle(); work_->merges && !settlement.empty())
-      work_->merges->settled(settlement, waiting_in_store_ == 0);
-  if (!queued.arrived && --replayed_pending_ == 0) {
-    if (work_->merges) work_->merges->replay_done(waiting_in_store_ == 0);
-    if (localization())
-      localize_when_stored();
-    else  // the store's map at once, and each session's correction
-      publish_changes(std::nullopt, std::exchange(work_->replay_joined, {}), true);
-  }
+  if (!work_->mapper.localizing_only()) guard_.run("settling", [&] { settle(); });
+  if (!queued.arrived && --replayed_pending_ == 0) guard_.run("the store's map", [&] { replayed(); });
   ++work_->processed;
 }
 
+// Localization starts once the stored map is in: its records are queued before any live one.
+void Backendd::localize_when_stored() {
+  if (localization() && !work_->mapper.localizing_only() && replayed_pending_ == 0) start_localizing();
+}
+
+void Backendd::settle() {
+  if (const auto settlement = work_->mapper.settle(); work_->merges && !settlement.empty())
+    work_->merges->settled(settlement, waiting_in_store_ == 0);
+}
+
+// The store's last record is applied: localization starts, or the store's map goes out at once with
+// each session's correction.
+void Backendd::replayed() {
+  if (work_->merges) work_->merges->replay_done(waiting_in_store_ == 0);
+  if (localization())
+    localize_when_stored();
+  else
+    publish_changes(std::nullopt, std::exchange(work_->replay_joined, {}), true);
+}
+
+// Throws what the mapper throws: process() guards it.
 void Backendd::process_record(QueuedRecord& queued) {
-  try {
-    if (const auto* lost = std::get_if<LostSession>(&queued.content)) {
-      work_->mapper.mark_lost(lost->session);
-      notes_.note("session " + core::session_name(lost->session) + " lost: its tracker's odometry failed");
-      publish_changes(lost->session, {}, false);
-      return work_->schedule.lost(lost->session);
-    }
-    if (const auto* merge = std::get_if<slam::KeyframeMerge>(&queued.content))
-      return apply_merge(*merge, queued.stored);
-    if (const auto* edge = std::get_if<slam::SettledEdge>(&queued.content)) return apply_settled(*edge, queued.stored);
-    if (const auto* tally = std::get_if<slam::SessionTally>(&queued.content)) {
-      work_->mapper.apply_tally(*tally);
-      if (work_->merges) work_->merges->tally_replayed(*tally, queued.stored, waiting_in_store_ == 0);
-      return publish_changes(tally->session, {}, false);
-    }
-    std::string error;
-    const auto value = value_of(queued, &error);
-    if (!value) return notes_.note_limited("unreadable", error);
-    if (queued.arrived)  // live input: its session is live
-      work_->schedule.seen(std::visit([](const auto& v) { return v.session; }, *value), *queued.arrived);
-    if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
-      apply_keyframe(*keyframe, queued);
-    else
-      apply_local_graph(std::get<LocalGraphRecord>(*value), queued);
-  } catch (const slam::MapperError& e) {
-    notes_.note_limited("not applied", std::string("not applied: ") + e.what());
-  } catch (const std::exception& e) {
-    notes_.note_limited("failure", std::string("record skipped after a failure: ") + e.what());
+  if (const auto* lost = std::get_if<LostSession>(&queued.content)) {
+    work_->mapper.mark_lost(lost->session);
+    notes_.note("session " + core::session_name(lost->session) + " lost: its tracker's odometry failed");
+    publish_changes(lost->session, {}, false);
+    return work_->schedule.lost(lost->session);
   }
+  if (const auto* merge = std::get_if<slam::KeyframeMerge>(&queued.content)) return apply_merge(*merge, queued.stored);
+  if (const auto* edge = std::get_if<slam::SettledEdge>(&queued.content)) return apply_settled(*edge, queued.stored);
+  if (const auto* tally = std::get_if<slam::SessionTally>(&queued.content)) {
+    work_->mapper.apply_tally(*tally);
+    if (work_->merges) work_->merges->tally_replayed(*tally, queued.stored, waiting_in_store_ == 0);
+    return publish_changes(tally->session, {}, false);
+  }
+  std::string error;
+  const auto value = value_of(queued, &error);
+  if (!value) return notes_.note_limited("unreadable", error);
+  if (queued.arrived)  // live input: its session is live
+    work_->schedule.seen(std::visit([](const auto& v) { return v.session; }, *value), *queued.arrived);
+  if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
+    apply_keyframe(*keyframe, queued);
+  else
+    apply_local_graph(std::get<LocalGraphRecord>(*value), queued);
 }
 
 // The stored map, optimised as a whole once, becomes read only; sessions from now on are localized.
@@ -985,6 +988,8 @@ void Backendd::publish_status(std::int8_t state) {
   s.rate_hz = elapsed > 0 ? static_cast<double>(w.processed - w.processed_at_last_status) / elapsed : 0;
   s.queue_depth = static_cast<std::int32_t>(queue_.size());
   for (std::size_t k = 0; k < s.bad_messages.size(); ++k) s.bad_messages[k] = bad_messages_[k];
+  s.bad_messages[cvo_lcm::status_t::BAD_CONTENT] += guard_.refused();  // records the mapper refused
+  s.failed_frames = guard_.failed();                                   // records and steps it failed on
   s.queue_drops = queue_drops_;
   s.keyframes_requested = keyframes_requested_;
   s.keyframes_recovered = keyframes_recovered_;
@@ -1017,37 +1022,49 @@ void Backendd::leave_waiting_records() {
                               : "they are in the store, and the next start applies them"));
 }
 
-// The final global optimisation, the map it gives, and the closing note.
+// The final global optimisation, the map it gives, and the closing note: each a step of its own
+// (record_guard.hpp), so that a map that cannot be optimised or described still stops cleanly.
 void Backendd::finish() {
+  guard_.run("the final optimisation (the last map stands)", [&] { final_optimisation(); });
+  guard_.run("the final CVO_GRID", [&] {
+    if (stop_time_left() > 0)
+      publish_grid(false);  // the final grid, changed or not: what a recording of the run ends with
+    else
+      notes_.note("final CVO_GRID skipped: no time left of backendd.stop_timeout_s (the last one sent stands)");
+  });
+  guard_.run("the closing notes", [&] { closing_notes(); });
+  guard_.run("the last CVO_STATUS", [&] { publish_status(cvo_lcm::status_t::STATE_STOPPING); });
+}
+
+void Backendd::final_optimisation() {
   Work& w = *work_;
-  try {
-    // Nothing to optimise before a local graph; a read-only map was optimised when it became one.
-    const bool optimise = w.mapper.backend().local_graphs() > 0 && !w.mapper.localizing_only();
-    const double budget = stop_time_left() - kPublishIn * config_.backendd.stop_timeout_s;
-    if (optimise && budget <= 0) {
-      notes_.note(
-          "final optimisation skipped: no time left of backendd.stop_timeout_s (the keyframe graph's poses "
-          "stand; the next stop runs it)");
-    } else if (optimise) {
-      const auto report = w.mapper.finish(budget);
-      notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
-                  std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations" +
-                  (report.stop_reason == posegraph::kTimeLimit ? ", cut short by backendd.stop_timeout_s" : ""));
-    }
-    publish_corrections(w.mapper.sessions(), false);
-    w.schedule.changed();
-    publish_map({}, false);
-  } catch (const std::exception& e) {
-    notes_.note(std::string("final optimisation failed, the last map stands: ") + e.what());
+  // Nothing to optimise before a local graph; a read-only map was optimised when it became one.
+  const bool optimise = w.mapper.backend().local_graphs() > 0 && !w.mapper.localizing_only();
+  const double budget = stop_time_left() - kPublishIn * config_.backendd.stop_timeout_s;
+  if (optimise && budget <= 0) {
+    notes_.note(
+        "final optimisation skipped: no time left of backendd.stop_timeout_s (the keyframe graph's poses "
+        "stand; the next stop runs it)");
+  } else if (optimise) {
+    const auto report = w.mapper.finish(budget);
+    notes_.note("final optimisation: cost " + std::to_string(report.initial_cost) + " -> " +
+                std::to_string(report.final_cost) + " in " + std::to_string(report.iterations) + " iterations" +
+                (report.stop_reason == posegraph::kTimeLimit ? ", cut short by backendd.stop_timeout_s" : ""));
   }
-  if (stop_time_left() > 0)
-    publish_grid(false);  // the final grid, changed or not: what a recording of the run ends with
-  else
-    notes_.note("final CVO_GRID skipped: no time left of backendd.stop_timeout_s (the last one sent stands)");
+  publish_corrections(w.mapper.sessions(), false);
+  w.schedule.changed();
+  publish_map({}, false);
+}
+
+void Backendd::closing_notes() {
+  const Work& w = *work_;
   notes_.note(text(w.summary) + "; " + std::to_string(w.local_graphs) + " local graphs; " +
               std::to_string(w.mapper.loops_accepted()) + " loops accepted of " +
               std::to_string(w.mapper.loops_tried()) + " tried");
   notes_.note(text("CVO_MAP_CORRECTION", w.corrections) + "; " + text("CVO_MAP", w.maps));
+  if (guard_.refused() + guard_.failed() > 0)
+    notes_.note(std::to_string(guard_.refused()) + " records refused by the mapper, " +
+                std::to_string(guard_.failed()) + " records or steps skipped after a failure");
   notes_.note(slam::describe(slam::map_robots(w.mapper.map())));
   const auto& g = w.grid;
   notes_.note(text(g, w.mapping.statistics()) + "; " + std::to_string(g.published) + " CVO_GRIDs sent; place " +
@@ -1060,7 +1077,6 @@ void Backendd::finish() {
     notes_.note(std::to_string(waited) +
                 " records waited in the store while the back end was behind (backendd.queue_max " +
                 std::to_string(queue_.capacity()) + ")");
-  publish_status(cvo_lcm::status_t::STATE_STOPPING);
 }
 
 }  // namespace cvo::daemon::backendd

@@ -42,7 +42,10 @@
 // CVO_POSE keeps its session live for the re-sent corrections). On SIGTERM/SIGINT/SIGHUP: what is
 // already in the socket is taken in, the queue is drained, a final global optimisation runs, the
 // changed corrections and the final CVO_MAP are published, then the final CVO_GRID, exit 0. No
-// record can stop the daemon: what the mapper cannot apply is noted and skipped.
+// record can stop the daemon: what the mapper cannot apply is noted and skipped, and so is a
+// record or step it fails on (record_guard.hpp), never the process or the map. CVO_STATUS counts
+// them: records the mapper refused in bad_messages[BAD_CONTENT], records and steps skipped after a
+// failure of the back end's own in failed_frames.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -62,6 +65,7 @@
 #include "daemon/backendd/keyframe_gaps.hpp"
 #include "daemon/backendd/keyframe_store.hpp"
 #include "daemon/backendd/message_door.hpp"
+#include "daemon/backendd/record_guard.hpp"
 #include "daemon/backendd/record_quota.hpp"
 #include "daemon/backendd/replay.hpp"
 #include "daemon/backendd/work_queue.hpp"
@@ -133,6 +137,9 @@ class Backendd {
   void work_loop();
   void process(QueuedRecord& queued);
   void process_record(QueuedRecord& queued);
+  void localize_when_stored();
+  void settle();
+  void replayed();
   void read_map_store();
   std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
   void apply_keyframe(const lcm::Keyframe& keyframe, const QueuedRecord& queued);
@@ -153,6 +160,8 @@ class Backendd {
   void publish_grid(bool after_loop);
   void publish_status(std::int8_t state);
   void finish();
+  void final_optimisation();
+  void closing_notes();
   // Seconds left of a signal stop's budget (backendd.stop_timeout_s from the signal); infinity when
   // no signal stop is under way (a log that ended is worked through whole).
   [[nodiscard]] double stop_time_left() const;
@@ -162,6 +171,7 @@ class Backendd {
 
   config::Config config_;
   Notes notes_{"cvo-backendd"};                // the journal and CVO_STATUS's detail, at one log-rate policy
+  RecordGuard guard_{notes_};                  // cvo-backend only: each record and step costs at most itself
   BusAuth bus_{config_.auth, "cvo-backendd"};  // the key ring (auth.key_file) and signer, all threads
   SystemdNotifier systemd_;
   std::unique_ptr<KeyframeStore> store_;  // none in localization mode: the store is only read

@@ -89,6 +89,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -186,9 +187,10 @@ class Backend {
   [[nodiscard]] const posegraph::PoseGraph& keyframe_graph() const { return keyframes_; }
 
   /// Merges keyframe-graph node `alias` into node `covering` (see the header): T = T_covering^alias,
-  /// `information` that of the loop that measured it. Throws std::invalid_argument when `covering`
-  /// is not a node of the graph (an alias included), `alias` is not a node or is fixed (a piece's
-  /// anchor), or they are one node.
+  /// `information` that of the loop that measured it. Keyframes merged into `alias` before are
+  /// re-pointed at `covering` (keyframe_merge.hpp: chained), so an alias always names a node of the
+  /// graph. Throws std::invalid_argument when `covering` is not a node of the graph (an alias
+  /// included), `alias` is not a node or is fixed (a piece's anchor), or they are one node.
   void merge_keyframe(posegraph::NodeId alias, posegraph::NodeId covering, const core::SE3& T,
                       const core::Matrix6d& information);
   /// A node of the keyframe graph or an alias of one.
@@ -225,10 +227,16 @@ class Backend {
   /// Throws std::invalid_argument when an end is not held, or the edge is not one an edge may be.
   void apply_settled(const posegraph::Edge& edge);
   /// Registers `alias` as merged into `covering` when the keyframe graph never held it (a store
-  /// whose local graphs into and out of it were settled: its own graph follows, or none). Throws
-  /// std::invalid_argument when `alias` is held or `covering` is no node of the graph.
+  /// whose local graphs into and out of it were settled: its own graph follows, or none); a
+  /// `covering` merged since is followed to the node it is an alias of. Throws
+  /// std::invalid_argument when `alias` is held or `covering` is not.
   void add_alias(posegraph::NodeId alias, posegraph::NodeId covering, const core::SE3& T,
                  const core::Matrix6d& information);
+  /// What is wrong with the graph's bookkeeping, nullopt when nothing is: every alias names a node of
+  /// the keyframe graph (never an alias: no chains, no cycles) and is no node itself; every node a
+  /// session, loop or bridge names is held. Slam::Mapper checks it after every change in a debug
+  /// build; tests call it.
+  [[nodiscard]] std::optional<std::string> inconsistency() const;
   /// Increases whenever a pose keyframe_poses() or frame_trajectory() returns may have changed.
   [[nodiscard]] std::uint64_t revision() const { return revision_; }
   [[nodiscard]] const BackendParameters& parameters() const { return parameters_; }
@@ -264,6 +272,7 @@ class Backend {
   [[nodiscard]] posegraph::Edge resolved(const posegraph::Edge& edge) const;
   void add_alias_edges(posegraph::PoseGraph& all) const;
   posegraph::Edge add_settled(const posegraph::Edge& edge);  // resolved, fused into settled_: the result
+  void repoint_aliases_of(posegraph::NodeId merged);
   bool forget_if_unused(posegraph::NodeId alias, const std::function<void(const posegraph::Edge&)>& settle_edge);
   void follow_aliases(const posegraph::PoseGraph& all);
 

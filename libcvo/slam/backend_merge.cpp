@@ -1,4 +1,5 @@
 // Backend: merged keyframes (backend.hpp's header, keyframe_merge.hpp's algebra).
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -50,6 +51,7 @@ void Backend::merge_keyframe(NodeId alias, NodeId covering, const core::SE3& T, 
   const auto edges = keyframes_.remove_node(alias);
   const core::Matrix6d symmetric = 0.5 * (information + information.transpose());
   aliases_.emplace(alias, StoredAlias{{alias, covering, T}, symmetric});
+  repoint_aliases_of(alias);  // before any edge is resolved through them
   rerouting_ = true;
   for (const auto& e : edges) add_graph_edge(e);
   rerouting_ = false;
@@ -58,6 +60,44 @@ void Backend::merge_keyframe(NodeId alias, NodeId covering, const core::SE3& T, 
   // estimates that later revisits are confirmed against with them).
   unsynced_.push_back({covering, alias, T, kTieStiffness * symmetric, /*robust=*/false});
   ++revision_;
+}
+
+// Keyframes merged into `merged` before it was merged itself now name its covering keyframe: an
+// alias must name a node of the graph (keyframe_merge.hpp: chained), never another alias.
+void Backend::repoint_aliases_of(NodeId merged) {
+  const StoredAlias& outer = aliases_.at(merged);
+  const posegraph::Edge first{outer.alias.covering, merged, outer.alias.relative, outer.information, false};
+  for (auto& [id, a] : aliases_) {
+    if (a.alias.covering != merged) continue;
+    const posegraph::Edge e = chained(first, {merged, id, a.alias.relative, a.information, false});
+    a.alias.covering = e.from;
+    a.alias.relative = e.measurement;
+    a.information = e.information;
+  }
+}
+
+std::optional<std::string> Backend::inconsistency() const {
+  for (const auto& [id, a] : aliases_) {
+    const std::string name = "alias " + std::to_string(id) + " of " + std::to_string(a.alias.covering);
+    if (a.alias.alias != id) return name + ": it names another keyframe";
+    if (keyframes_.contains(id)) return name + ": a node of the keyframe graph as well";
+    if (aliases_.contains(a.alias.covering)) return name + ": a chain (the keyframe it names is an alias)";
+    if (!keyframes_.contains(a.alias.covering)) return name + ": the keyframe it names is not in the keyframe graph";
+  }
+  const auto unheld = [&](NodeId n, const std::string& what) -> std::optional<std::string> {
+    if (holds(n)) return std::nullopt;
+    return what + " names " + std::to_string(n) + ", which is not held";
+  };
+  for (const auto& [id, s] : sessions_)
+    for (const auto& n : {s.anchor, s.last_node})
+      if (const auto why = n ? unheld(*n, "session " + core::session_name(id)) : std::nullopt) return why;
+  for (const auto& l : loops_)
+    for (const NodeId n : {l.edge.from, l.edge.to})
+      if (const auto why = unheld(n, "a loop")) return why;
+  for (const auto& b : bridges_)
+    for (const NodeId n : {b.from, b.to})
+      if (const auto why = unheld(n, "a bridge")) return why;
+  return std::nullopt;
 }
 
 // The global optimisation's view: each alias is a frame held to its covering keyframe.

@@ -67,9 +67,14 @@ void Backend::apply_settled(const posegraph::Edge& given) {
 void Backend::add_alias(NodeId alias, NodeId covering, const core::SE3& T, const core::Matrix6d& information) {
   const std::string name = "backend: alias " + std::to_string(alias) + " of " + std::to_string(covering);
   if (holds(alias)) throw std::invalid_argument(name + ": held already");
-  if (!keyframes_.contains(covering)) throw std::invalid_argument(name + ": no such keyframe to merge into");
+  if (!holds(covering)) throw std::invalid_argument(name + ": no such keyframe to merge into");
   if (!T.is_finite()) throw std::invalid_argument(name + ": not finite");
-  aliases_.emplace(alias, StoredAlias{{alias, covering, T}, 0.5 * (information + information.transpose())});
+  posegraph::Edge e{covering, alias, T, 0.5 * (information + information.transpose()), false};
+  // A store may name a keyframe that was merged since (a chain): the alias names its covering node.
+  if (const auto outer = aliases_.find(covering); outer != aliases_.end())
+    e = chained(
+        {outer->second.alias.covering, covering, outer->second.alias.relative, outer->second.information, false}, e);
+  aliases_.emplace(alias, StoredAlias{{alias, e.from, e.measurement}, e.information});
   ++revision_;
 }
 

@@ -46,6 +46,19 @@ posegraph::Edge fused(const posegraph::Edge& existing, const posegraph::Edge& ad
   return out;
 }
 
+posegraph::Edge chained(const posegraph::Edge& first, const posegraph::Edge& second) {
+  if (first.to != second.from)
+    throw std::invalid_argument("chained: the second edge does not start where the first ends");
+  const core::Matrix6d one = moved(first.information, second.measurement);  // Ω₁', at k
+  const core::Matrix6d sum = one + second.information;
+  const core::Matrix6d out = one * sum.ldlt().solve(second.information);
+  posegraph::Edge e = second;
+  e.from = first.from;
+  e.measurement = first.measurement * second.measurement;
+  e.information = 0.5 * (out + out.transpose());
+  return e;
+}
+
 std::optional<posegraph::Edge> increment(const posegraph::Edge& part, const posegraph::Edge& whole) {
   if (part.from != whole.from || part.to != whole.to) throw std::invalid_argument("increment: other nodes");
   const core::Matrix6d more =

@@ -15,6 +15,13 @@
 // δ = log(Z₀⁻¹ Z₁), the information-weighted mean is Z = Z₀ · exp((Ω₀ + Ω₁)⁻¹ Ω₁ δ) and its
 // information Ω₀ + Ω₁ (the sum of the two quadratics to first order). So the graph keeps one edge per
 // pair of nodes it ever linked: its size follows the area, not the time spent in it.
+//
+// Chaining: a keyframe k merged into b (T_b^k, Ω₂) whose covering keyframe b is merged into a in
+// turn (T_a^b, Ω₁) is re-pointed at a, so that an alias always names a node of the graph. With
+// X_b = X_a T_a^b exp(e₁) and X_k = X_b T_b^k exp(e₂): X_k = X_a T_a^b T_b^k exp(Ad(T_b^k⁻¹) e₁ + e₂)
+// to first order, so the chained edge is Z = T_a^b T_b^k with covariance Ad(T_b^k⁻¹) Σ₁ Ad(T_b^k⁻¹)ᵀ + Σ₂,
+// i.e. information Ω = (Ω₁'⁻¹ + Ω₂⁻¹)⁻¹ = Ω₁' (Ω₁' + Ω₂)⁻¹ Ω₂ with Ω₁' = Ad(T_b^k)ᵀ Ω₁ Ad(T_b^k) (the
+// second form needs only Ω₁' + Ω₂ invertible, so a semi-definite Ω of either edge is no trouble).
 #include <optional>
 
 #include "libcvo/core/se3.hpp"
@@ -35,6 +42,9 @@ struct KeyframeAlias {
 [[nodiscard]] posegraph::Edge reversed(const posegraph::Edge& edge);
 /// `added` fused into `existing` (same nodes, either direction): the result runs as `existing` does.
 [[nodiscard]] posegraph::Edge fused(const posegraph::Edge& existing, const posegraph::Edge& added);
+/// `first` (a -> b) followed by `second` (b -> k): the edge a -> k (see Chaining above). Throws
+/// std::invalid_argument when second does not start where first ends.
+[[nodiscard]] posegraph::Edge chained(const posegraph::Edge& first, const posegraph::Edge& second);
 /// What `whole` (same nodes and direction) holds beyond `part`: the edge d with fused(part, d) =
 /// whole to first order, Ω_d = Ω_whole − Ω_part and, at Z_part, δ_d = Ω_d⁻¹ Ω_whole log(Z_part⁻¹ Z_whole).
 /// nullopt when Ω_d is not positive definite (whole holds nothing beyond part: a repeat).

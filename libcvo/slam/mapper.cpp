@@ -68,6 +68,15 @@ bool Mapper::merged(core::SessionId session, std::int64_t keyframe_id) const {
   return k != it->second.keyframes.end() && k->second.merged;
 }
 
+bool Mapper::held(core::SessionId session, std::int64_t keyframe_id) const {
+  const auto it = sessions_.find(session);
+  if (it == sessions_.end()) return false;
+  const auto k = it->second.keyframes.find(keyframe_id);
+  if (k == it->second.keyframes.end()) return false;
+  const posegraph::NodeId n = node(it->second, k->second.frame);
+  return backend_.holds(n) && backend_.keyframe_graph().contains(backend_.resolve(n));
+}
+
 KeyframeOutcome Mapper::add_keyframe(const SessionKeyframe& k) {
   const auto frame = static_cast<std::int64_t>(k.frame.index);
   if (frame >= kMaxFrame)
@@ -191,6 +200,7 @@ std::vector<core::SessionId> Mapper::after_change() {
     marginals_.follow(backend_.keyframe_graph());  // new leaves carry the covariances along
   }
   marginals_.keep(covariance_nodes());
+  check_in_debug();
   std::vector<core::SessionId> joined;
   for (const core::SessionId id : order_) {
     Session& s = sessions_.at(id);
@@ -206,7 +216,24 @@ posegraph::OptimizationReport Mapper::finish(double max_seconds) {
   ++revision_;
   ++optimisations_;
   marginals_.invalidate();
+  check_in_debug();
   return report;
+}
+
+std::optional<std::string> Mapper::inconsistency() const {
+  if (auto why = backend_.inconsistency()) return why;
+  for (const auto& [id, s] : sessions_)
+    for (const auto& [keyframe, record] : s.keyframes)
+      if (record.merged && !backend_.merged(node(s, record.frame)))
+        return name(id, keyframe) + " is recorded as merged but is no alias of the keyframe graph";
+  return std::nullopt;
+}
+
+// A broken invariant is the mapper's own fault: thrown where it arose, not where it is later tripped over.
+void Mapper::check_in_debug() const {
+#ifndef NDEBUG
+  if (const auto why = inconsistency()) throw std::logic_error("mapper: " + *why);
+#endif
 }
 
 MapLoop Mapper::describe(const loop_closure::LoopClosure& loop) const {

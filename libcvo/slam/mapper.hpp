@@ -289,6 +289,9 @@ class Mapper {
   [[nodiscard]] bool knows(core::SessionId session, std::int64_t keyframe_id) const;
   /// Keyframe (session, id) is known and merged into one covering it.
   [[nodiscard]] bool merged(core::SessionId session, std::int64_t keyframe_id) const;
+  /// Keyframe (session, id) is known and has a pose in the keyframe graph: it is a node there, or an
+  /// alias of one (merged). A keyframe whose local graph into it has not come yet is not held.
+  [[nodiscard]] bool held(core::SessionId session, std::int64_t keyframe_id) const;
 
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
@@ -319,6 +322,11 @@ class Mapper {
   void apply_tally(const SessionTally& tally);
   /// Keyframes settle() forgot so far.
   [[nodiscard]] std::size_t forgotten_keyframes() const { return forgotten_keyframes_; }
+  /// What is wrong with the mapper's bookkeeping, nullopt when nothing is: the Backend's
+  /// (Backend::inconsistency: every alias names a node of the keyframe graph), and every keyframe
+  /// recorded as merged is an alias there. Checked after every change in a debug build (NDEBUG
+  /// off), where a break throws std::logic_error at its cause; tests call it.
+  [[nodiscard]] std::optional<std::string> inconsistency() const;
   /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
   [[nodiscard]] std::size_t window_keyframes() const;
 
@@ -381,6 +389,7 @@ class Mapper {
   [[nodiscard]] posegraph::NodeId node(const Session& s, std::int64_t frame) const;
   [[nodiscard]] MapLoop describe(const loop_closure::LoopClosure& loop) const;
   std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
+  void check_in_debug() const;                  // inconsistency() as std::logic_error, unless NDEBUG
   // Of the new keyframe's loops (those that joined pieces entered already), the one to the keyframe
   // that covers it best, if any (the header), with its γ.
   std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,

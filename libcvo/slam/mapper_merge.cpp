@@ -32,6 +32,7 @@ void Mapper::merge(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph
   s.unsettled.insert(m.id);
   marginals_.invalidate();
   ++revision_;
+  check_in_debug();
 }
 
 KeyframeMerge Mapper::merge_of(core::SessionId session, std::int64_t id, const KeyframeRecord& record) {
@@ -158,7 +159,7 @@ bool Mapper::apply_merge(const KeyframeMerge& m) {
 // predecessor was merged), so it has no joining loops.
 bool Mapper::merge_settled(const KeyframeMerge& m, posegraph::NodeId keyframe, posegraph::NodeId covering) {
   Session& s = sessions_.at(m.session);
-  if (!m.joining.empty() || !backend_.keyframe_graph().contains(covering))
+  if (!m.joining.empty() || !backend_.holds(covering))  // Backend::add_alias follows a merged one
     throw MapperError("merge of keyframe " + std::to_string(m.id) + " of session " + core::session_name(m.session) +
                       ": neither in the graph nor after a settled one");
   try {

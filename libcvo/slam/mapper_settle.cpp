@@ -36,6 +36,7 @@ Settlement Mapper::settle() {
       out.tallies.push_back({id, s.forgotten_before + s.forgotten, s.settled_through});
   // The map's loops changed; the keyframe graph, and so its marginals, did not.
   if (!out.empty()) ++revision_;
+  check_in_debug();
   return out;
 }
 
@@ -61,6 +62,7 @@ void Mapper::apply_settled(const SettledEdge& e) {
   }
   ++revision_;
   marginals_.invalidate();
+  check_in_debug();
 }
 
 void Mapper::apply_tally(const SessionTally& tally) {

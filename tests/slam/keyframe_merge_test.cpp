@@ -102,6 +102,22 @@ TEST(KeyframeMerge, AnIncrementFusedIntoThePartGivesTheWhole) {
   EXPECT_FALSE(increment(whole, whole)) << "a repeat holds nothing more";
 }
 
+// Keyframe k merged into b, b merged into a: the chained edge a -> k measures the composed pose, and
+// its covariance is the two edges' in series (b's uncertainty carried to k, plus k's own).
+TEST(KeyframeMerge, AChainedEdgeComposesThePosesAndAddsTheCovariancesInSeries) {
+  const SE3 ab = pose(0.3, 0.1, 0, 0, 0, 0.4), bk = pose(0.2, -0.1, 0.05, 0.1, 0, -0.2);
+  const Edge first{1, 2, ab, information(100), false};
+  const Edge second{2, 3, bk, information(400), false};
+  const Edge e = chained(first, second);
+  EXPECT_EQ(e.from, 1);
+  EXPECT_EQ(e.to, 3);
+  EXPECT_LT((e.measurement.translation() - (ab * bk).translation()).norm(), 1e-12);
+  const core::Matrix6d ad = bk.inverse().adjoint();  // b's error seen at k
+  const core::Matrix6d series = ad * first.information.inverse() * ad.transpose() + second.information.inverse();
+  EXPECT_TRUE(e.information.inverse().isApprox(series, 1e-9));
+  EXPECT_THROW((void)chained(second, first), std::invalid_argument) << "3 -> ... does not start at 2";
+}
+
 // A chain of keyframes 0.1 m apart whose odometry over-reads each step by 1 cm; keyframe 6 merged
 // into keyframe 2 (it sees 2's view from 0.4 m on) and a loop 9 -> 3 later: the incremental
 // optimisation of the keyframe graph lands where a batch optimisation of that graph does, however
