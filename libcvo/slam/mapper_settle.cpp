@@ -28,12 +28,14 @@ Settlement Mapper::settle() {
         if (const auto name = forget(n)) out.keyframes.push_back(*name);
     }
   }
-  for (auto& [id, s] : sessions_)  // forget() may count a keyframe of another session
+  for (auto& [key, s] : sessions_) {  // forget() may count a keyframe of another session
+    const core::SessionId id = key;   // a copy: clang 14 cannot capture a structured binding
     if (std::find_if(out.keyframes.begin(), out.keyframes.end(), [&](const auto& k) { return k.first == id; }) !=
             out.keyframes.end() ||
         std::find_if(out.graphs.begin(), out.graphs.end(), [&](const auto& k) { return k.first == id; }) !=
             out.graphs.end())
       out.tallies.push_back({id, s.forgotten_before + s.forgotten, s.settled_through});
+  }
   // The map's loops changed; the keyframe graph, and so its marginals, did not.
   if (!out.empty()) ++revision_;
   check_in_debug();
