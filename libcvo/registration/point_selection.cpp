@@ -235,7 +235,7 @@ int PointSelector::count_at_most(int rx, int rows, int bin) const {
 }
 
 void PointSelector::region_medians(int ry) {
-  // Median |g| + offset per region of row ry: the first bin b < kHistogramBins - 1 where at least
+  // Median |g| per region of row ry: the first bin b < kHistogramBins - 1 where at least
   // half the region's pixels have a bin <= b (else the last bin), found by bisection, as that
   // count grows with b.
   region_bins(ry);
@@ -250,13 +250,13 @@ void PointSelector::region_medians(int ry) {
       else
         lo = mid + 1;
     }
-    region_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] =
-        (static_cast<float>(lo) + 0.5f) / 255.0f + kThresholdOffset;
+    region_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] = (static_cast<float>(lo) + 0.5f) / 255.0f;
   }
 }
 
 void PointSelector::smooth_thresholds(int ry) {
-  // The thresholds of row ry averaged over each region's 3x3 neighbourhood (the regions that exist).
+  // The medians of row ry averaged over each region's 3x3 neighbourhood (the regions that exist),
+  // plus the offset (a constant commutes with the average).
   for (int rx = 0; rx < regions_x_; ++rx) {
     float sum = 0;
     int n = 0;
@@ -267,7 +267,8 @@ void PointSelector::smooth_thresholds(int ry) {
         sum += region_threshold_[static_cast<std::size_t>(y * regions_x_ + x)];
         ++n;
       }
-    smoothed_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] = sum / static_cast<float>(n);
+    smoothed_threshold_[static_cast<std::size_t>(ry * regions_x_ + rx)] =
+        sum / static_cast<float>(n) + threshold_offset_;
   }
 }
 
@@ -295,6 +296,18 @@ void PointSelector::find_candidates(const cv::Mat& depth, int ry, RawDepthRange 
     pack_row_flags(v);
     result.valid_depth_pixels += valid;
     result.candidates += candidates;
+  }
+}
+
+// Step 3 again with every region's threshold at its (smoothed) median: the grey, |g| and medians
+// of the first pass stand.
+void PointSelector::candidates_at_median(const cv::Mat& depth, RawDepthRange valid, SelectionResult& result) {
+  threshold_offset_ = 0;
+  result.at_median = true;
+  result.valid_depth_pixels = result.candidates = 0;
+  for (int ry = 0; ry < regions_y_; ++ry) {
+    smooth_thresholds(ry);
+    find_candidates(depth, ry, valid, result);
   }
 }
 
@@ -439,7 +452,11 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
     return result;
   }
   // 1-3: grey and |g|, the region thresholds, the candidates with valid depth.
-  thresholds_and_candidates(frame, valid_depths(frame.intrinsics), result);
+  const RawDepthRange valid = valid_depths(frame.intrinsics);
+  threshold_offset_ = kThresholdOffset;
+  thresholds_and_candidates(frame, valid, result);
+  if (result.candidates < parameters_.target_points && result.valid_depth_pixels > 0)
+    candidates_at_median(frame.depth, valid, result);
   if (result.valid_depth_pixels == 0) {
     result.status = SelectionStatus::kNoValidDepth;
     return result;

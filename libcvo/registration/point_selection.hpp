@@ -11,6 +11,12 @@
 //     [min_depth, max_depth]. The image is tiled by s x s cells and each cell keeps its strongest
 //     candidate; s is adapted (a few passes) so about `target_points` survive, spreading points
 //     over the whole image.
+//     A frame with fewer candidates than target_points (a texture-less scene, whose real camera
+//     noise, under a level at the pixel scale, passes no threshold of median + 7) is searched again
+//     with each region's threshold at its median alone: about half of every region's pixels then
+//     qualify and the cells spread target_points over the surfaces, whose geometry is all that can
+//     register such a scene. DSO too lowers its thresholds when too few points pass. A textured
+//     frame never comes here, so its selection is unchanged.
 //  4. Each point is back-projected with the intrinsics and labelled with its RGB and gradient:
 //     X = z · (x', y', 1) with z = raw_depth / depth_scale, raw_depth the mean of the valid depths
 //     of the (2r+1)² pixels around it within a fraction of its own (its surface;
@@ -53,7 +59,8 @@ struct SelectionResult {
   std::size_t valid_depth_pixels = 0;
   std::size_t candidates = 0;  // above threshold with valid depth
   std::size_t selected = 0;
-  int cell_size = 1;  // the s finally used
+  int cell_size = 1;       // the s finally used
+  bool at_median = false;  // too few candidates at median + 7: thresholds at the region medians (step 3)
 };
 
 // Raw depths lo <= d <= hi are valid (point_selection.cpp: valid_raw_depths).
@@ -105,6 +112,7 @@ class PointSelector {
   void region_medians(int ry);
   void smooth_thresholds(int ry);
   void find_candidates(const cv::Mat& depth, int ry, RawDepthRange valid, SelectionResult& result);
+  void candidates_at_median(const cv::Mat& depth, RawDepthRange valid, SelectionResult& result);
   void pack_row_flags(int v);
   int choose_cell_size(std::size_t candidates);
   std::size_t count_for_cell_size(int s);
@@ -130,7 +138,8 @@ class PointSelector {
   int words_per_row_;                      // 64-pixel words of a row of candidate_bits_
   std::array<float, 3 * 256> grey_lut_{};  // B, G, R contributions to grey
   std::vector<float> grey_, magnitude_;
-  std::vector<float> region_threshold_, smoothed_threshold_;
+  std::vector<float> region_threshold_, smoothed_threshold_;  // the medians; smoothed, plus threshold_offset_
+  float threshold_offset_ = 0;                                // DSO's constant above the median, or 0
   std::vector<std::uint8_t> bins_;  // step 2: the histogram bin of each pixel of one row of regions
   // Step 3: per image row, each pixel's threshold and its candidate flag (0/1, padded to whole
   // words); candidate_bits_: the flags of every row packed 64 to a word, bit u % 64 of word u / 64.
