@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <vector>
 
@@ -87,9 +88,13 @@ std::string untrusted_origin(const SessionWord& w, const AppliedCorrection& last
   if (w.epoch != last.epoch) return {};  // a newer back end: its revisions count afresh
   const double since_s = static_cast<double>(context.now_utime - last.applied_utime) * 1e-6;
   const double leap = limits.revisions_per_s * std::max(1.0, since_s);
-  if (static_cast<double>(w.revision - last.revision) > leap)
-    return name(w) + ": it leaps " + std::to_string(w.revision - last.revision) + " revisions from the applied " +
+  // Each side in double: a forged revision near either end of int64 must not overflow the difference.
+  if (static_cast<double>(w.revision) - static_cast<double>(last.revision) > leap) {
+    // w.revision > last.revision here, so the difference is exact in uint64 (and defined in any case).
+    const auto leaps = static_cast<std::uint64_t>(w.revision) - static_cast<std::uint64_t>(last.revision);
+    return name(w) + ": it leaps " + std::to_string(leaps) + " revisions from the applied " +
            std::to_string(last.revision) + " (at most " + std::to_string(std::lround(leap)) + " since then)";
+  }
   kind = BadKind::kConflict;
   if (context.sender != last.sender) return name(w) + ": another sender than the applied word of its epoch";
   return {};
