@@ -72,25 +72,31 @@ Drift track(const testing::RenderedSequence& s) {
   return drift;
 }
 
-// white_room along the orbit, Kinect depth and colour noise, 10 ms exposure, auto-exposure.
-// Measured at this commit: worst 119.6 mm and 0.35 deg over the 12 frames (0.4 s), no failure. The
-// translation drifts (the view is mostly a white wall and floor at 3 m with 2.6 cm depth steps):
-// the bounds are those figures times 1.5, a regression guard, not a target.
+// white_room along the orbit, Kinect depth and colour noise, 10 ms exposure, auto-exposure; three
+// draws of the sensor noise. Over noise seeds 0-7, at this commit: worst 19-187 mm and 0.21-0.66 deg
+// over the 12 frames (0.4 s), no failure; the bounds are 1.5 times the worst, a regression guard,
+// not a target (the translation drifts: the view is mostly a white wall and floor at 3 m with
+// 2.6 cm depth steps). With the renderer's former colour noise (seven times fr1's) 72-296 mm; with
+// noise of fr1's order (1.5 levels a channel) and no search at the region medians
+// (point_selection.hpp), 84-553 points a frame, and 90-frame sequences lost 40-66 frames.
 TEST(StressScenes, WhiteRoomWithAKinectLikeCameraIsTracked) {
   sim::SensorOptions sensor = sim::kinect_sensor();
   sensor.exposure.exposure_s = 0.01;
   sensor.exposure.samples = 3;
   sensor.auto_exposure.enabled = true;
-  const auto s = render_stress(sim::SceneKind::white_room, sim::PathKind::orbit, camera(0.0), sensor, 12);
-  const Drift drift = track(s);
-  EXPECT_EQ(drift.failed, 0);
-  EXPECT_LT(drift.worst_translation_mm, 180.0);
-  EXPECT_LT(drift.worst_rotation_deg, 0.6);
+  for (const std::uint64_t noise_seed : {0, 1, 2}) {
+    SCOPED_TRACE(noise_seed);
+    const auto s = render_stress(sim::SceneKind::white_room, sim::PathKind::orbit, camera(0.0), sensor, 12, noise_seed);
+    const Drift drift = track(s);
+    EXPECT_EQ(drift.failed, 0);
+    EXPECT_LT(drift.worst_translation_mm, 280.0);
+    EXPECT_LT(drift.worst_rotation_deg, 1.0);
+  }
 }
 
 // textured_room along fast_rpy (237 deg/s peak, 6.4 degrees between the first two frames), a 30 ms
 // rolling shutter declared in the intrinsics, Kinect depth and colour noise, 10 ms exposure; three
-// draws of the sensor noise. Measured over noise seeds 0-7: worst 7.8-16.5 mm and 0.22-0.41 deg over
+// draws of the sensor noise. Measured over noise seeds 0-7: worst 4.6-16.8 mm and 0.19-0.26 deg over
 // 12 frames (0.4 s, ~60 degrees turned), no failure; the bounds are 1.5 times the worst. Before the
 // session's first pair started from a kernel that reaches the turn (keyframe_odometry.hpp), seed 0
 // alone passed: 274 and 535 mm, 2.2 and 8.2 deg for seeds 1 and 2, the first pair converging to
@@ -107,7 +113,7 @@ TEST(StressScenes, FastTurnsUnderARollingShutterAreTrackedFromTheFirstFrame) {
     const Drift drift = track(s);
     EXPECT_EQ(drift.failed, 0);
     EXPECT_LT(drift.worst_translation_mm, 25.0);
-    EXPECT_LT(drift.worst_rotation_deg, 0.6);
+    EXPECT_LT(drift.worst_rotation_deg, 0.4);
   }
 }
 

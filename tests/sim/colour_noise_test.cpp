@@ -4,14 +4,32 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 namespace cvo::sim {
 namespace {
 
+// The model with every term at work (the defaults have no shot noise and no correlation).
 ColourNoiseOptions on() {
   ColourNoiseOptions options;
   options.enabled = true;
+  options.read_sigma_levels = 2.0;
+  options.shot_levels = 0.25;
+  options.channel_correlation = 0.9;
   return options;
+}
+
+// The defaults are fr1's measured grey noise, 0.79 levels on its flattest 8x8 patches
+// (colour_noise.hpp): a flat field's grey spreads by 0.67 * 1.2 = 0.8 levels.
+TEST(ColourNoise, TheDefaultsGiveAGreyNoiseOfAboutALevelAsFr1sRealFramesShow) {
+  ColourNoiseOptions defaults;
+  defaults.enabled = true;
+  const cv::Mat bytes = develop_colour(cv::Mat(200, 200, CV_64FC3, cv::Scalar::all(0.45)), 1.0, defaults, 5);
+  cv::Mat grey;
+  cv::cvtColor(bytes, grey, cv::COLOR_BGR2GRAY);
+  cv::Scalar mean, std;
+  cv::meanStdDev(grey, mean, std);
+  EXPECT_NEAR(std[0], 0.8, 0.15);
 }
 
 TEST(ColourNoise, SigmaIsReadPlusShotNoise) {
