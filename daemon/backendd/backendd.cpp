@@ -490,9 +490,12 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
 
 // CVO_KEYFRAME_CHUNK: a slice of a keyframe's or local graph's message (libcvo/lcm/chunks.hpp). A
 // slice of a message let in already is a repeat (or, with another CRC, a conflict); the others are
-// put together, and a message complete goes through the door as if it had come whole, from the
-// sender of its last slice (every slice was verified). A keyframe's slice says the keyframe exists:
-// should the rest not come, it is asked for (keyframe_gaps.hpp).
+// put together (competing messages of one name apart, by CRC), and a message complete goes through
+// the door as if it had come whole, from the sender of its last slice (every slice was verified);
+// once one of a name is let in, the others of it are dropped. A slice of a live session says its
+// keyframe exists: should the rest not come, it is asked for (keyframe_gaps.hpp); one of a session
+// whose tracker is not heard asks for nothing, and is counted refused if it goes unassembled
+// (slice_intake.hpp).
 void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t sender) {
   const auto chunk = decoded<cvo_lcm::keyframe_chunk_t>(data, size, "CVO_KEYFRAME_CHUNK");
   if (!chunk) return;
@@ -507,10 +510,8 @@ void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t se
       refuse(cvo_lcm::status_t::BAD_CONFLICT, "a slice of " + describe(key) + " with other content: refused");
     return;  // a repeat: a slice re-sent for another, or late
   }
-  gaps_.seen(graph ? KeyframeGaps::Seen::kGraphPart : KeyframeGaps::Seen::kPose, chunk->session, chunk->id,
-             Clock::now());
-  gaps_.progressed(chunk->session, chunk->id, Clock::now());
-  auto added = slices_.add(*chunk);
+  auto added = slices_.add(*chunk, gaps_, Clock::now());
+  count_strangers_dropped();
   using Outcome = lcm::ChunkAssembly::Added::Outcome;
   if (added.outcome == Outcome::kRefused)
     return refuse(static_cast<std::size_t>(added.refusal),
@@ -525,11 +526,25 @@ void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t se
     return;
   }
   receive(key.kind, added.message.data(), added.message.size(), sender);
+  if (door_.knows(key)) slices_.forget({chunk->session, chunk->id, chunk->message});
   if (const auto early = early_graphs_.find(keyframe); !graph && early != early_graphs_.end()) {
     const EarlyGraph g = std::move(early->second);
     early_graphs_.erase(early);
     receive(RecordKind::kLocalGraph, g.message.data(), g.message.size(), g.sender);
+    if (door_.knows({RecordKind::kLocalGraph, key.session, key.id}))
+      slices_.forget({chunk->session, chunk->id, cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH});
   }
+}
+
+// Slices of sessions whose tracker is not heard, dropped unassembled: they could not belong to a
+// live session (a forger's flood, most likely), refused as naming no keyframe the back end knows.
+void Backendd::count_strangers_dropped() {
+  const std::int64_t dropped = slices_.strangers_dropped();
+  if (dropped == 0) return;
+  bad_messages_[cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME] += dropped;
+  notes_.note_limited("refused " + std::to_string(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME),
+                      std::to_string(dropped) +
+                          " CVO_KEYFRAME_CHUNK of sessions whose tracker is not heard dropped unassembled: refused");
 }
 
 // A message heard on `channel` (authentic already), decoded; one that does not decode is counted by
@@ -553,6 +568,7 @@ void Backendd::saw_pose(const void* data, std::size_t size) {
   const auto pose = decoded<cvo_lcm::pose_t>(data, size, "CVO_POSE");
   if (!pose) return;
   gaps_.seen(KeyframeGaps::Seen::kPose, pose->session, pose->keyframe_id, Clock::now());
+  slices_.heard(pose->session, Clock::now(), pose->keyframe_id);
   const bool lost = pose->state == cvo_lcm::pose_t::STATE_LOST;
   {
     const std::lock_guard lock(posed_mutex_);
@@ -571,6 +587,7 @@ void Backendd::saw_status(const void* data, std::size_t size) {
   const auto status = decoded<cvo_lcm::status_t>(data, size, "CVO_STATUS");
   if (!status || status->process != "cvo-trackerd") return;
   gaps_.heard(status->session, Clock::now());
+  slices_.heard(status->session, Clock::now(), std::nullopt);
   // Live: its correction, with what is acknowledged, goes again once a status period (a tracker that
   // lingers at its exit until its keyframes are acknowledged sends no pose).
   const std::lock_guard lock(posed_mutex_);

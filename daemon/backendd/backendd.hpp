@@ -3,7 +3,7 @@
 // back end cvo-run --mode slam uses).
 //
 //   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH (or their slices, CVO_KEYFRAME_CHUNK, put
-//                 together first: libcvo/lcm/chunks.hpp) -> decoded once and checked -> the door (each
+//                 together first: slice_intake.hpp) -> decoded once and checked -> the door (each
 //                 keyframe (session, id) and local graph once; a repeat with other content is
 //                 refused, message_door.hpp) -> appended to the keyframe store (durable before
 //                 anything else happens) -> work queue, the decoded value (when it is full,
@@ -68,6 +68,7 @@
 #include "daemon/backendd/record_guard.hpp"
 #include "daemon/backendd/record_quota.hpp"
 #include "daemon/backendd/replay.hpp"
+#include "daemon/backendd/slice_intake.hpp"
 #include "daemon/backendd/work_queue.hpp"
 #include "daemon/common/bus_auth.hpp"
 #include "daemon/common/heartbeat.hpp"
@@ -127,6 +128,7 @@ class Backendd {
   template <class Message>
   std::optional<Message> decoded(const void* data, std::size_t size, const char* channel);
   void receive_slice(const void* data, std::size_t size, std::int64_t sender);
+  void count_strangers_dropped();
   [[nodiscard]] cvo_lcm::keyframe_request_t request_message(const KeyframeGaps::Request& request) const;
   void saw_pose(const void* data, std::size_t size);
   void saw_status(const void* data, std::size_t size);
@@ -183,8 +185,8 @@ class Backendd {
   MessageDoor door_;  // cvo-receive only (filled from the store before it starts)
   RecordQuota quota_{config_.backendd.max_records_per_session, config_.backendd.max_records_per_sender};  // the same
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
-  HeldPrefix held_;            // what is acknowledged of each session: cvo-receive marks, cvo-backend reads
-  lcm::ChunkAssembly slices_;  // cvo-receive only: messages that came in part (CVO_KEYFRAME_CHUNK)
+  HeldPrefix held_;     // what is acknowledged of each session: cvo-receive marks, cvo-backend reads
+  SliceIntake slices_;  // cvo-receive only: messages that came in part (CVO_KEYFRAME_CHUNK)
   // cvo-receive only: local graphs put together before their keyframe, let in after it.
   struct EarlyGraph {
     std::vector<std::uint8_t> message;

@@ -3,6 +3,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <iterator>
 #include <limits>
 #include <utility>
 
@@ -97,56 +98,121 @@ std::string ChunkAssembly::check(const Chunk& c) const {
   return {};
 }
 
-void ChunkAssembly::make_room(std::size_t bytes) {
-  while (!partial_.empty() && (partial_.size() >= limits_.max_messages || bytes_ + bytes > limits_.max_bytes)) {
-    const auto oldest = std::min_element(partial_.begin(), partial_.end(), [](const auto& a, const auto& b) {
-      return a.second.touched < b.second.touched;
-    });
-    bytes_ -= oldest->second.message.size();
-    partial_.erase(oldest);
-    ++dropped_;
+// The messages of `name` held in part: a range of partial_ (its keys order by name first).
+std::pair<ChunkAssembly::Partials::const_iterator, ChunkAssembly::Partials::const_iterator> ChunkAssembly::of_name(
+    const SlicedName& name) const {
+  const auto first = partial_.lower_bound(Key{name, 0, std::numeric_limits<std::int32_t>::min()});
+  auto last = first;
+  while (last != partial_.end() && last->first.name == name) ++last;
+  return {first, last};
+}
+
+std::size_t ChunkAssembly::of_name_count(const SlicedName& name) const {
+  const auto [first, last] = of_name(name);
+  return static_cast<std::size_t>(std::distance(first, last));
+}
+
+void ChunkAssembly::drop(Partials::const_iterator it) {
+  for (const auto& [index, data] : it->second.slices) bytes_ -= data.size() + kSliceOverhead;
+  partial_.erase(it);
+}
+
+// The weakest of [first, last): fewest slices held, then least recently added to.
+bool ChunkAssembly::weaker(const Partials::value_type& a, const Partials::value_type& b) {
+  return std::pair(a.second.slices.size(), a.second.touched) < std::pair(b.second.slices.size(), b.second.touched);
+}
+
+ChunkAssembly::Partials::const_iterator ChunkAssembly::weakest(Partials::const_iterator first,
+                                                               Partials::const_iterator last) {
+  return std::min_element(first, last, weaker);
+}
+
+void ChunkAssembly::evict(Partials::const_iterator it) {
+  ++dropped_;
+  dropped_slices_ += static_cast<std::int64_t>(it->second.slices.size());
+  drop(it);
+}
+
+// Room for a new message of `name` whose first slice takes `bytes`: within max_per_name for its
+// name and max_messages in all. What goes for room is counted (dropped()).
+void ChunkAssembly::make_room(const SlicedName& name) {
+  while (of_name_count(name) >= std::max<std::size_t>(limits_.max_per_name, 1)) {
+    const auto [first, last] = of_name(name);
+    evict(weakest(first, last));
   }
+  while (!partial_.empty() && partial_.size() >= limits_.max_messages)
+    evict(weakest(partial_.cbegin(), partial_.cend()));
+}
+
+// Room for `bytes` more of `keep` within max_bytes, the weakest of the others dropped first; false
+// when even all the room would not do.
+bool ChunkAssembly::room_for(Partials::const_iterator keep, std::size_t bytes) {
+  while (bytes_ + bytes > limits_.max_bytes) {
+    auto victim = partial_.cend();
+    for (auto it = partial_.cbegin(); it != partial_.cend(); ++it)
+      if (it != keep && (victim == partial_.cend() || weaker(*it, *victim))) victim = it;
+    if (victim == partial_.cend()) return false;
+    evict(victim);
+  }
+  return true;
+}
+
+// The last slice of `it` came: the message put together, checked against its CRC, and dropped.
+ChunkAssembly::Added ChunkAssembly::complete(Partials::iterator it) {
+  const Key key = it->first;
+  Added done{Added::Outcome::kComplete, {}, core::BadKind::kContent, {}};
+  done.message.reserve(static_cast<std::size_t>(key.size));
+  for (const auto& [index, data] : it->second.slices) done.message.insert(done.message.end(), data.begin(), data.end());
+  drop(it);
+  if (content_crc(done.message.data(), done.message.size()) != key.crc)
+    return {Added::Outcome::kRefused,
+            {},
+            core::BadKind::kContent,
+            "the slices put together are not the message they name (CRC)"};
+  return done;
 }
 
 ChunkAssembly::Added ChunkAssembly::add(const Chunk& c) {
   using Outcome = Added::Outcome;
-  const auto refuse = [](core::BadKind kind, std::string why) {
-    return Added{Outcome::kRefused, {}, kind, std::move(why)};
-  };
-  if (auto why = check(c); !why.empty()) return refuse(core::BadKind::kContent, std::move(why));
-  const SlicedName name{c.session, c.id, c.message};
-  const auto size = static_cast<std::size_t>(c.message_size);
-  const auto crc = static_cast<std::uint32_t>(c.message_crc);
-  auto it = partial_.find(name);
+  if (auto why = check(c); !why.empty()) return {Outcome::kRefused, {}, core::BadKind::kContent, std::move(why)};
+  const Key key{{c.session, c.id, c.message}, static_cast<std::uint32_t>(c.message_crc), c.message_size};
+  const std::size_t charge = c.data.size() + kSliceOverhead;
+  auto it = partial_.find(key);
   if (it == partial_.end()) {
-    make_room(size);
-    Partial p{crc, std::vector<std::uint8_t>(size), std::vector<bool>(static_cast<std::size_t>(slice_count(size))),
-              slice_count(size), 0};
-    bytes_ += size;
-    it = partial_.emplace(name, std::move(p)).first;
-  } else if (it->second.message.size() != size || it->second.crc != crc) {
-    return refuse(core::BadKind::kConflict, "a slice of another message than the one of this name held in part");
+    make_room(key.name);
+    it = partial_.emplace(key, Partial{{}, slice_count(static_cast<std::size_t>(c.message_size)), 0}).first;
   }
   Partial& p = it->second;
   p.touched = ++adds_;
-  const auto index = static_cast<std::size_t>(c.index);
-  if (p.have[index]) return {Outcome::kRepeat, {}, core::BadKind::kContent, {}};
-  std::copy(c.data.begin(), c.data.end(), p.message.begin() + static_cast<std::ptrdiff_t>(index * kData));
-  p.have[index] = true;
-  if (--p.missing > 0) return {Outcome::kPartial, {}, core::BadKind::kContent, {}};
-  Added done{Outcome::kComplete, std::move(p.message), core::BadKind::kContent, {}};
-  bytes_ -= size;
-  partial_.erase(it);
-  if (content_crc(done.message.data(), done.message.size()) != crc)
-    return refuse(core::BadKind::kContent, "the slices put together are not the message they name (CRC)");
-  return done;
+  if (p.slices.contains(c.index)) return {Outcome::kRepeat, {}, core::BadKind::kContent, {}};
+  if (!room_for(it, charge)) {  // its own slices fill the room: it goes whole
+    evict(it);
+    ++dropped_slices_;  // this one
+    return {Outcome::kRefused, {}, core::BadKind::kContent, "a message larger than the room for messages in part"};
+  }
+  p.slices.emplace(c.index, c.data);
+  bytes_ += charge;
+  if (static_cast<std::int32_t>(p.slices.size()) < p.count) return {Outcome::kPartial, {}, core::BadKind::kContent, {}};
+  return complete(it);
+}
+
+void ChunkAssembly::forget(const SlicedName& name) {
+  while (true) {
+    const auto [first, last] = of_name(name);
+    if (first == last) return;
+    drop(first);
+  }
 }
 
 std::optional<std::vector<SliceRange>> ChunkAssembly::missing(const SlicedName& name, std::size_t max_ranges) const {
-  const auto it = partial_.find(name);
-  if (it == partial_.end()) return std::nullopt;
+  const auto [first, last] = of_name(name);
+  if (first == last) return std::nullopt;
+  const auto most = std::max_element(
+      first, last, [](const auto& a, const auto& b) { return a.second.slices.size() < b.second.slices.size(); });
+  std::vector<bool> have(static_cast<std::size_t>(most->second.count));
+  for (const auto& [index, data] : most->second.slices) have[static_cast<std::size_t>(index)] = true;
   std::vector<SliceRange> ranges;
-  for (const auto& [first, end] : missing_runs(it->second.have, max_ranges)) ranges.push_back({first, end - first});
+  for (const auto& [from, end] : missing_runs(have, max_ranges)) ranges.push_back({from, end - from});
   return ranges;
 }
 

@@ -108,11 +108,80 @@ TEST(Chunks, SlicesOfAnotherMessageOfTheSameNameAreNeverPutTogether) {
   const auto mine = slices_of(message), theirs = slices_of(other);
   ChunkAssembly assembly;
   assembly.add(mine[0]);
-  const auto added = assembly.add(theirs[1]);
-  EXPECT_EQ(added.outcome, Outcome::kRefused);
-  EXPECT_EQ(added.refusal, core::BadKind::kConflict);
+  EXPECT_EQ(assembly.add(theirs[1]).outcome, Outcome::kPartial) << "held apart, by its CRC";
   assembly.add(mine[1]);
   EXPECT_EQ(assembly.add(mine[2]).message, message);
+  assembly.add(theirs[0]);
+  EXPECT_EQ(assembly.add(theirs[2]).message, other);
+}
+
+// Issue 48: one forged first slice for each of a live session's next keyframe names held them,
+// and the genuine slices were refused as conflicts.
+TEST(Chunks, AForgedFirstSliceDoesNotLockItsNameTheGenuineKeyframeCompletesAndDecodes) {
+  auto keyframe = test::sample_keyframe();
+  keyframe.colour.resize(5 * kData, 0x42);  // a keyframe of several slices
+  keyframe.colour_size = static_cast<std::int32_t>(keyframe.colour.size());
+  const auto genuine = encode(keyframe);
+  const SlicedName name{keyframe.session, keyframe.id, Chunk::KEYFRAME};
+  const auto slices = slices_of(genuine, name);
+  ASSERT_GE(slices.size(), 2u);
+  auto forged = slices.front();  // a forger who has not seen the keyframe yet guesses its size and CRC
+  forged.message_size += 3 * static_cast<std::int32_t>(kData);
+  forged.message_crc ^= 0x5a5a;
+  forged.data.assign(kData, 0xee);
+  ChunkAssembly assembly;
+  ASSERT_EQ(assembly.add(forged).outcome, Outcome::kPartial);
+  Bytes put_together;
+  for (const auto& c : slices) {
+    auto added = assembly.add(c);
+    ASSERT_NE(added.outcome, Outcome::kRefused) << added.why;
+    if (added.outcome == Outcome::kComplete) put_together = std::move(added.message);
+  }
+  ASSERT_EQ(put_together, genuine);
+  EXPECT_TRUE(decode<cvo_lcm::keyframe_t>(put_together.data(), static_cast<int>(put_together.size()), nullptr));
+  assembly.forget(name);
+  EXPECT_EQ(assembly.held(), 0u) << "the forgery competes in vain once the keyframe is let in";
+  EXPECT_EQ(assembly.bytes(), 0u);
+}
+
+TEST(Chunks, ManyCompetingMessagesOfOneNameStayBoundedAndTheOneWellUnderWayStays) {
+  const auto message = message_of(8 * kData);
+  const auto mine = slices_of(message);
+  ChunkAssembly assembly({.max_messages = 64, .max_bytes = std::size_t{1} << 20, .max_per_name = 4});
+  for (int k = 0; k < 4; ++k) assembly.add(mine[static_cast<std::size_t>(k)]);
+  for (std::uint8_t seed = 10; seed < 210; ++seed) {  // 200 forgeries of the same name
+    const auto forged = slices_of(message_of(8 * kData, seed));
+    assembly.add(forged[seed % 8]);
+    EXPECT_LE(assembly.held(), 4u);
+  }
+  EXPECT_GE(assembly.dropped(), 196);
+  Bytes put_together;
+  for (std::size_t k = 4; k < mine.size(); ++k)
+    if (auto added = assembly.add(mine[k]); added.outcome == Outcome::kComplete) put_together = added.message;
+  EXPECT_EQ(put_together, message) << "forgeries of one slice each make way for the message holding four";
+}
+
+TEST(Chunks, AFloodOfRandomSlicesStaysWithinTheRoomAndItsSlicesAreCountedWhenDropped) {
+  const ChunkAssembly::Limits limits{.max_messages = 16};
+  const std::size_t room = limits.max_messages * (kData + ChunkAssembly::kSliceOverhead);
+  ChunkAssembly assembly(limits);
+  std::mt19937_64 random(48);
+  constexpr int kFlood = 20000;
+  for (int n = 0; n < kFlood; ++n) {
+    Chunk c{};
+    c.session = static_cast<std::int64_t>(random());
+    c.id = static_cast<std::int64_t>(random() % 1000);
+    c.message = Chunk::KEYFRAME;
+    c.message_size = 100 << 20;  // claims 100 MiB: never allocated ahead
+    c.message_crc = static_cast<std::int32_t>(random());
+    c.index = static_cast<std::int32_t>(random() % 1000);
+    c.data.assign(kData, 0x42);
+    c.data_size = static_cast<std::int32_t>(kData);
+    assembly.add(c);
+    ASSERT_LE(assembly.bytes(), room) << "one slice of each message, whatever size it claims";
+    ASSERT_LE(assembly.held(), limits.max_messages);
+  }
+  EXPECT_EQ(assembly.dropped_slices() + static_cast<std::int64_t>(assembly.held()), kFlood);
 }
 
 TEST(Chunks, SlicesWhoseBytesDoNotGiveTheirCrcAreRefusedWhole) {
@@ -127,7 +196,7 @@ TEST(Chunks, SlicesWhoseBytesDoNotGiveTheirCrcAreRefusedWhole) {
   EXPECT_EQ(assembly.held(), 0u) << "dropped: asked for again whole";
 }
 
-TEST(Chunks, TheMessageLeastRecentlyAddedToIsDroppedForRoom) {
+TEST(Chunks, TheMessageHoldingFewestSlicesLeastRecentlyAddedToIsDroppedForRoom) {
   ChunkAssembly assembly({.max_messages = 2, .max_bytes = 10 * kData});
   const auto first = slices_of(message_of(4 * kData), {1, 0, Chunk::KEYFRAME});
   const auto second = slices_of(message_of(4 * kData), {1, 1, Chunk::KEYFRAME});
@@ -135,7 +204,7 @@ TEST(Chunks, TheMessageLeastRecentlyAddedToIsDroppedForRoom) {
   assembly.add(first[0]);
   assembly.add(second[0]);
   assembly.add(first[1]);  // first is now the more recent
-  assembly.add(third[0]);  // two at most: second goes
+  assembly.add(third[0]);  // two at most: second (one slice) goes
   EXPECT_EQ(assembly.held(), 2u);
   EXPECT_EQ(assembly.dropped(), 1);
   EXPECT_TRUE(assembly.missing({1, 0, Chunk::KEYFRAME}, 1));
