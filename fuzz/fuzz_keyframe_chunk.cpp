@@ -4,7 +4,8 @@
 // slices, so an input is several LCM buffers: up to 64, each a 2-byte big-endian length and that many
 // bytes (a length past the end takes the rest; a last lone byte is ignored). The limits are small so
 // that eviction runs. Checked after every slice, what a receiver relies on: the ranges it asks for
-// again (missing()), a complete message's size and CRC, and the assembly's bounds.
+// again (missing()), a complete message's size and CRC, nothing of its name held once it is let in
+// (forget()), and the assembly's bounds.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -43,16 +44,13 @@ std::vector<std::span<const std::uint8_t>> split(const std::uint8_t* data, std::
 // missing(name, max_ranges) of the chunk's name, after the chunk was added with `outcome`.
 void check_missing(const ChunkAssembly& assembly, const Chunk& chunk, Outcome outcome, std::size_t max_ranges) {
   const auto ranges = assembly.missing({chunk.session, chunk.id, chunk.message}, max_ranges);
-  if (outcome == Outcome::kComplete && ranges) fail("a message put together is still held in part");
   if (outcome == Outcome::kPartial && (!ranges || ranges->empty())) fail("a message held in part misses nothing");
   if (!ranges) return;
   if (ranges->size() > max_ranges)
     fail(std::to_string(ranges->size()) + " missing ranges, at most " + std::to_string(max_ranges) + " asked for");
-  // A partial or repeat slice: the message held is the chunk's (a conflict is refused before a
-  // repeat); a refused one may name a message held with another size, within the limits only.
-  const bool held_is_chunks = outcome == Outcome::kPartial || outcome == Outcome::kRepeat;
-  const std::int64_t slices =
-      cvo::lcm::slice_count(held_is_chunks ? static_cast<std::size_t>(chunk.message_size) : kLimits.max_bytes);
+  // Messages of the name that compete with the chunk's (another CRC or size) are held too, and the
+  // ranges are of the one holding the most: within the largest message the limits let in.
+  const std::int64_t slices = cvo::lcm::slice_count(kLimits.max_bytes);
   std::int64_t end = 0;
   for (const auto& range : *ranges) {
     if (range.count < 1) fail("a missing range of " + std::to_string(range.count) + " slices");
@@ -74,6 +72,11 @@ void add(ChunkAssembly& assembly, const Chunk& chunk) {
   }
   for (const std::size_t max_ranges : {std::size_t{1}, std::size_t{3}})
     check_missing(assembly, chunk, added.outcome, max_ranges);
+  if (added.outcome == Outcome::kComplete) {  // let in, as the back end does: the rest competed in vain
+    const cvo::lcm::SlicedName name{chunk.session, chunk.id, chunk.message};
+    assembly.forget(name);
+    if (assembly.missing(name, 1)) fail("a name let in is still held in part after forget()");
+  }
   if (assembly.bytes() > kLimits.max_bytes || assembly.held() > kLimits.max_messages)
     fail("the assembly holds " + std::to_string(assembly.held()) + " messages of " + std::to_string(assembly.bytes()) +
          " bytes, beyond its limits");
