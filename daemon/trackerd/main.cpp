@@ -30,7 +30,7 @@ constexpr const char* kSources = R"(sources (--source, trackerd.source):
   tum:DIR              a TUM RGB-D folder (trackerd.paced: at recorded rate)
   lcm:URL              CVO_RGBD messages, live (udpm://...) or a log (file://...)
   openni2:URI          an OpenNI2 device (openni2:any) or an .oni recording
-  v4l2:COLOUR[,DEPTH]  V4L2 device nodes (intrinsics from the camera key))";
+  v4l2:COLOUR,DEPTH    V4L2 device nodes (intrinsics from the camera key))";
 
 struct Arguments {
   bool print_config = false;

@@ -235,7 +235,7 @@ const std::vector<Field>& table() {
       row("localization.window_keyframes", &Config::localization, &LocalizationParameters::window_keyframes,
           kAtLeastTwo, "a session being localized in a stored map keeps its newest keyframes, this many"),
       row("trackerd.source", &Config::trackerd, &TrackerdParameters::source, kAny,
-          "frame source: tum:DIR, lcm:URL, openni2:URI (openni2:any), v4l2:COLOUR[,DEPTH]"),
+          "frame source: tum:DIR, lcm:URL, openni2:URI (openni2:any), v4l2:COLOUR,DEPTH"),
       row("trackerd.lcm_url", &Config::trackerd, &TrackerdParameters::lcm_url, kAny,
           "LCM provider the results are published on (ttl=0: never leaves the host)"),
       row("trackerd.paced", &Config::trackerd, &TrackerdParameters::paced, kAny,

@@ -548,7 +548,7 @@ TEST(Trackerd, HelpListsEveryOptionAndAnUnknownOneExitsTwoNamingIt) {
   cvo::test::TempDir dir;
   cvo::testing::expect_cli_contract("cvo-trackerd", "",
                                     {"--config", "--source", "--lcm-url", "--exit-on-eof", "--deterministic", "--set",
-                                     "--print-config", "tum:DIR", "lcm:URL", "openni2:URI", "v4l2:COLOUR[,DEPTH]"},
+                                     "--print-config", "tum:DIR", "lcm:URL", "openni2:URI", "v4l2:COLOUR,DEPTH"},
                                     dir.path());
 }
 
