@@ -915,12 +915,14 @@ void Backendd::publish_corrections(const std::vector<core::SessionId>& sessions,
     if (!again && !w.schedule.differs(session, entry)) continue;
     auth::publish(w.lcm, bus_.signer(), "CVO_MAP_CORRECTION", message);
     w.corrections.add(static_cast<std::size_t>(message.getEncodedSize()));
-    w.schedule.sent(session, std::move(entry), Clock::now());
+    w.schedule.sent(session, std::move(entry), Clock::now(), message.acknowledged);
   }
 }
 
-// From cvo-backend's loop: the full map once its period has passed while a change waited, and
-// the corrections of live sessions (a CVO_POSE or a record of theirs came lately) again.
+// From cvo-backend's loop: the full map once its period has passed while a change waited, the
+// corrections of live sessions (a CVO_POSE or a record of theirs came lately) again, and those of
+// sessions the store holds more of than they were told: between two records, so a tracker lingering
+// for its acknowledgement waits for one record of the mapper's, not for its backlog.
 void Backendd::publish_due() {
   Work& w = *work_;
   const auto now = Clock::now();
@@ -932,6 +934,10 @@ void Backendd::publish_due() {
   if (replayed_pending_ > 0) return;  // the store's map goes once it is in
   if (w.schedule.map_due(now, false)) publish_map({}, w.schedule.loop_waiting());
   if (const auto due = w.schedule.resends_due(now); !due.empty()) publish_corrections(due, true);
+  // A session the mapper has not reached gets its default entry (unplaced, at the map's revision):
+  // the first correction its tracker applies, or a handed-over session's word (map_decision.hpp).
+  if (const auto due = w.schedule.acknowledgements_due(held_.take_grown()); !due.empty())
+    publish_corrections(due, true);
 }
 
 void Backendd::publish_map(const std::vector<std::int64_t>& joined, bool after_loop) {

@@ -14,9 +14,10 @@
 //   cvo-backend   work queue -> slam::Mapper (loop detection across every session, joins,
 //                 keyframe-graph optimisation) -> after each change CVO_MAP_CORRECTION for each
 //                 session whose entry changed (O(1) bytes each), each live session's again once a
-//                 status period, and the full CVO_MAP at most once backendd.map_period_s while it
-//                 changes, at once after a join, within a second after a loop closure
-//                 (map_schedule.hpp); beside it
+//                 status period, a session's at once when the store holds more of it than it was
+//                 told (held_prefix.hpp; between two records), and the full CVO_MAP at most once
+//                 backendd.map_period_s while it changes, at once after a join, within a second
+//                 after a loop closure (map_schedule.hpp); beside it
 //                 mapping::Mapping, each keyframe's local map placed at the poses of each full map
 //                 -> CVO_GRID (the poses of a CVO_MAP sent) at most once a second while it changes,
 //                 at once with a loop's map when it moved keyframes; CVO_STATUS once a period
@@ -156,7 +157,7 @@ class Backendd {
                        bool after_loop);
   // Those of `sessions` whose entry changed (`again`: each, changed or not).
   void publish_corrections(const std::vector<core::SessionId>& sessions, bool again);
-  void publish_due();  // the full map once its period has passed, live sessions' corrections again
+  void publish_due();  // the full map once its period has passed, corrections again: live or newly held sessions'
   void publish_map(const std::vector<std::int64_t>& joined, bool after_loop);
   void place_in_grid(const slam::Map& map, bool after_loop);
   void publish_grid(bool after_loop);

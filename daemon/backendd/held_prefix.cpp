@@ -11,6 +11,7 @@ void HeldPrefix::held(std::int64_t session, std::int64_t id, bool graph) {
     s.above.erase({s.prefix, false});
     s.above.erase({s.prefix, true});
     ++s.prefix;
+    grown_.insert(session);
   }
 }
 
@@ -23,6 +24,14 @@ std::int64_t HeldPrefix::acknowledged(std::int64_t session) const {
   const std::lock_guard lock(mutex_);
   const auto it = sessions_.find(session);
   return it == sessions_.end() ? 0 : it->second.prefix;
+}
+
+std::map<std::int64_t, std::int64_t> HeldPrefix::take_grown() {
+  const std::lock_guard lock(mutex_);
+  std::map<std::int64_t, std::int64_t> out;
+  for (const std::int64_t session : grown_) out.emplace(session, sessions_.at(session).prefix);
+  grown_.clear();
+  return out;
 }
 
 }  // namespace cvo::daemon::backendd

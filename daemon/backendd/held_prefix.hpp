@@ -5,7 +5,8 @@
 // what is not acknowledged, in its spool and at its exit, and sends it again.
 //
 // cvo-receive marks records as they are stored (and as the store is read back at start);
-// cvo-backend reads the prefix when it publishes a session's correction. Thread-safe.
+// cvo-backend reads the prefix when it publishes a session's correction, and takes the sessions
+// whose prefix grew, to acknowledge them at once (map_schedule.hpp). Thread-safe.
 #include <cstdint>
 #include <map>
 #include <mutex>
@@ -22,6 +23,8 @@ class HeldPrefix {
   void merged(std::int64_t session, std::int64_t id);
   /// Keyframes 0 .. acknowledged(session) - 1 are all held, each with its local graph.
   [[nodiscard]] std::int64_t acknowledged(std::int64_t session) const;
+  /// The sessions whose prefix grew since the last call, each with its prefix now.
+  [[nodiscard]] std::map<std::int64_t, std::int64_t> take_grown();
 
  private:
   struct Session {
@@ -30,6 +33,7 @@ class HeldPrefix {
   };
   mutable std::mutex mutex_;
   std::map<std::int64_t, Session> sessions_;
+  std::set<std::int64_t> grown_;  // since take_grown(): at most one entry a session
 };
 
 }  // namespace cvo::daemon::backendd

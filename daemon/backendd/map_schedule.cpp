@@ -9,8 +9,9 @@ bool MapSchedule::differs(std::int64_t session, const std::vector<std::uint8_t>&
   return it == sent_.end() || it->second.entry != entry;
 }
 
-void MapSchedule::sent(std::int64_t session, std::vector<std::uint8_t> entry, Clock::time_point now) {
-  sent_[session] = {std::move(entry), now};
+void MapSchedule::sent(std::int64_t session, std::vector<std::uint8_t> entry, Clock::time_point now,
+                       std::int64_t acknowledged) {
+  sent_[session] = {std::move(entry), now, acknowledged};
 }
 
 void MapSchedule::seen(std::int64_t session, Clock::time_point now) { live_[session] = now; }
@@ -23,6 +24,15 @@ std::vector<std::int64_t> MapSchedule::resends_due(Clock::time_point now) {
   for (const auto& [session, seen] : live_)
     if (const auto it = sent_.find(session); it != sent_.end() && now - it->second.at >= periods_.resend)
       due.push_back(session);
+  return due;
+}
+
+std::vector<std::int64_t> MapSchedule::acknowledgements_due(const std::map<std::int64_t, std::int64_t>& held) const {
+  std::vector<std::int64_t> due;
+  for (const auto& [session, prefix] : held) {
+    const auto it = sent_.find(session);
+    if (prefix > (it == sent_.end() ? 0 : it->second.acknowledged)) due.push_back(session);
+  }
   return due;
 }
 

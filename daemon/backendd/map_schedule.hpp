@@ -9,6 +9,10 @@
 //   - a live session's correction again once `resend` has passed since its last, so that one lost
 //     on UDP, or missed by a tracker that started listening late, comes again; live: a CVO_POSE or a
 //     record of it within `live`, and not lost;
+//   - a session's correction at once when the back end holds more of it than its last correction
+//     acknowledged, or than none did (held_prefix.hpp): a lingering tracker waits for that word, and
+//     the mapper may reach the session's records only after a long backlog (a hand-over of killed
+//     sessions' spools), so it goes whether the mapper has seen the session or not;
 //   - the full map: the first one at once, with a `map` period of 0 after every change; after a
 //     join at once (a new session is placed: once per session); after a loop closure once `loop`
 //     has passed since the last (the grid's pace: a planner sees the loop's grid within a second,
@@ -39,14 +43,18 @@ class MapSchedule {
 
   /// Whether `entry` (the session's, encoded) is other than the last one sent for it.
   [[nodiscard]] bool differs(std::int64_t session, const std::vector<std::uint8_t>& entry) const;
-  /// The session's correction with `entry` went out.
-  void sent(std::int64_t session, std::vector<std::uint8_t> entry, Clock::time_point now);
+  /// The session's correction with `entry`, acknowledging `acknowledged` keyframes, went out.
+  void sent(std::int64_t session, std::vector<std::uint8_t> entry, Clock::time_point now,
+            std::int64_t acknowledged = 0);
   /// A record or a CVO_POSE of the session came: it is live.
   void seen(std::int64_t session, Clock::time_point now);
   /// Its tracker said it is lost: no longer live.
   void lost(std::int64_t session);
   /// The live sessions whose correction went out `resend` ago or longer; forgets those no longer live.
   std::vector<std::int64_t> resends_due(Clock::time_point now);
+  /// Of `held` (session -> the prefix held now), those whose last correction acknowledged less, or
+  /// that had none while something is held.
+  [[nodiscard]] std::vector<std::int64_t> acknowledgements_due(const std::map<std::int64_t, std::int64_t>& held) const;
   /// Of `sessions`, those live at `now`. An optimisation moves every session, but only the live
   /// ones have a tracker that takes a correction: the others' entries go on the full map, so a map of
   /// many sessions costs O(live sessions) per loop, not O(sessions).
@@ -68,6 +76,7 @@ class MapSchedule {
   struct Sent {
     std::vector<std::uint8_t> entry;
     Clock::time_point at;
+    std::int64_t acknowledged = 0;
   };
   [[nodiscard]] bool live_at(Clock::time_point seen, Clock::time_point now) const {
     return now - seen <= periods_.live;

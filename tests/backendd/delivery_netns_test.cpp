@@ -73,9 +73,9 @@ class Delivery : public ::testing::Test {
     capture_ = std::make_unique<LcmCapture>(dir_.path() / "maps.lcmlog");
   }
   // A back end on the test's store; returns once its first CVO_STATUS is heard.
-  std::unique_ptr<DaemonProcess> start_backend(const std::string& name) {
+  std::unique_ptr<DaemonProcess> start_backend(const std::string& name, const std::vector<std::string>& settings = {}) {
     const auto err = dir_.path() / (name + ".txt");
-    auto backend = cvo::testing::start_backendd(dir_.path() / "keyframes.store", err);
+    auto backend = cvo::testing::start_backendd(dir_.path() / "keyframes.store", err, settings);
     const int pid = backend->pid();
     EXPECT_TRUE(capture_->wait_until([&](const Captured& c) { return c.status_from(pid); }, 60s))
         << cvo::testing::slurp(err);
@@ -246,6 +246,55 @@ TEST_F(Delivery, TrackersKilledFiveTimesWhileTheBackEndIsDownHoldEveryKeyframeTh
                                          << core::session_name(session);
   std::cout << all.size() << " keyframes named by the poses of five killed sessions: all spooled, all in the map"
             << std::endl;
+  EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
+}
+
+// Issue 48: the back end acknowledges what its store holds as it stores it, not once its mapper
+// reaches it. Killed sessions' spools, handed over by the next tracker, are a backlog the mapper
+// works through for seconds after that tracker's clip ended, its own keyframes behind them; the
+// tracker lingers until every session it holds is acknowledged. Its own session is acknowledged in
+// full by a correction the mapper had applied none of its records for (before, a session's first
+// correction went only after the mapper applied one of its records), the tracker exits 0 without
+// its "not acknowledged" note, and the back end still had records waiting then.
+TEST_F(Delivery, ALingeringTrackerIsAcknowledgedWhileTheBackEndWorksThroughAHandOver) {
+  const auto spool = dir_.path() / "spool";
+  const auto made = kill_trackers(4, spool);
+  ASSERT_EQ(made.size(), 4u);
+  // A mapper slow by design (each loop candidate's RANSAC tries 100 000 sets, not 300): the
+  // hand-over's ~100 records take it a minute, the tracker's clip a few seconds, so the tracker's
+  // own records are reached only long after its linger would have run out, however loaded the host.
+  // The stop leaves the backlog in the store (the five-kill test sees it all held).
+  auto backend = start_backend("backend", {"loop_closure.ransac_iterations=100000", "backendd.stop_timeout_s=2"});
+  const auto err = dir_.path() / "trackerd.txt";
+  auto tracker = cvo::testing::start_trackerd(kClip, err, true, {"trackerd.spool=" + spool.string()});
+  ASSERT_TRUE(wait_for_text(err, "end of tum:", 60s)) << cvo::testing::slurp(err);
+  const auto clip_ended = std::chrono::steady_clock::now();
+  EXPECT_EQ(tracker.wait_for(60s).value_or(-9), 0) << cvo::testing::slurp(err);
+  const double lingered_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clip_ended).count();
+  const Captured at_exit = capture_->snapshot();
+  EXPECT_FALSE(said(err, "not acknowledged")) << cvo::testing::slurp(err);
+
+  std::set<std::int64_t> killed;
+  for (const auto& [session, names] : made) killed.insert(session);
+  const std::int64_t own = session_of(at_exit, killed);
+  ASSERT_NE(own, 0) << cvo::testing::slurp(err);
+  const std::int64_t keyframes = at_exit.newest_keyframe.at(own) + 1;
+  const auto unmapped = at_exit.acknowledged_unmapped.find(own);
+  EXPECT_EQ(unmapped == at_exit.acknowledged_unmapped.end() ? 0 : unmapped->second, keyframes)
+      << "the tracker's keyframes acknowledged before the mapper applied any of them\n"
+      << cvo::testing::slurp(dir_.path() / "backend.txt");
+  ASSERT_FALSE(at_exit.backend_statuses.empty());
+  const auto waiting = at_exit.backend_statuses.back().queue_depth;
+  EXPECT_GT(waiting, 0) << "the back end's backlog was worked through before the tracker exited";
+  std::cout << "the tracker exited " << lingered_s << " s after its clip (" << keyframes << " keyframes) while "
+            << waiting << " records waited for the mapper" << std::endl;
+
+  // The sessions it handed over were acknowledged in full as well, the mapper or not.
+  for (const auto& [session, names] : made) {
+    const auto it = at_exit.acknowledged.find(session);
+    EXPECT_EQ(it == at_exit.acknowledged.end() ? 0 : it->second, static_cast<std::int64_t>(names.size()))
+        << "keyframes acknowledged of handed-over session " << core::session_name(session);
+  }
   EXPECT_EQ(cvo::testing::stop(*backend, 60s).value_or(-9), 0);
 }
 

@@ -3,6 +3,7 @@
 // whatever order they come; what is held below it is ignored, a merged keyframe counts as both, and
 // sessions are kept apart.
 #include <cstdint>
+#include <map>
 
 #include <gtest/gtest.h>
 
@@ -18,6 +19,19 @@ constexpr bool kKeyframe = false, kGraph = true;
 TEST(HeldPrefix, AnUnknownSessionHasNothingAcknowledged) {
   const HeldPrefix held;
   EXPECT_EQ(held.acknowledged(kSession), 0);
+}
+
+TEST(HeldPrefix, TheSessionsWhosePrefixGrewAreTakenOnce) {
+  HeldPrefix held;
+  held.held(kSession, 0, kKeyframe);
+  EXPECT_TRUE(held.take_grown().empty()) << "a keyframe without its graph does not grow the prefix";
+  held.held(kSession, 0, kGraph);
+  held.merged(kOther, 0);
+  held.held(kSession, 1, kKeyframe);
+  held.held(kSession, 1, kGraph);
+  const std::map<std::int64_t, std::int64_t> grown{{kSession, 2}, {kOther, 1}};
+  EXPECT_EQ(held.take_grown(), grown);
+  EXPECT_TRUE(held.take_grown().empty()) << "taken already";
 }
 
 TEST(HeldPrefix, TheKeyframeAloneOrItsGraphAloneIsNotHeld) {

@@ -22,6 +22,17 @@ TEST(MapSchedule, ACorrectionGoesWhenItsEntryChanged) {
   EXPECT_TRUE(schedule.differs(8, a)) << "another session's is its own";
 }
 
+// A lingering tracker waits for its acknowledgement: it goes as soon as more is held than the last
+// correction said, whether a correction of the session went before or not.
+TEST(MapSchedule, ACorrectionGoesAtOnceWhenMoreIsHeldThanItAcknowledged) {
+  MapSchedule schedule({5s, 1s, 10s});
+  EXPECT_TRUE(schedule.acknowledgements_due({{7, 0}}).empty()) << "nothing held: nothing to say";
+  EXPECT_EQ(schedule.acknowledgements_due({{7, 2}}), std::vector<std::int64_t>{7}) << "none sent yet";
+  schedule.sent(7, {1}, t0, 2);
+  EXPECT_TRUE(schedule.acknowledgements_due({{7, 2}}).empty()) << "said already";
+  EXPECT_EQ(schedule.acknowledgements_due({{7, 3}, {8, 1}}), (std::vector<std::int64_t>{7, 8}));
+}
+
 TEST(MapSchedule, ALiveSessionsCorrectionGoesAgainOnceAPeriod) {
   MapSchedule schedule({5s, 1s, 10s});
   schedule.sent(7, {1}, t0);

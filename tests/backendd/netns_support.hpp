@@ -71,6 +71,9 @@ struct Captured {
   std::map<std::int64_t, std::int64_t> last_frame;       // CVO_POSE: each session's newest frame index
   std::map<std::int64_t, std::int64_t> newest_keyframe;  // CVO_POSE: each session's newest keyframe id
   std::map<std::int64_t, std::int64_t> acknowledged;     // CVO_MAP_CORRECTION: each session's, the highest
+  // The same, of corrections whose entry counts no keyframe: sent before the mapper applied any
+  // record of the session.
+  std::map<std::int64_t, std::int64_t> acknowledged_unmapped;
   // CVO_POSE: each session's states as they changed (pose_t STATE_*), sessions in the order seen.
   std::vector<std::pair<std::int64_t, std::vector<std::int8_t>>> state_changes;
 
@@ -142,6 +145,10 @@ class LcmCapture {
         if (const auto m = cvo::lcm::decode<cvo_lcm::map_correction_t>(buffer->data, size, nullptr)) {
           auto& acknowledged = captured_.acknowledged[m->session.session];
           acknowledged = std::max(acknowledged, m->acknowledged);
+          if (m->session.keyframes == 0) {
+            auto& unmapped = captured_.acknowledged_unmapped[m->session.session];
+            unmapped = std::max(unmapped, m->acknowledged);
+          }
         }
       } else if (channel == "CVO_KEYFRAME") {
         if (const auto k = cvo::lcm::decode<cvo_lcm::keyframe_t>(buffer->data, size, nullptr))
