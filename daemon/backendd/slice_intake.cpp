@@ -25,7 +25,13 @@ bool SliceIntake::live(std::int64_t session, Clock::time_point now) const {
 lcm::ChunkAssembly::Added SliceIntake::add(const cvo_lcm::keyframe_chunk_t& chunk, KeyframeGaps& gaps,
                                            Clock::time_point now) {
   const lcm::SlicedName name{chunk.session, chunk.id, chunk.message};
-  if (!live(chunk.session, now) || strangers_.holds(name)) return strangers_.add(chunk);
+  if (!live(chunk.session, now) || strangers_.holds(name)) {
+    // A slice of a session the gaps already wait on is its tracker answering (on a lossy link its
+    // slices may come when its statuses do not): its requests go on. progressed() creates nothing,
+    // so a stranger's slice still asks for nothing.
+    gaps.progressed(chunk.session, chunk.id, now);
+    return strangers_.add(chunk);
+  }
   const bool graph = chunk.message == cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH;
   if (chunk.id <= heard_.at(chunk.session).newest_keyframe)  // else the pose naming it will say it exists
     gaps.seen(graph ? KeyframeGaps::Seen::kGraphPart : KeyframeGaps::Seen::kPose, chunk.session, chunk.id, now);
