@@ -23,6 +23,10 @@ constexpr double kSlackFraction = 0.25;
 // semi-dense selection, a run along one image row about as long as the kernel's reach at depth.
 constexpr std::size_t kScatterCluster = 8;
 constexpr std::uint16_t kUncollected = 0xFFFF;
+constexpr std::uint32_t kNoSource = 0xFFFFFFFF;
+// How far ahead a reselected point's label is looked for (match_moving_points): the points the
+// reselection dropped in a row. A few at the image's edge; beyond this the rest collect anew.
+constexpr std::size_t kMatchWindow = 16;
 constexpr float kFar = 1e15f;  // where a hidden fixed point is put: beyond every kernel's reach
 
 std::size_t next_power_of_two(std::size_t v) {
@@ -142,6 +146,8 @@ Registration::Registration(const Capacities& capacities, const core::CvoParamete
       candidate_count_(capacities.max_points, kUncollected),
       candidate_weight_(capacities.max_points, 1.0f),
       collected_label_(slots_ > 0 ? capacities.max_points * kFeatureDim : 0),
+      moving_label_(collected_label_.size()),
+      source_(slots_ > 0 ? capacities.max_points : 0),
       scratch_fixed_(slots_ > 0 ? capacities.max_points * static_cast<std::size_t>(std::max(parameters.threads, 1))
                                 : 0),
       scratch_colour_(scratch_fixed_.size()),
@@ -224,18 +230,72 @@ bool Registration::build_grid(const PointCloud& fixed, std::size_t n, double ell
 }
 
 // Reuse::kCandidates (see the header): the grid stays when it was built from this cloud for a
-// length-scale at least as wide (cells as wide as the reach); the candidates of moving points whose label changed are
-// dropped.
+// length-scale at least as wide (cells as wide as the reach); each moving point takes the
+// candidates of the last align()'s point with its label (match_moving_points).
 bool Registration::keep_grid(const PointCloud& fixed, std::size_t n, double ell, const PointCloud& moving,
                              std::size_t nm) {
   if (grid_cloud_ != &fixed || grid_points_ != n || !(ell <= grid_ell_) || slots_ == 0) return false;
   if (!set_length_scale(ell, kSlackFraction) || static_cast<double>(reach_sq_) > cell_ * cell_) return false;
-  for (std::size_t j = 0; j < nm; ++j) {
-    if (candidate_count_[j] == kUncollected) continue;
-    for (std::size_t c = 0; c < kFeatureDim; ++c)
-      if (collected_label_[kFeatureDim * j + c] != moving.feature_channel(c)[j]) candidate_count_[j] = kUncollected;
-  }
+  match_moving_points(moving, nm);
   return true;
+}
+
+// A frame selected again keeps its pixels in order but may drop one (no depth where the new motion
+// looks) or keep one it had dropped, which shifts every later index. So point j takes the list of
+// the first point k at or after the last match, within kMatchWindow, whose label was j's: the
+// pixels' order is kept, and a label all but names a pixel. A list is valid for any point with
+// its label within its margin (point_sums checks where it was collected), so a coincidence of
+// labels costs nothing but a collection.
+void Registration::match_moving_points(const PointCloud& moving, std::size_t nm) {
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < nm; ++j) {
+    source_[j] = kNoSource;
+    for (std::size_t d = 0; d < kMatchWindow && k + d < labelled_points_; ++d) {
+      if (!has_label(k + d, moving, j)) continue;
+      source_[j] = static_cast<std::uint32_t>(k + d);
+      k += d + 1;
+      break;
+    }
+  }
+  // The sources increase with j, so lists moving up (source < j) are moved from the last one
+  // down, and lists moving down from the first one up: no list is overwritten before it moves.
+  for (std::size_t j = nm; j-- > 0;)
+    if (source_[j] < j) move_candidates(source_[j], j);
+  for (std::size_t j = 0; j < nm; ++j)
+    if (source_[j] != kNoSource && source_[j] > j) move_candidates(source_[j], j);
+  for (std::size_t j = 0; j < nm; ++j)
+    if (source_[j] == kNoSource || !collected_with(j, moving)) candidate_count_[j] = kUncollected;
+}
+
+// Whether point j's list was collected for the label it has now.
+bool Registration::collected_with(std::size_t j, const PointCloud& moving) const {
+  for (std::size_t c = 0; c < kFeatureDim; ++c)
+    if (collected_label_[kFeatureDim * j + c] != moving.feature_channel(c)[j]) return false;
+  return true;
+}
+
+bool Registration::has_label(std::size_t k, const PointCloud& moving, std::size_t j) const {
+  for (std::size_t c = 0; c < kFeatureDim; ++c)
+    if (moving_label_[kFeatureDim * k + c] != moving.feature_channel(c)[j]) return false;
+  return true;
+}
+
+void Registration::move_candidates(std::size_t from, std::size_t to) {
+  const std::uint16_t count = candidate_count_[from];
+  candidate_count_[to] = count;
+  if (count == kUncollected) return;
+  std::copy_n(&candidate_fixed_[from * slots_], count, &candidate_fixed_[to * slots_]);
+  std::copy_n(&candidate_colour_[from * slots_], count, &candidate_colour_[to * slots_]);
+  candidate_weight_[to] = candidate_weight_[from];
+  std::copy_n(&collected_label_[kFeatureDim * from], kFeatureDim, &collected_label_[kFeatureDim * to]);
+  std::copy_n(&collected_at_[4 * from], 4, &collected_at_[4 * to]);
+}
+
+// The moving points' labels in their order, for the next align()'s match_moving_points.
+void Registration::record_labels(const PointCloud& moving, std::size_t nm) {
+  for (std::size_t j = 0; j < nm; ++j)
+    for (std::size_t c = 0; c < kFeatureDim; ++c) moving_label_[kFeatureDim * j + c] = moving.feature_channel(c)[j];
+  labelled_points_ = nm;
 }
 
 bool Registration::View::sees(const Eigen::Vector3f& p) const {
@@ -428,6 +488,7 @@ RegistrationResult Registration::align(const PointCloud& fixed, const PointCloud
   double ell = ell_start > 0 ? std::max(ell_start, ell_min) : parameters_.ell_init;
   if (reuse != Reuse::kCandidates || !keep_grid(fixed, nf, ell, moving, nm))
     build_grid(fixed, nf, ell, slots_ > 0 ? kSlackFraction : 0.0);
+  if (slots_ > 0) record_labels(moving, nm);
   visibility_ = parameters_.mutual_visibility;
   if (visibility_) {
     fixed_view_ = view_of(fixed, nf);

@@ -78,8 +78,10 @@
 // list depends on the point's label and on where it was collected, and the validity test above
 // already catches a point that moved beyond its margin. So with Reuse::kCandidates align() keeps
 // the grid (when it is at least as wide as the start's reach) and every candidate list whose
-// point still has its label. Where no point's candidates exceed the budget, the same pairs count
-// as in a fresh align().
+// point still has its label. The lists follow the labels, not the indices: a frame selected again
+// keeps its pixels' order but may drop a point or keep one it had dropped, which shifts every later
+// index (matching by index kept 50 lists of ~2 900 on fr1/rpy). Where no point's candidates exceed
+// the budget, the same pairs count as in a fresh align().
 //
 // Fixed memory: every buffer is sized at construction from the capacities; after construction
 // align() and inner_product() do not allocate. Threads (optional) split the moving cloud into
@@ -129,9 +131,9 @@ struct RegistrationResult {
 enum class Reuse {
   kNothing,
   // `fixed` is the last align()'s fixed cloud, unchanged, and `moving` holds (some of) the last
-  // moving cloud's points, each at its index with its label, moved a little: a frame selected
-  // again with another motion (odometry/keyframe_odometry.hpp). The grid and the candidates of
-  // every point whose label is the same stay; the rest collect as usual.
+  // moving cloud's points in their order with their labels, moved a little (some dropped, some
+  // added): a frame selected again with another motion (odometry/keyframe_odometry.hpp). The grid
+  // and the candidates of every point found again by its label stay; the rest collect as usual.
   kCandidates
 };
 
@@ -203,6 +205,11 @@ class Registration {
   bool set_length_scale(double ell, double slack_fraction);
   bool build_grid(const PointCloud& fixed, std::size_t n, double ell, double slack_fraction);
   bool keep_grid(const PointCloud& fixed, std::size_t n, double ell, const PointCloud& moving, std::size_t nm);
+  void match_moving_points(const PointCloud& moving, std::size_t nm);
+  [[nodiscard]] bool has_label(std::size_t k, const PointCloud& moving, std::size_t j) const;
+  [[nodiscard]] bool collected_with(std::size_t j, const PointCloud& moving) const;
+  void move_candidates(std::size_t from, std::size_t to);
+  void record_labels(const PointCloud& moving, std::size_t nm);
   void find_cells(const Eigen::Vector3f& w, Cells& cells) const;
   void accumulate(const PointCloud& moving, std::size_t n, const core::SE3& T, Sums& total, std::size_t stride = 1,
                   bool candidates = false);
@@ -249,6 +256,9 @@ class Registration {
   std::vector<std::uint16_t> candidate_count_;  // or kUncollected
   std::vector<float> candidate_weight_;         // fixed points each candidate stands for (the budget)
   std::vector<float> collected_label_;          // kFeatureDim per moving point: its label when collected
+  std::vector<float> moving_label_;             // kFeatureDim per moving point of the last align(), in order
+  std::size_t labelled_points_ = 0;
+  std::vector<std::uint32_t> source_;  // per moving point: the last align()'s point whose list it takes
   std::vector<std::uint32_t> scratch_fixed_;    // per thread: every candidate of one point, before the budget
   std::vector<float> scratch_colour_;
   std::vector<float> collected_at_;  // 4 per moving point: where it was when collected, the reach then
