@@ -145,6 +145,7 @@ PointSelector::PointSelector(int width, int height, const core::SelectionParamet
   column_cell_.resize(W);
   cell_best_.resize(n);  // enough for s = 1
   cell_magnitude_.resize(n);
+  cell_depth_.resize(n);
 }
 
 void PointSelector::grey_row(const std::uint8_t* bgr, float* grey) const {
@@ -465,7 +466,7 @@ SelectionResult PointSelector::select(const core::RgbdFrame& frame, PointCloud& 
   choose_winners(s);
   result.cell_size = s;
   last_ = {frame.bgr.data, frame.depth.data, frame.index, frame.timestamp, result};
-  back_project(frame, cloud, colour_T_depth, twist, result);
+  back_project(frame, cloud, colour_T_depth, twist, result, false);
   return result;
 }
 
@@ -477,13 +478,13 @@ SelectionResult PointSelector::reselect(const core::RgbdFrame& frame, PointCloud
   cloud.clear();
   SelectionResult result = *last_.result;
   result.status = SelectionStatus::kOk;
-  back_project(frame, cloud, colour_T_depth, twist, result);
+  back_project(frame, cloud, colour_T_depth, twist, result, true);
   return result;
 }
 
 // 4. Back-project the winners, in row-major order of their cells (deterministic).
 void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
-                                 const core::Vector6d& twist, SelectionResult& result) {
+                                 const core::Vector6d& twist, SelectionResult& result, bool again) {
   const auto& K = frame.intrinsics;
   const auto W = static_cast<std::size_t>(width_);
   const int s = result.cell_size;
@@ -510,7 +511,9 @@ void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud
     const auto p = static_cast<std::size_t>(best);
     const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
     const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
-    const float z = window_depth(frame.depth, u, v, window, tolerance, valid) * depth_inv;
+    float& own_depth = cell_depth_[static_cast<std::size_t>(c)];
+    if (!again) own_depth = window_depth(frame.depth, u, v, window, tolerance, valid);
+    const float z = own_depth * depth_inv;
     const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
     const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
                     gradient_weight * (grey_[p + W] - grey_[p - W])};

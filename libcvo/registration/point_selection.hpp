@@ -119,8 +119,10 @@ class PointSelector {
   void choose_winners(int s);
   void build_ray_table(const core::Intrinsics& intrinsics);
   [[nodiscard]] RawDepthRange valid_depths(const core::Intrinsics& K) const;
+  // `again`: the winners' own depths are those select() read (cell_depth_), which depend on the
+  // images alone.
   void back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
-                    const core::Vector6d& twist, SelectionResult& result);
+                    const core::Vector6d& twist, SelectionResult& result, bool again);
 
   // The frame the last select() chose winners for (reselect()); no result: none.
   struct LastSelection {
@@ -150,6 +152,7 @@ class PointSelector {
   std::vector<std::int32_t> column_cell_;  // per column: its cell's (winners) or the next cell's first column (counts)
   std::vector<std::int32_t> cell_best_;    // per cell: pixel index of its strongest candidate or -1
   std::vector<float> cell_magnitude_;      // per cell: that candidate's |g|
+  std::vector<float> cell_depth_;          // per cell: that candidate's raw depth over its window (step 4)
   // Distorted cameras only: undistorted (x/z, y/z) per pixel, row-major, for ray_intrinsics_.
   std::vector<float> rays_;
   core::Intrinsics ray_intrinsics_{};
