@@ -5,21 +5,21 @@
 #include <string>
 #include <vector>
 
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/store_records.hpp"
 #include "fuzz/harness.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/store_records.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto file = cvo::fuzz::scratch_dir() / "keyframes.store";
   cvo::fuzz::write_file(file, cvo::fuzz::as_text(data, size));
   cvo::fuzz::expect_refusal_or_success([&] {
-    const auto snapshot = cvo::daemon::backendd::read_store(file);
+    const auto snapshot = cvo::store::read_store(file);
     if (snapshot.bytes.size() != size || !std::equal(snapshot.bytes.begin(), snapshot.bytes.end(), data))
       cvo::fuzz::fail("read_store did not read the file as it is");
-    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
+    std::vector<cvo::store::StoredRecord> recovered;
     std::string warning;
     {
-      cvo::daemon::backendd::KeyframeStore store(file, recovered, warning);
+      cvo::store::KeyframeStore store(file, recovered, warning);
       // Each recovered record says where it lies in the store as recovery left it (issue 27: what a
       // restart discards as garbage is named so).
       for (const auto& r : recovered) {
@@ -35,15 +35,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (std::size_t i = 0; i < recovered.size(); ++i) {
       const auto& r = snapshot.scan.records[i];
       const auto* p = snapshot.payload(r);
-      if (r.kind != recovered[i].kind || !std::equal(p, p + cvo::daemon::backendd::StoreSnapshot::payload_bytes(r),
+      if (r.kind != recovered[i].kind || !std::equal(p, p + cvo::store::StoreSnapshot::payload_bytes(r),
                                                      recovered[i].payload.begin(), recovered[i].payload.end()))
         cvo::fuzz::fail("record " + std::to_string(i) + " differs between read_store and recovery");
     }
     // keyframe_store.hpp's promise: after recovery FILE holds exactly the intact records, so the
     // next start reads them all again and finds nothing damaged.
-    std::vector<cvo::daemon::backendd::StoredRecord> again;
+    std::vector<cvo::store::StoredRecord> again;
     std::string warning_again;
-    { cvo::daemon::backendd::KeyframeStore store(file, again, warning_again); }
+    { cvo::store::KeyframeStore store(file, again, warning_again); }
     if (!warning_again.empty() || again.size() != recovered.size())
       cvo::fuzz::fail("the recovered store is not clean: " + warning_again);
     for (std::size_t i = 0; i < again.size(); ++i)

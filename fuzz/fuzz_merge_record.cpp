@@ -1,10 +1,10 @@
-// A keyframe store's merge record, and its settled record, (daemon/backendd/merge_record.hpp) as
+// A keyframe store's merge record, and its settled record, (libcvo/store/merge_record.hpp) as
 // cvo-backendd's start-up and cvo-map decode them: any bytes are refused with a reason, or decode to a merge whose
 // encoding decodes again to the same encoding (what a restarted store replays is what was stored).
 #include <string>
 
-#include "daemon/backendd/merge_record.hpp"
 #include "fuzz/harness.hpp"
+#include "libcvo/store/merge_record.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   cvo::fuzz::expect_refusal_or_success([&] {
@@ -20,17 +20,17 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         cvo::fuzz::fail(std::string("a ") + what + " record refused without a reason");
       }
     };
-    stable("settled", cvo::daemon::backendd::decode_settled, cvo::daemon::backendd::encode_settled);
-    stable("tally", cvo::daemon::backendd::decode_tally, cvo::daemon::backendd::encode_tally);
-    const auto merge = cvo::daemon::backendd::decode_merge(data, size, &error);
+    stable("settled", cvo::store::decode_settled, cvo::store::encode_settled);
+    stable("tally", cvo::store::decode_tally, cvo::store::encode_tally);
+    const auto merge = cvo::store::decode_merge(data, size, &error);
     if (!merge) {
       if (error.empty()) cvo::fuzz::fail("a merge record refused without a reason");
       return;
     }
-    const auto bytes = cvo::daemon::backendd::encode_merge(*merge);
-    const auto again = cvo::daemon::backendd::decode_merge(bytes.data(), bytes.size(), &error);
+    const auto bytes = cvo::store::encode_merge(*merge);
+    const auto again = cvo::store::decode_merge(bytes.data(), bytes.size(), &error);
     if (!again) cvo::fuzz::fail("a decoded merge record encodes to bytes that do not decode: " + error);
-    if (cvo::daemon::backendd::encode_merge(*again) != bytes)
+    if (cvo::store::encode_merge(*again) != bytes)
       cvo::fuzz::fail("a decoded merge record does not encode to the same bytes twice");
   });
   return 0;

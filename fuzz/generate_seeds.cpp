@@ -11,13 +11,13 @@
 
 #include <opencv2/core.hpp>
 
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/merge_record.hpp"
 #include "fuzz/auth_harness.hpp"
 #include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/merge_record.hpp"
 #include "tests/lcm/sample_messages.hpp"
 
 namespace {
@@ -175,7 +175,7 @@ int main(int argc, char** argv) try {
 
   // A keyframe store as cvo-backendd leaves it, then the same cut short in its last record (what a
   // crash during a write leaves).
-  using cvo::daemon::backendd::RecordKind;
+  using cvo::store::RecordKind;
   // A new store at `file`: the keyframe, its local graph, then `more` (kind, payload) records;
   // `discard_graph`: then a tombstone naming the local graph (a settled revisit's).
   const auto keyframe_store = [&](const fs::path& file,
@@ -183,10 +183,10 @@ int main(int argc, char** argv) try {
                                   bool discard_graph = false) {
     fs::create_directories(file.parent_path());
     fs::remove(file);
-    std::vector<cvo::daemon::backendd::StoredRecord> recovered;
+    std::vector<cvo::store::StoredRecord> recovered;
     std::string warning;
-    cvo::daemon::backendd::KeyframeStore store(file, recovered, warning);
-    cvo::daemon::backendd::RecordRef graph_at;
+    cvo::store::KeyframeStore store(file, recovered, warning);
+    cvo::store::RecordRef graph_at;
     store.append(RecordKind::kKeyframe, encode(keyframe_message));
     store.append(RecordKind::kLocalGraph, graph, &graph_at);
     for (const auto& [kind, payload] : more) store.append(kind, payload);
@@ -215,7 +215,7 @@ int main(int argc, char** argv) try {
   loop.inliers = 40;
   merge.joining = {loop};
   merge.others = {loop, loop};
-  const auto merge_bytes = cvo::daemon::backendd::encode_merge(merge);
+  const auto merge_bytes = cvo::store::encode_merge(merge);
   write(out / "merge_record/sample", merge_bytes);
   keyframe_store(out / "keyframe_store/with-merge", {{RecordKind::kMerge, merge_bytes}});
   cvo::slam::SettledEdge settled;
@@ -224,7 +224,7 @@ int main(int argc, char** argv) try {
   settled.to_session = keyframe.session + 1;
   settled.to_id = 4;
   settled.measurement = merge.relative;
-  const auto settled_bytes = cvo::daemon::backendd::encode_settled(settled);
+  const auto settled_bytes = cvo::store::encode_settled(settled);
   write(out / "merge_record/settled", settled_bytes);
   keyframe_store(out / "keyframe_store/settled-and-discarded", {{RecordKind::kSettled, settled_bytes}}, true);
   const auto store_size = fs::file_size(store_file);

@@ -24,8 +24,6 @@
 #include "cvo_lcm/map_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "daemon/backendd/map_schedule.hpp"
-#include "daemon/backendd/merge_record.hpp"
-#include "daemon/backendd/store_merges.hpp"
 #include "daemon/common/realtime.hpp"
 #include "daemon/common/signals.hpp"
 #include "daemon/common/status.hpp"
@@ -48,8 +46,11 @@
 #include "libcvo/mapping/mapping.hpp"
 #include "libcvo/slam/map_robots.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "libcvo/store/merge_record.hpp"
+#include "libcvo/store/store_merges.hpp"
 
 namespace cvo::daemon::backendd {
+
 namespace {
 
 // Why the back end stopped asking for keyframes (KeyframeGaps::GivenUp::Reason), for its note.
@@ -103,7 +104,7 @@ std::string publish_url(const config::BackenddParameters& b) {
 bool is_log(const std::string& url) { return url.starts_with("file://"); }
 
 std::string keyframe_name(core::SessionId session, std::int64_t id) {
-  return describe(MessageKey{RecordKind::kKeyframe, session, id});
+  return describe(store::MessageKey{store::RecordKind::kKeyframe, session, id});
 }
 
 // What CVO_STATUS, systemd and the closing note say of the map.
@@ -226,8 +227,8 @@ struct Backendd::Work {
   std::vector<std::string> joins;  // every join noted, repeated in the closing note
   MapSummary summary;              // of the last map published
   GridSummary grid;
-  std::optional<StoreMerges> merges;  // none in localization mode: the store is only read
-  bool grid_due = false;              // the grid changed since the last CVO_GRID
+  std::optional<store::StoreMerges> merges;  // none in localization mode: the store is only read
+  bool grid_due = false;                     // the grid changed since the last CVO_GRID
   std::int64_t local_graphs = 0, processed = 0, processed_at_last_status = 0;
   Clock::time_point last_status = Clock::now();
 };
@@ -240,7 +241,7 @@ Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(c
   // good (publish_url's check below sees lcm_url only when the two are one).
   if (!::lcm::LCM(b.lcm_url).good())
     throw io::InputError("backendd.lcm_url", "cannot open LCM provider '" + b.lcm_url + "'");
-  work_ = std::make_unique<Work>(loop_closure::Vocabulary::load(resolve_vocabulary(b.vocabulary)), config_);
+  work_ = std::make_unique<Work>(loop_closure::Vocabulary::load(store::resolve_vocabulary(b.vocabulary)), config_);
   if (!work_->lcm.good())
     throw io::InputError(b.publish_url == "lcm_url" ? "backendd.lcm_url" : "backendd.publish_url",
                          "cannot open LCM provider '" + publish_url(b) + "'");
@@ -249,7 +250,7 @@ Backendd::Backendd(config::Config config) : config_(std::move(config)), queue_(c
     return;
   }
   std::string warning;
-  store_ = std::make_unique<KeyframeStore>(b.store, recovered_, warning, b.unsaved_records_max);
+  store_ = std::make_unique<store::KeyframeStore>(b.store, recovered_, warning, b.unsaved_records_max);
   if (!warning.empty()) notes_.note("warning: " + warning);
   work_->merges.emplace(*store_);
   note_store_change();  // a new store on a full disk: started degraded
@@ -260,12 +261,12 @@ void Backendd::read_map_store() {
   const auto& file = config_.backendd.store;
   if (!std::filesystem::exists(file))
     throw io::InputError("backendd.store", "no keyframe store '" + file + "': localization needs a stored map");
-  const StoreSnapshot snapshot = read_store(file);
+  const store::StoreSnapshot snapshot = store::read_store(file);
   if (!snapshot.scan.clean())
-    notes_.note("warning: " + describe_damage(file, snapshot.scan, "a write under way", "it is left out"));
+    notes_.note("warning: " + store::describe_damage(file, snapshot.scan, "a write under way", "it is left out"));
   for (const auto& r : snapshot.scan.records) {
     const std::uint8_t* payload = snapshot.payload(r);
-    recovered_.push_back({r.kind, {payload, payload + StoreSnapshot::payload_bytes(r)}});
+    recovered_.push_back({r.kind, {payload, payload + store::StoreSnapshot::payload_bytes(r)}});
   }
 }
 
@@ -303,7 +304,7 @@ int Backendd::run() {
 
 // The store's records pass the same door as received messages (replayed first, in order), so a
 // store written before the door, or a damaged one, cannot feed the mapper a repeat.
-void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
+void Backendd::let_in_recovered(std::vector<store::StoredRecord> recovered) {
   for (auto& record : recovered) {
     std::string why;
     // The back end's own records name no message: they do not pass the door.
@@ -314,33 +315,34 @@ void Backendd::let_in_recovered(std::vector<StoredRecord> recovered) {
     };
     const auto* payload = record.payload.data();
     const auto size = record.payload.size();
-    if (record.kind == RecordKind::kMerge) {
-      auto merge = decode_merge(payload, size, &why);
+    if (record.kind == store::RecordKind::kMerge) {
+      auto merge = store::decode_merge(payload, size, &why);
       if (merge) held_.merged(merge->session, merge->id);
       queue_decoded(std::move(merge));
       continue;
     }
-    if (record.kind == RecordKind::kSettled) {
-      queue_decoded(decode_settled(payload, size, &why));
+    if (record.kind == store::RecordKind::kSettled) {
+      queue_decoded(store::decode_settled(payload, size, &why));
       continue;
     }
-    if (record.kind == RecordKind::kTally) {
-      queue_decoded(decode_tally(payload, size, &why));
+    if (record.kind == store::RecordKind::kTally) {
+      queue_decoded(store::decode_tally(payload, size, &why));
       continue;
     }
     // A record of an older schema (another fingerprint or version), or a repeat, is skipped, said here.
-    auto message = let_in_stored(door_, record.kind, record.payload.data(), record.payload.size(), &why);
+    auto message = store::let_in_stored(door_, record.kind, record.payload.data(), record.payload.size(), &why);
     const std::int64_t sender = stored_sender(record.payload);
     record.payload = {};  // decoded: the message holds what the bytes did
     if (!message) {
       notes_.note_limited("stored skipped", why);
       continue;
     }
-    const MessageKey key = message->key;
+    const store::MessageKey key = message->key;
     quota_.count(key.session, sender);
-    held_.held(key.session, key.id, key.kind == RecordKind::kLocalGraph);
-    gaps_.seen(record.kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
-               key.session, key.id, Clock::now());  // a gap in the store is asked for too
+    held_.held(key.session, key.id, key.kind == store::RecordKind::kLocalGraph);
+    gaps_.seen(
+        record.kind == store::RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
+        key.session, key.id, Clock::now());  // a gap in the store is asked for too
     ++replayed_pending_;
     queue_.push({std::move(*message), std::nullopt, record.where});
   }
@@ -359,13 +361,13 @@ void Backendd::receive_loop() {
         then(buffer->data, buffer->data_size, *sender);
     }
   };
-  const auto record = [this](RecordKind kind) {
+  const auto record = [this](store::RecordKind kind) {
     return [this, kind](const void* data, std::size_t size, std::int64_t sender) {
       receive(kind, static_cast<const std::uint8_t*>(data), size, sender);
     };
   };
-  Verified keyframes{this, &verifier, record(RecordKind::kKeyframe)},
-      local_graphs{this, &verifier, record(RecordKind::kLocalGraph)},
+  Verified keyframes{this, &verifier, record(store::RecordKind::kKeyframe)},
+      local_graphs{this, &verifier, record(store::RecordKind::kLocalGraph)},
       slices{this, &verifier, [this](const void*d, std::size_t n, std::int64_t s) { receive_slice(d, n, s); }},
       poses{this, &verifier, [this](const void*d, std::size_t n, std::int64_t) { saw_pose(d, n); }},
       statuses{this, &verifier, [this](const void*d, std::size_t n, std::int64_t) { saw_status(d, n); }};
@@ -414,8 +416,8 @@ std::optional<std::int64_t> Backendd::authentic(auth::Verifier& verifier, const 
   return std::nullopt;
 }
 
-void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender) {
-  const std::string channel = kind == RecordKind::kKeyframe ? "CVO_KEYFRAME" : "CVO_LOCAL_GRAPH";
+void Backendd::receive(store::RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender) {
+  const std::string channel = kind == store::RecordKind::kKeyframe ? "CVO_KEYFRAME" : "CVO_LOCAL_GRAPH";
   const auto refuse = [&](std::size_t why, const std::string& detail) {
     ++bad_messages_[why];
     notes_.note_limited("refused " + std::to_string(why), detail);
@@ -423,26 +425,26 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
   try {
     std::string error;
     std::size_t bad = cvo_lcm::status_t::BAD_BODY;
-    const auto message = identify(kind, data, size, &error, &bad);
+    const auto message = store::identify(kind, data, size, &error, &bad);
     if (!message) return refuse(bad, "skipped " + channel + ": " + error);
-    const MessageKey key = message->key;
-    const auto crc = content_crc(data, size);  // a re-send, signed afresh, is a repeat
+    const store::MessageKey key = message->key;
+    const auto crc = store::content_crc(data, size);  // a re-send, signed afresh, is a repeat
     switch (door_.check(key, crc)) {
-      case Admission::kRepeat:
+      case store::Admission::kRepeat:
         return notes_.note_limited("repeat", describe(key) + " received again: stored already, not used twice");
-      case Admission::kConflict:
+      case store::Admission::kConflict:
         return refuse(cvo_lcm::status_t::BAD_CONFLICT,
                       describe(key) + " repeats an existing one with other content" +
                           (sender != 0 ? " (sender " + auth::key_name(sender) + ")" : "") + ": refused");
-      case Admission::kNew: break;
+      case store::Admission::kNew: break;
     }
     if (const std::string over = quota_.refusal(key.session, sender); !over.empty())
       return refuse(cvo_lcm::status_t::BAD_QUOTA, describe(key) + " refused: " + over);
-    auto value = usable(*message, &error, &bad);
+    auto value = store::usable(*message, &error, &bad);
     if (!value) return refuse(bad, "skipped " + channel + ": " + error);
     // A graph is applied to its keyframe: one that never came is asked for again (a gap), and the
     // tracker sends the keyframe, then the graph.
-    if (kind == RecordKind::kLocalGraph && !door_.knows({RecordKind::kKeyframe, key.session, key.id})) {
+    if (kind == store::RecordKind::kLocalGraph && !door_.knows({store::RecordKind::kKeyframe, key.session, key.id})) {
       gaps_.seen(KeyframeGaps::Seen::kGraphWithoutKeyframe, key.session, key.id, Clock::now());
       return refuse(cvo_lcm::status_t::BAD_UNKNOWN_KEYFRAME, "skipped " + describe(key) + ": its keyframe never came");
     }
@@ -459,22 +461,22 @@ void Backendd::receive(RecordKind kind, const std::uint8_t* data, std::size_t si
                                                    " records wait for the back end already");
     }
     // Used in any case; what the store cannot write now it holds and writes later, within a bound.
-    RecordRef where;
+    store::RecordRef where;
     const auto appended =
-        store_ ? store_->append(kind, std::vector<std::uint8_t>(data, data + size), &where) : Appended::kStored;
-    if (store_ && appended == Appended::kNotDurable)
+        store_ ? store_->append(kind, std::vector<std::uint8_t>(data, data + size), &where) : store::Appended::kStored;
+    if (store_ && appended == store::Appended::kNotDurable)
       notes_.note_limited("not stored", "warning: " + describe(key) + " used but not stored (lost on restart): " +
                                             describe(store_->health()) + " (backendd.unsaved_records_max)");
     note_store_change();
     door_.admit(key, crc);
-    if (appended == Appended::kStored) held_.held(key.session, key.id, kind == RecordKind::kLocalGraph);
+    if (appended == store::Appended::kStored) held_.held(key.session, key.id, kind == store::RecordKind::kLocalGraph);
     quota_.count(key.session, sender);
-    gaps_.seen(kind == RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
+    gaps_.seen(kind == store::RecordKind::kKeyframe ? KeyframeGaps::Seen::kKeyframe : KeyframeGaps::Seen::kLocalGraph,
                key.session, key.id, Clock::now());
     // Had the store failed just now, the record is queued whole, past the bound by this one.
     QueuedRecord queued{std::move(*value), Clock::now()};
-    if (appended == Appended::kStored && store_) queued.stored = where;
-    if (to_store && appended == Appended::kStored) {
+    if (appended == store::Appended::kStored && store_) queued.stored = where;
+    if (to_store && appended == store::Appended::kStored) {
       queued.content = where;
       ++waiting_in_store_;
       ++waited_in_store_;
@@ -500,13 +502,14 @@ void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t se
   const auto chunk = decoded<cvo_lcm::keyframe_chunk_t>(data, size, "CVO_KEYFRAME_CHUNK");
   if (!chunk) return;
   const bool graph = chunk->message == cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH;
-  const MessageKey key{graph ? RecordKind::kLocalGraph : RecordKind::kKeyframe, chunk->session, chunk->id};
+  const store::MessageKey key{graph ? store::RecordKind::kLocalGraph : store::RecordKind::kKeyframe, chunk->session,
+                              chunk->id};
   const auto refuse = [&](std::size_t why, const std::string& detail) {
     ++bad_messages_[why];
     notes_.note_limited("refused " + std::to_string(why), detail);
   };
   if (door_.knows(key)) {
-    if (door_.check(key, static_cast<std::uint32_t>(chunk->message_crc)) == Admission::kConflict)
+    if (door_.check(key, static_cast<std::uint32_t>(chunk->message_crc)) == store::Admission::kConflict)
       refuse(cvo_lcm::status_t::BAD_CONFLICT, "a slice of " + describe(key) + " with other content: refused");
     return;  // a repeat: a slice re-sent for another, or late
   }
@@ -518,7 +521,7 @@ void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t se
                   "skipped CVO_KEYFRAME_CHUNK of " + describe(key) + ": " + added.why);
   if (added.outcome != Outcome::kComplete) return;
   const KeyframeName keyframe{key.session, key.id};
-  if (graph && !door_.knows({RecordKind::kKeyframe, key.session, key.id})) {
+  if (graph && !door_.knows({store::RecordKind::kKeyframe, key.session, key.id})) {
     // Complete before its keyframe (whose slices are still missing some): kept for it, not refused
     // and asked for again; past kMaxEarlyGraphs the first by name goes (asked for as any lost graph).
     if (early_graphs_.size() >= kMaxEarlyGraphs) early_graphs_.erase(early_graphs_.begin());
@@ -530,8 +533,8 @@ void Backendd::receive_slice(const void* data, std::size_t size, std::int64_t se
   if (const auto early = early_graphs_.find(keyframe); !graph && early != early_graphs_.end()) {
     const EarlyGraph g = std::move(early->second);
     early_graphs_.erase(early);
-    receive(RecordKind::kLocalGraph, g.message.data(), g.message.size(), g.sender);
-    if (door_.knows({RecordKind::kLocalGraph, key.session, key.id}))
+    receive(store::RecordKind::kLocalGraph, g.message.data(), g.message.size(), g.sender);
+    if (door_.knows({store::RecordKind::kLocalGraph, key.session, key.id}))
       slices_.forget({chunk->session, chunk->id, cvo_lcm::keyframe_chunk_t::LOCAL_GRAPH});
   }
 }
@@ -734,7 +737,7 @@ void Backendd::process(QueuedRecord& queued) {
   if (queued.arrived) guard_.run("the start of localization", [&] { localize_when_stored(); });
   guard_.run("record", [&] { process_record(queued); });
   // A service for months: merged keyframes older than their session's newest are forgotten
-  // (slam::Mapper::settle), and their records become settled records (store_merges.hpp).
+  // (slam::Mapper::settle), and their records become settled records (libcvo/store/store_merges.hpp).
   if (!work_->mapper.localizing_only()) guard_.run("settling", [&] { settle(); });
   if (!queued.arrived && --replayed_pending_ == 0) guard_.run("the store's map", [&] { replayed(); });
   ++work_->processed;
@@ -783,7 +786,7 @@ void Backendd::process_record(QueuedRecord& queued) {
   if (const auto* keyframe = std::get_if<lcm::Keyframe>(&*value))
     apply_keyframe(*keyframe, queued);
   else
-    apply_local_graph(std::get<LocalGraphRecord>(*value), queued);
+    apply_local_graph(std::get<store::LocalGraphRecord>(*value), queued);
 }
 
 // The stored map, optimised as a whole once, becomes read only; sessions from now on are localized.
@@ -803,28 +806,28 @@ void Backendd::start_localizing() {
 
 // The record's value, decoded here only if it was not at the door: a replayed message's images, a
 // record that waited in the store whole.
-std::optional<RecordValue> Backendd::value_of(QueuedRecord& queued, std::string* error) {
-  if (auto* value = std::get_if<RecordValue>(&queued.content)) return std::move(*value);
-  std::optional<Identified> message;
-  if (auto* replayed = std::get_if<Identified>(&queued.content)) {
+std::optional<store::RecordValue> Backendd::value_of(QueuedRecord& queued, std::string* error) {
+  if (auto* value = std::get_if<store::RecordValue>(&queued.content)) return std::move(*value);
+  std::optional<store::Identified> message;
+  if (auto* replayed = std::get_if<store::Identified>(&queued.content)) {
     message = std::move(*replayed);
   } else {
     --waiting_in_store_;
-    const auto record = store_->read(std::get<RecordRef>(queued.content), error);
-    if (record) message = identify(record->kind, record->payload.data(), record->payload.size(), error, nullptr);
+    const auto record = store_->read(std::get<store::RecordRef>(queued.content), error);
+    if (record) message = store::identify(record->kind, record->payload.data(), record->payload.size(), error, nullptr);
     if (!message) {
       *error = "a record that waited in the store is lost: " + *error;
       return std::nullopt;
     }
   }
-  auto value = usable(*message, error, nullptr);
+  auto value = store::usable(*message, error, nullptr);
   if (!value) *error = "stored " + describe(message->key) + " unreadable: " + *error;
   return value;
 }
 
 void Backendd::apply_keyframe(const lcm::Keyframe& k, const QueuedRecord& queued) {
   Work& w = *work_;
-  const auto outcome = apply(w.mapper, k);
+  const auto outcome = store::apply(w.mapper, k);
   if (outcome.duplicate) return;
   w.first_arrival.try_emplace(k.session, queued.arrived);
   if (w.merges) w.merges->keyframe(k.session, k.id, queued.stored);
@@ -850,7 +853,7 @@ void Backendd::apply_keyframe(const lcm::Keyframe& k, const QueuedRecord& queued
 void Backendd::store_merge(const slam::KeyframeMerge& merge, bool replayed) {
   if (!work_->merges) return;
   const auto compactions = work_->merges->compactions();
-  if (work_->merges->merged(merge, replayed, waiting_in_store_ == 0) == Appended::kNotDurable)
+  if (work_->merges->merged(merge, replayed, waiting_in_store_ == 0) == store::Appended::kNotDurable)
     notes_.note_limited("not stored", "warning: the merge of " + keyframe_name(merge.session, merge.id) +
                                           " not stored: its keyframe's record stays (" + describe(store_->health()) +
                                           ")");
@@ -861,21 +864,21 @@ void Backendd::store_merge(const slam::KeyframeMerge& merge, bool replayed) {
 
 // A stored merge record: the keyframe's own replay merged it already, or (its record compacted
 // away) it is registered from the merge alone.
-void Backendd::apply_merge(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& stored) {
+void Backendd::apply_merge(const slam::KeyframeMerge& merge, const std::optional<store::RecordRef>& stored) {
   work_->mapper.apply_merge(merge);
   if (work_->merges) work_->merges->record_replayed(merge, stored, waiting_in_store_ == 0);
   publish_changes(merge.session, {}, true);
 }
 
-// A stored settled record (store_merges.hpp): what settled revisits left to its pair of keyframes.
-void Backendd::apply_settled(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored) {
+// A stored settled record (libcvo/store/store_merges.hpp): what settled revisits left to its pair of keyframes.
+void Backendd::apply_settled(const slam::SettledEdge& edge, const std::optional<store::RecordRef>& stored) {
   work_->mapper.apply_settled(edge);
   if (work_->merges) work_->merges->settled_replayed(edge, stored, waiting_in_store_ == 0);
   publish_changes(std::nullopt, {}, true);
 }
 
-void Backendd::apply_local_graph(const LocalGraphRecord& record, const QueuedRecord& queued) {
-  const auto joined = apply(work_->mapper, record);
+void Backendd::apply_local_graph(const store::LocalGraphRecord& record, const QueuedRecord& queued) {
+  const auto joined = store::apply(work_->mapper, record);
   if (work_->merges)
     work_->merges->local_graph(record.session, record.keyframe_id, queued.stored,
                                work_->mapper.merged(record.session, record.keyframe_id));
@@ -1004,7 +1007,7 @@ void Backendd::publish_status(std::int8_t state) {
   s.robot = config::robot_name(config::kHostName);  // its host
   s.session = 0;                                    // the back end is no tracker session
   // A store that does not keep every record is the daemon's degraded state (the stop says itself).
-  const auto store = store_ ? store_->health() : StoreHealth{};
+  const auto store = store_ ? store_->health() : store::StoreHealth{};
   s.state = store.degraded() && state != cvo_lcm::status_t::STATE_STOPPING ? cvo_lcm::status_t::STATE_DEGRADED : state;
   s.unsaved_records = static_cast<std::int64_t>(store.unsaved);
   const double elapsed = std::chrono::duration<double>(now - w.last_status).count();

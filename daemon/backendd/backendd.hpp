@@ -5,7 +5,7 @@
 //   cvo-receive   LCM CVO_KEYFRAME / CVO_LOCAL_GRAPH (or their slices, CVO_KEYFRAME_CHUNK, put
 //                 together first: slice_intake.hpp) -> decoded once and checked -> the door (each
 //                 keyframe (session, id) and local graph once; a repeat with other content is
-//                 refused, message_door.hpp) -> appended to the keyframe store (durable before
+//                 refused, libcvo/store/message_door.hpp) -> appended to the keyframe store (durable before
 //                 anything else happens) -> work queue, the decoded value (when it is full,
 //                 only where the record lies in the store is queued, and it is read back and
 //                 decoded in its turn); what never came of a session (a gap in its keyframe ids,
@@ -64,11 +64,8 @@
 #include "cvo_lcm/status_t.hpp"
 #include "daemon/backendd/held_prefix.hpp"
 #include "daemon/backendd/keyframe_gaps.hpp"
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/message_door.hpp"
 #include "daemon/backendd/record_guard.hpp"
 #include "daemon/backendd/record_quota.hpp"
-#include "daemon/backendd/replay.hpp"
 #include "daemon/backendd/slice_intake.hpp"
 #include "daemon/backendd/work_queue.hpp"
 #include "daemon/common/bus_auth.hpp"
@@ -77,6 +74,9 @@
 #include "daemon/common/systemd_notify.hpp"
 #include "libcvo/config/config.hpp"
 #include "libcvo/lcm/chunks.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/message_door.hpp"
+#include "libcvo/store/replay.hpp"
 
 namespace lcm {
 class LCM;
@@ -111,18 +111,18 @@ class Backendd {
   // store is not held decoded) or its merge; waiting in the store (the queue was full), only where
   // it lies (read back and decoded in its turn: what waits there is not held in memory at all).
   struct QueuedRecord {
-    std::variant<RecordValue, Identified, RecordRef, LostSession, slam::KeyframeMerge, slam::SettledEdge,
-                 slam::SessionTally>
+    std::variant<store::RecordValue, store::Identified, store::RecordRef, LostSession, slam::KeyframeMerge,
+                 slam::SettledEdge, slam::SessionTally>
         content;
     std::optional<std::chrono::steady_clock::time_point> arrived;  // nullopt: replayed from the store
-    std::optional<RecordRef> stored{};  // where its record lies in the store (garbage once merged)
+    std::optional<store::RecordRef> stored{};  // where its record lies in the store (garbage once merged)
   };
 
-  void let_in_recovered(std::vector<StoredRecord> recovered);
+  void let_in_recovered(std::vector<store::StoredRecord> recovered);
   void receive_loop();
   // `sender`: the verified sender (auth_t; 0 on an open bus), for
   // what is said of a refusal and for per-sender bounds.
-  void receive(RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender);
+  void receive(store::RecordKind kind, const std::uint8_t* data, std::size_t size, std::int64_t sender);
   // The verified sender of an authentic, new buffer (cvo-receive); nullopt, counted by kind, when not.
   std::optional<std::int64_t> authentic(auth::Verifier& verifier, const std::string& channel, const void* data,
                                         std::size_t size);
@@ -144,13 +144,13 @@ class Backendd {
   void settle();
   void replayed();
   void read_map_store();
-  std::optional<RecordValue> value_of(QueuedRecord& queued, std::string* error);
+  std::optional<store::RecordValue> value_of(QueuedRecord& queued, std::string* error);
   void apply_keyframe(const lcm::Keyframe& keyframe, const QueuedRecord& queued);
-  void apply_merge(const slam::KeyframeMerge& merge, const std::optional<RecordRef>& stored);
-  void apply_settled(const slam::SettledEdge& edge, const std::optional<RecordRef>& stored);
-  // A keyframe the mapper merged: its merge into the store, its own record discarded (store_merges.hpp).
+  void apply_merge(const slam::KeyframeMerge& merge, const std::optional<store::RecordRef>& stored);
+  void apply_settled(const slam::SettledEdge& edge, const std::optional<store::RecordRef>& stored);
+  // A keyframe the mapper merged: its merge into the store, its own record discarded (libcvo/store/store_merges.hpp).
   void store_merge(const slam::KeyframeMerge& merge, bool replayed);
-  void apply_local_graph(const LocalGraphRecord& record, const QueuedRecord& queued);
+  void apply_local_graph(const store::LocalGraphRecord& record, const QueuedRecord& queued);
   // After a change that may have touched `touched` only (nullopt: every session): the corrections
   // that changed, the full map when due (map_schedule.hpp).
   void publish_changes(std::optional<core::SessionId> touched, const std::vector<std::int64_t>& joined,
@@ -177,13 +177,13 @@ class Backendd {
   RecordGuard guard_{notes_};                  // cvo-backend only: each record and step costs at most itself
   BusAuth bus_{config_.auth, "cvo-backendd"};  // the key ring (auth.key_file) and signer, all threads
   SystemdNotifier systemd_;
-  std::unique_ptr<KeyframeStore> store_;  // none in localization mode: the store is only read
-  std::vector<StoredRecord> recovered_;
+  std::unique_ptr<store::KeyframeStore> store_;  // none in localization mode: the store is only read
+  std::vector<store::StoredRecord> recovered_;
   // cvo-receive only: whether the store was failing when last noted, and when held records were
   // last retried.
   bool store_failing_ = false;
   std::chrono::steady_clock::time_point store_retried_{};
-  MessageDoor door_;  // cvo-receive only (filled from the store before it starts)
+  store::MessageDoor door_;  // cvo-receive only (filled from the store before it starts)
   RecordQuota quota_{config_.backendd.max_records_per_session, config_.backendd.max_records_per_sender};  // the same
   KeyframeGaps gaps_{gap_policy(config_)};  // cvo-receive only (filled from the store as well)
   HeldPrefix held_;     // what is acknowledged of each session: cvo-receive marks, cvo-backend reads

@@ -1,4 +1,4 @@
-#include "daemon/backendd/keyframe_store.hpp"
+#include "libcvo/store/keyframe_store.hpp"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -14,7 +14,7 @@
 
 #include "libcvo/io/input_error.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 namespace {
 
 namespace fs = std::filesystem;
@@ -440,4 +440,4 @@ std::uint64_t KeyframeStore::records() const {
   return records_;
 }
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

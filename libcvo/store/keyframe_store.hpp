@@ -1,36 +1,10 @@
 #pragma once
-// cvo-backendd's memory across restarts: every CVO_KEYFRAME and CVO_LOCAL_GRAPH it accepted,
-// appended to one file as checksummed records, so that after a kill or a reboot it resumes with
-// every keyframe it had received.
-//
-// The file's format and how it is scanned: store_records.hpp. Records are only appended, each
-// written at the end of the last complete one and flushed to disk (fdatasync) before it counts as
-// stored.
-//
-// Reading back keeps every intact record (store_records.hpp's scan). When a stretch was damaged,
-// the damaged original is kept under a new name (FILE.damaged-<UTC time>, a hard link) and a
-// clean store of every intact record is written in its place (temporary file, fsync, rename:
-// FILE is at every moment the original or the complete copy). Where no clean copy can be written
-// (no space), the original stays as it is and is read the same way at every start. A last record
-// cut short by the end of the file (what a crash during a write leaves; it holds nothing intact)
-// is cut off in place: copying a whole store after every such crash would cost its size each
-// time.
-//
-// Garbage (issue #27 item 3): a record made useless by a later one (a merged keyframe's, once its
-// merge record is stored: merge_record.hpp) is discard()ed; once such records pass a quarter of the
-// file, the store is compacted: its other records are copied in order to FILE.recovering, made durable
-// and renamed over FILE, as a damaged store's intact records are (the original is not kept), so the
-// file stays within 4/3 of its live records (each compaction copies at most three times the garbage
-// it drops: the disk's cost of a merged keyframe is bounded too). A RecordRef from before the last
-// compaction is moved with its record; one from before two is void. Each discard is durable: a
-// tombstone record (store_records.hpp: kDiscarded) names what it made garbage, so a restarted store
-// recovers neither (they count as its garbage, and a clean copy of a damaged store leaves them
-// out). A tombstone that cannot be written is dropped: its record merely replays after a restart.
-//
-// A record that cannot be written (ENOSPC, EFBIG, EIO, ...) is never lost silently: a partial
-// write is cut back so no torn record stays in front of the next one, and the record is held in
-// memory, up to a bound, and written in order, before any newer one, once writing works again
-// (on the next append or retry()). Until then the store is degraded (health()).
+// The keyframe store's writer: every CVO_KEYFRAME and CVO_LOCAL_GRAPH cvo-backendd accepted,
+// appended durably (fdatasync) as checksummed records (store_records.hpp), so that a restart resumes
+// with every keyframe received. On opening, a damaged store is recovered (its original kept beside
+// it) and a torn last record cut off; discarded records are compacted away once they pass a quarter
+// of the file; a record that cannot be written is held in memory, up to a bound, and written once
+// writing works again. Why each: README.md ("Writing it").
 #include <sys/types.h>
 
 #include <cstddef>
@@ -44,9 +18,9 @@
 #include <utility>
 #include <vector>
 
-#include "daemon/backendd/store_records.hpp"
+#include "libcvo/store/store_records.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 /// Where a record lies in the store file: the start of its header and its whole size. Lets a
 /// reader that is behind take a record back from disk instead of holding it in memory, and a
@@ -147,4 +121,4 @@ class KeyframeStore {
   std::vector<std::pair<off_t, std::size_t>> compacted_away_;  // the last compaction's garbage, by offset
 };
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -1,10 +1,10 @@
-#include "daemon/backendd/merge_record.hpp"
+#include "libcvo/store/merge_record.hpp"
 
 #include <bit>
 #include <cmath>
 #include <cstring>
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 namespace {
 
 static_assert(std::endian::native == std::endian::little, "the store's records are little-endian");
@@ -202,4 +202,4 @@ std::optional<slam::SessionTally> decode_tally(const std::uint8_t* data, std::si
   return t;
 }
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

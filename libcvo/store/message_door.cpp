@@ -1,4 +1,4 @@
-#include "daemon/backendd/message_door.hpp"
+#include "libcvo/store/message_door.hpp"
 
 #include <utility>
 
@@ -9,7 +9,7 @@
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/slam/mapper.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 std::string describe(const MessageKey& key) {
   const std::string keyframe = "keyframe " + std::to_string(key.id) + " of session " + core::session_name(key.session);
@@ -54,4 +54,4 @@ Admission MessageDoor::check(const MessageKey& key, std::uint32_t crc) const {
   return it->second == crc ? Admission::kRepeat : Admission::kConflict;
 }
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -1,10 +1,8 @@
 #pragma once
-// What cvo-receive lets into the keyframe store. A keyframe is named by (session, id), a local
-// graph by (session, its keyframe's id); each name is stored once. The same name again with the
-// same content (the CRC-32 of the LCM payload less its auth_t trailer, content_crc: a re-send is
-// signed afresh) is a repeat, a re-send: not stored or used again.
-// With other bytes it contradicts what was accepted and is refused (status_t::BAD_CONFLICT):
-// stored, it would be replayed into the back end on every restart.
+// What is let into the keyframe store: a keyframe named by (session, id), a local graph by
+// (session, its keyframe's id), each name stored once; the same name again is a repeat (same
+// content: not used twice) or a conflict (other content: refused, status_t::BAD_CONFLICT). The
+// decode on the way in, once (README.md: "The door").
 #include <compare>
 #include <cstddef>
 #include <cstdint>
@@ -15,12 +13,12 @@
 
 #include "cvo_lcm/keyframe_t.hpp"
 #include "cvo_lcm/local_graph_t.hpp"
-#include "daemon/backendd/keyframe_store.hpp"
 #include "libcvo/lcm/chunks.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/odometry/local_graph.hpp"
+#include "libcvo/store/keyframe_store.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 struct MessageKey {
   RecordKind kind = RecordKind::kKeyframe;
@@ -81,4 +79,4 @@ class MessageDoor {
   std::map<MessageKey, std::uint32_t> crc_;
 };
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -1,13 +1,13 @@
-#include "daemon/backendd/replay.hpp"
+#include "libcvo/store/replay.hpp"
 
 #include <exception>
 #include <utility>
 #include <variant>
 
-#include "daemon/backendd/merge_record.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/store/merge_record.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 std::filesystem::path resolve_vocabulary(const std::string& setting) {
   return setting == "default" ? loop_closure::default_vocabulary_file() : std::filesystem::path(setting);
@@ -93,4 +93,4 @@ std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord&
   return mapper.add_local_graph(record.session, record.keyframe_id, record.graph);
 }
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

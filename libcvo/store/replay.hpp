@@ -1,9 +1,7 @@
 #pragma once
-// A stored record replayed into the back end, the one way cvo-backendd does it at start-up and
-// cvo-map does it for a whole store: through the door (decoded once, each name once: a repeat of
-// a name already let in is skipped), its content checked (message_door.hpp's usable()), then
-// applied to the slam::Mapper (a keyframe with add_keyframe, a local graph with add_local_graph, a
-// merge record with apply_merge).
+// A stored record replayed into slam::Mapper, the one way cvo-backendd does it at start-up and
+// cvo-map and cvo-run --mode localize do it for a whole store: through the door (message_door.hpp),
+// its content checked, then applied (README.md: "Replay").
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -11,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "daemon/backendd/message_door.hpp"
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/core/session.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "libcvo/store/message_door.hpp"
+#include "libcvo/store/store_records.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 /// The vocabulary file a config names (backendd.vocabulary): "default" is
 /// loop_closure::default_vocabulary_file(); anything else a path.
@@ -48,4 +46,4 @@ slam::KeyframeOutcome apply(slam::Mapper& mapper, const lcm::Keyframe& keyframe)
 /// A local graph into the mapper: the sessions it placed in the map; throws as above.
 std::vector<core::SessionId> apply(slam::Mapper& mapper, const LocalGraphRecord& record);
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

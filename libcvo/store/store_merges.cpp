@@ -1,10 +1,10 @@
-#include "daemon/backendd/store_merges.hpp"
+#include "libcvo/store/store_merges.hpp"
 
 #include <algorithm>
 
-#include "daemon/backendd/merge_record.hpp"
+#include "libcvo/store/merge_record.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 void StoreMerges::discard(const RecordRef& where, bool may_compact) {
   if (!store_.discard(where, may_compact)) return;
@@ -140,4 +140,4 @@ void StoreMerges::tally_replayed(const slam::SessionTally& tally, const std::opt
   replayed(tally_records_, tally.session, stored, may_compact);
 }
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -1,31 +1,18 @@
 #pragma once
-// The store's side of merged keyframes (issue #27 item 3, slam/mapper.hpp: revisits): once the
-// mapper merged a keyframe into one covering it, its merge record (merge_record.hpp) is stored
-// after the keyframe's own record, which is then garbage (keyframe_store.hpp: discard, compaction),
-// so the store grows with the area explored, not with the time spent in it.
-//
-// Settled revisits (slam::Mapper::settle): a settled local graph's record and a forgotten
-// keyframe's merge record are garbage too, and each settled edge that changed is stored as a
-// settled record (merge_record.hpp) that replaces the pair's previous one, and each session whose
-// tally changed (slam::SessionTally: the keyframes it forgot) as a tally record likewise. So what stays of a revisit
-// is what grows with the area: the kept keyframes' records, the settled edges between them, and a
-// few records where a revisit enters or leaves the mapped area.
-//
-// Replayed from the store, a merged keyframe is merged again by its own replay, and its merge record
-// follows it: that record, once seen, makes the keyframe's record garbage again. A merge the replay
-// made whose record never came (a stop between the keyframe and its merge) is stored at the end of
-// the replay. Every reference it holds follows the store's compactions. Owned by the thread that
-// applies records to the mapper.
+// The store's side of merged keyframes and settled revisits (slam/mapper.hpp: revisits): a merge's
+// or a settlement's records stored, and the records they make garbage discarded, live and when the
+// store is replayed (README.md: "Merges and settled revisits"). Owned by the thread that applies
+// records to the mapper.
 #include <cstdint>
 #include <map>
 #include <optional>
 #include <tuple>
 #include <utility>
 
-#include "daemon/backendd/keyframe_store.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "libcvo/store/keyframe_store.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 class StoreMerges {
  public:
@@ -82,4 +69,4 @@ class StoreMerges {
   std::int64_t compactions_ = 0;
 };
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

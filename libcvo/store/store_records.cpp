@@ -1,4 +1,4 @@
-#include "daemon/backendd/store_records.hpp"
+#include "libcvo/store/store_records.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -12,7 +12,7 @@
 
 #include "libcvo/io/input_error.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 namespace {
 
 namespace fs = std::filesystem;
@@ -206,4 +206,4 @@ StoreSnapshot read_store(const fs::path& file) {
   return snapshot;
 }
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -1,17 +1,7 @@
 #pragma once
-// The keyframe store's file, which cvo-backendd's KeyframeStore appends to and repairs and cvo-map
-// reads without changing:
-//
-// File: the 8-byte magic "CVOKFS1\n", then records
-//     u32 magic 0x4B465243 ("KFRC")  u8 kind  u8[3] zero  u32 payload bytes  u32 CRC-32 (zlib) of
-//     kind + payload bytes, then the payload: the message's LCM encoding (fingerprint included)
-// all little-endian.
-//
-// Scanning keeps every intact record but the garbage (kDiscarded below). A damaged stretch (bad magic, kind, length or
-// checksum) is skipped and scanning resynchronises on the next valid record (magic, plausible header, length within the
-// file, checksum): damage costs only the records it touches. A last record cut short by the end of the file (what a
-// crash during a write leaves, or a write still under way when another process reads) holds nothing intact and is told
-// apart from damage. One scan serves the daemon's recovery and a read-only reader alike.
+// The keyframe store's file: its records and the scan that reads them back, for the store's writer
+// (keyframe_store.hpp) and a read-only reader alike (read_store: cvo-map, cvo-run --mode localize).
+// The format and why the scan keeps what it keeps: README.md ("The file", "Reading it").
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -20,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 
 // kMerge: a keyframe merged into one covering it (merge_record.hpp), after the keyframe's record.
 // kSettled: what settled revisits left to a pair of keyframes (merge_record.hpp).
@@ -108,4 +98,4 @@ struct StoreSnapshot {
 /// `file` when it cannot be opened or read, or is not a keyframe store.
 StoreSnapshot read_store(const std::filesystem::path& file);
 
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

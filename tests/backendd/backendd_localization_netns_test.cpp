@@ -15,8 +15,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/io/tum_dataset.hpp"
+#include "libcvo/store/store_records.hpp"
 #include "tests/backendd/netns_support.hpp"
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/run_tool.hpp"

@@ -27,10 +27,10 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/message_door.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/lcm/map_conversion.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/message_door.hpp"
 #include "tests/backendd/netns_support.hpp"
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/run_tool.hpp"
@@ -68,10 +68,10 @@ class BackenddNetns : public ::testing::Test {
   }
 
   using Iterator = std::vector<Message>::const_iterator;
-  static backendd::MessageKey keyframe_key(const Message& m) {
+  static store::MessageKey keyframe_key(const Message& m) {
     const auto message =
-        backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
-    return message ? message->key : backendd::MessageKey{backendd::RecordKind::kKeyframe, -1, -1};
+        store::identify(store::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+    return message ? message->key : store::MessageKey{store::RecordKind::kKeyframe, -1, -1};
   }
   static std::set<KeyframeName> keyframes_in(Iterator begin, Iterator end) {
     std::set<KeyframeName> names;
@@ -194,16 +194,16 @@ TEST_F(BackenddNetns, AKeyframeRepeatedWithOtherContentIsRefusedAndCounted) {
   const auto status = capture.snapshot().backend_statuses.back();
   EXPECT_EQ(status.bad_messages[cvo_lcm::status_t::BAD_CONFLICT], 1) << log;
   for (int k = 0; k < cvo_lcm::status_t::BAD_CONFLICT; ++k) EXPECT_EQ(status.bad_messages[k], 0) << "kind " << k;
-  const auto name = backendd::describe(keyframe_key(*kf));
+  const auto name = store::describe(keyframe_key(*kf));
   EXPECT_NE(log.find(name + " repeats an existing one with other content: refused"), std::string::npos) << log;
 
   // Every message once in the store: neither the repeat nor the conflicting one.
-  std::vector<backendd::StoredRecord> records;
+  std::vector<store::StoredRecord> records;
   std::string warning;
   {
-    backendd::KeyframeStore reopened(store, records, warning);
+    store::KeyframeStore reopened(store, records, warning);
     EXPECT_EQ(reopened.records(), messages_.size());
-    reopened.append(backendd::RecordKind::kKeyframe, kf->bytes);  // as a store written before the door could hold it
+    reopened.append(store::RecordKind::kKeyframe, kf->bytes);  // as a store written before the door could hold it
   }
 
   // The store with the repeat is replayed once: the same map, the repeat skipped with a note.

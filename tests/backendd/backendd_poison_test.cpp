@@ -24,8 +24,8 @@
 #include "cvo_lcm/local_graph_t.hpp"
 #include "cvo_lcm/pose_t.hpp"
 #include "cvo_lcm/status_t.hpp"
-#include "daemon/backendd/keyframe_store.hpp"
 #include "libcvo/lcm/decode.hpp"
+#include "libcvo/store/keyframe_store.hpp"
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/daemon_process.hpp"
@@ -128,9 +128,9 @@ Outcome run_backendd(const fs::path& dir, const std::string& name, const fs::pat
   o.exit_code = backendd.wait_for(300s).value_or(-9);
   o.log = cvo::testing::slurp(dir / (name + ".txt"));
   o.published = cvo::testing::read_published(out);
-  std::vector<backendd::StoredRecord> records;
+  std::vector<store::StoredRecord> records;
   std::string warning;
-  o.records = backendd::KeyframeStore(store, records, warning).records();
+  o.records = store::KeyframeStore(store, records, warning).records();
   return o;
 }
 
@@ -269,16 +269,16 @@ TEST(BackenddPoison, StoredRecordsOfAnOlderSchemaAreSkippedWithAMessage) {
   ASSERT_GE(good.size(), 8u);
   std::size_t keyframes = 0;
   {
-    std::vector<backendd::StoredRecord> none;
+    std::vector<store::StoredRecord> none;
     std::string warning;
-    backendd::KeyframeStore store(dir.path() / "old.store", none, warning);
+    store::KeyframeStore store(dir.path() / "old.store", none, warning);
     for (const auto& e : good) {
       const bool keyframe = e.channel == "CVO_KEYFRAME";
       keyframes += keyframe;
       if (keyframe && keyframes == 2) {  // the old record first, as an older build stored it
-        ASSERT_EQ(store.append(backendd::RecordKind::kKeyframe, as_version_3(e)), backendd::Appended::kStored);
+        ASSERT_EQ(store.append(store::RecordKind::kKeyframe, as_version_3(e)), store::Appended::kStored);
       }
-      store.append(keyframe ? backendd::RecordKind::kKeyframe : backendd::RecordKind::kLocalGraph, e.bytes);
+      store.append(keyframe ? store::RecordKind::kKeyframe : store::RecordKind::kLocalGraph, e.bytes);
     }
   }
   {  // an input with nothing for the back end (LCM cannot open a log without an event)

@@ -19,8 +19,8 @@
 #include <Eigen/Geometry>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/backendd/merge_record.hpp"
-#include "daemon/backendd/store_records.hpp"
+#include "libcvo/store/merge_record.hpp"
+#include "libcvo/store/store_records.hpp"
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
@@ -32,7 +32,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-using backendd::RecordKind;
+using store::RecordKind;
 
 void write_log(const fs::path& file, const std::vector<std::vector<testing::Message>>& visits) {
   ::lcm::LogFile log(file.string(), "w");
@@ -69,17 +69,17 @@ struct StoreCounts {
   std::size_t live = 0, merges = 0, settled = 0;
 };
 StoreCounts live_keyframes_and_merges(const fs::path& store) {
-  const auto snapshot = backendd::read_store(store);
+  const auto snapshot = store::read_store(store);
   EXPECT_TRUE(snapshot.scan.clean());
   std::set<std::pair<std::int64_t, std::int64_t>> merged;
   std::size_t keyframes = 0, settled = 0;
   std::vector<std::pair<std::int64_t, std::int64_t>> kept;
   for (const auto& r : snapshot.scan.records) {
     const std::uint8_t* payload = snapshot.payload(r);
-    const auto bytes = backendd::StoreSnapshot::payload_bytes(r);
+    const auto bytes = store::StoreSnapshot::payload_bytes(r);
     if (r.kind == RecordKind::kMerge) {
       std::string error;
-      const auto m = backendd::decode_merge(payload, bytes, &error);
+      const auto m = store::decode_merge(payload, bytes, &error);
       EXPECT_TRUE(m) << error;
       if (m) merged.insert({m->session, m->id});
     } else if (r.kind == RecordKind::kSettled) {

@@ -32,8 +32,8 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/message_door.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/message_door.hpp"
 #include "tests/backendd/netns_support.hpp"
 #include "tests/backendd/tracker_recording.hpp"
 #include "tests/support/run_tool.hpp"
@@ -128,7 +128,7 @@ class BackenddStoreFull : public ::testing::Test {
     for (const auto& m : messages_) {
       if (m.channel != "CVO_KEYFRAME") continue;
       const auto message =
-          backendd::identify(backendd::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
+          store::identify(store::RecordKind::kKeyframe, m.bytes.data(), m.bytes.size(), nullptr, nullptr);
       if (message) names.emplace(message->key.session, message->key.id);
     }
     return names;
@@ -168,9 +168,9 @@ std::unique_ptr<DaemonProcess> start_daemon(const std::vector<std::string>& wrap
 
 // The store holds every message once, in the order sent, and reads back without a warning.
 void expect_every_message_stored_once(const fs::path& store, const std::vector<Message>& messages) {
-  std::vector<backendd::StoredRecord> records;
+  std::vector<store::StoredRecord> records;
   std::string warning;
-  backendd::KeyframeStore reopened(store, records, warning);
+  store::KeyframeStore reopened(store, records, warning);
   EXPECT_TRUE(warning.empty()) << warning;
   ASSERT_EQ(records.size(), messages.size()) << "neither lost nor stored twice";
   for (std::size_t i = 0; i < records.size(); ++i)

@@ -18,12 +18,12 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/io/input_error.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/store_records.hpp"
 #include "tests/support/temp_dir.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 namespace {
 
 namespace fs = std::filesystem;
@@ -622,4 +622,4 @@ TEST(StoreRecords, ReadStoreRefusesAMissingOrForeignFileNamingIt) {
 }
 
 }  // namespace
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

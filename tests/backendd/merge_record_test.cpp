@@ -1,10 +1,10 @@
-// The store's merge and settled records (daemon/backendd/merge_record.hpp): what is written reads back whole,
+// The store's merge and settled records (libcvo/store/merge_record.hpp): what is written reads back whole,
 // and bytes that are not one are refused with a reason.
 #include <gtest/gtest.h>
 
-#include "daemon/backendd/merge_record.hpp"
+#include "libcvo/store/merge_record.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 namespace {
 
 slam::KeyframeMerge sample_merge() {
@@ -109,4 +109,4 @@ TEST(TallyRecord, WhatIsWrittenReadsBackWholeAndOtherBytesAreRefused) {
 }
 
 }  // namespace
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -9,10 +9,10 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cvo_lcm/status_t.hpp"
-#include "daemon/backendd/message_door.hpp"
+#include "libcvo/store/message_door.hpp"
 #include "tests/lcm/sample_messages.hpp"
 
-namespace cvo::daemon::backendd {
+namespace cvo::store {
 namespace {
 
 template <class T>
@@ -138,4 +138,4 @@ TEST(MessageDoor, AUsableMessageGivesTheValueTheBackEndApplies) {
 }
 
 }  // namespace
-}  // namespace cvo::daemon::backendd
+}  // namespace cvo::store

@@ -18,8 +18,8 @@
 #include <octomap/OcTree.h>
 #include <yaml-cpp/yaml.h>
 
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/sim/sequence.hpp"
+#include "libcvo/store/store_records.hpp"
 #include "tests/support/cli_contract.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/run_tool.hpp"
@@ -30,7 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-using daemon::backendd::RecordKind;
+using store::RecordKind;
 using testing::DaemonProcess;
 using testing::quoted;
 using testing::run_tool;
@@ -135,9 +135,9 @@ void expect_map_files_load(const fs::path& out) {
 TEST(CvoMap, OnAStoreWithADamagedRecordMakesTheMapFromEveryIntactRecord) {
   const test::TempDir dir("cvo_map");
   const auto store = backend_store(dir.path());
-  const auto scan = daemon::backendd::read_store(store).scan;
+  const auto scan = store::read_store(store).scan;
   ASSERT_TRUE(scan.clean());
-  std::vector<daemon::backendd::IntactRecord> keyframes;
+  std::vector<store::IntactRecord> keyframes;
   for (const auto& r : scan.records)
     if (r.kind == RecordKind::kKeyframe) keyframes.push_back(r);
   ASSERT_GE(keyframes.size(), 4u) << "too few keyframes to damage one in the middle";
@@ -207,7 +207,7 @@ TEST(CvoMap, ReadsAStoreTheDaemonIsAppendingTo) {
   EXPECT_TRUE(std::is_sorted(records_seen.begin(), records_seen.end())) << "the store grew between the runs";
 
   ASSERT_EQ(backendd.wait_for(120s).value_or(-9), 0) << slurp(dir.path() / "backend.txt");
-  const auto after = daemon::backendd::read_store(store).scan;
+  const auto after = store::read_store(store).scan;
   EXPECT_TRUE(after.clean()) << describe_damage(store, after, "", "");
   EXPECT_GT(static_cast<long>(after.records.size()), number_after(r.out, "records:")) << "the daemon went on appending";
 }

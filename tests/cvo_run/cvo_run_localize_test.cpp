@@ -20,11 +20,11 @@
 
 #include <gtest/gtest.h>
 
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/core/trajectory.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "libcvo/sim/sequence.hpp"
+#include "libcvo/store/store_records.hpp"
 #include "tests/drivers/tum_copy.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/run_tool.hpp"
@@ -44,7 +44,7 @@ using testing::ToolRun;
 std::uint32_t checksum(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  return daemon::backendd::crc32_of(bytes.data(), bytes.size());
+  return store::crc32_of(bytes.data(), bytes.size());
 }
 
 std::size_t lines_of(const fs::path& file) {

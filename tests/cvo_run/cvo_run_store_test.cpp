@@ -15,7 +15,7 @@
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
-#include "daemon/backendd/store_records.hpp"
+#include "libcvo/store/store_records.hpp"
 #include "tests/drivers/tum_copy.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
@@ -27,7 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-using daemon::backendd::RecordKind;
+using store::RecordKind;
 using testing::json_value;
 using testing::quoted;
 using testing::run_tool;
@@ -68,7 +68,7 @@ TEST(CvoRunStore, CvoMapReadsTheStoreOfATwoSessionRun) {
   EXPECT_EQ(records, 2 * keyframes + 2 * merged);
 
   // The records are the daemon's: CVO_KEYFRAME and CVO_LOCAL_GRAPH payloads, one session per folder.
-  const auto scan = daemon::backendd::read_store(store).scan;
+  const auto scan = store::read_store(store).scan;
   EXPECT_TRUE(scan.clean());
   EXPECT_EQ(static_cast<long>(scan.records.size()), 2 * keyframes) << "each merge record replaces its keyframe's";
   EXPECT_EQ(scan.records.front().kind, RecordKind::kKeyframe);
@@ -96,7 +96,7 @@ TEST(CvoRunStore, RevisitsAreMergedAndTheirKeyframeRecordsCompactedAway) {
   const long merged = std::stol(json_value(r.out, "keyframes_merged"));
   ASSERT_GT(merged, 0);
 
-  const auto scan = daemon::backendd::read_store(store).scan;
+  const auto scan = store::read_store(store).scan;
   EXPECT_TRUE(scan.clean());
   long keyframe_records = 0, merge_records = 0;
   for (const auto& record : scan.records) {

@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "daemon/backendd/replay.hpp"
 #include "libcvo/config/config.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/io/map_files.hpp"
 #include "libcvo/loop_closure/vocabulary.hpp"
+#include "libcvo/store/replay.hpp"
 #include "program/cli.hpp"
 #include "program/configuration.hpp"
 #include "store_map.hpp"
@@ -99,7 +99,7 @@ void print_summary(const tools::StoreMap& m, const io::MapFiles& files, const st
 int run(const Arguments& args) {
   const config::Config config = program::configuration(args.config, args.sets);
   auto vocabulary = loop_closure::Vocabulary::load(
-      args.vocabulary ? *args.vocabulary : daemon::backendd::resolve_vocabulary(config.backendd.vocabulary));
+      args.vocabulary ? *args.vocabulary : store::resolve_vocabulary(config.backendd.vocabulary));
   const tools::StoreMap m = tools::map_store(args.store, config, std::move(vocabulary), std::cerr);
   const auto grid = m.mapping.grid();
   if (!grid || m.mapping.statistics().placed == 0) {

@@ -7,15 +7,15 @@
 #include <utility>
 #include <variant>
 
-#include "daemon/backendd/replay.hpp"
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/config/mapper_parameters.hpp"
+#include "libcvo/store/replay.hpp"
+#include "libcvo/store/store_records.hpp"
 
 namespace cvo::tools {
 namespace {
 
 namespace fs = std::filesystem;
-using namespace daemon::backendd;
+using namespace store;
 
 // The keyframe is in the SLAM map whether or not the mapping can use it (as in cvo-backendd).
 void map_keyframe(const lcm::Keyframe& k, StoreMap& out) {

@@ -1,7 +1,7 @@
 #pragma once
-// cvo-map's work: a back end's keyframe store, read without changing it (store_records.hpp's
+// cvo-map's work: a back end's keyframe store, read without changing it (libcvo/store/store_records.hpp's
 // read_store: it may be read while cvo-backendd appends to it), replayed as cvo-backendd replays
-// it at start-up (replay.hpp: the door, the same decode, slam::Mapper), then the final global
+// it at start-up (libcvo/store/replay.hpp: the door, the same decode, slam::Mapper), then the final global
 // optimisation and the keyframes' local maps placed at its poses (mapping::Mapping).
 //
 // What is lost costs only itself: a damaged stretch of the file (skipped by the scan), a record

@@ -4,21 +4,21 @@
 #include <string>
 #include <utility>
 
-#include "daemon/backendd/replay.hpp"
-#include "daemon/backendd/store_records.hpp"
 #include "libcvo/config/mapper_parameters.hpp"
 #include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/session.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/odometry/keyframe_odometry.hpp"
 #include "libcvo/slam/mapper.hpp"
+#include "libcvo/store/replay.hpp"
+#include "libcvo/store/store_records.hpp"
 
 namespace cvo::tools {
 namespace {
 
 namespace fs = std::filesystem;
 using core::LocalizationState;
-using namespace daemon::backendd;
+using namespace store;
 
 // Every intact record of the store into the mapper; what cannot be used is named and skipped.
 void replay_store(const fs::path& file, slam::Mapper& mapper, std::ostream& problems) {

@@ -2,8 +2,8 @@
 // cvo-run's localization mode (--mode localize --map-store FILE): a sequence localized in a stored
 // map, offline, as cvo-backendd's localization mode does it live:
 //   the map       the keyframe store (cvo-backendd's, or cvo-run --mode slam --store), read without
-//                 changing it (store_records.hpp's read_store), replayed as cvo-backendd and cvo-map
-//                 replay it (replay.hpp), then the final global optimisation (as cvo-map); from
+//                 changing it (libcvo/store/store_records.hpp's read_store), replayed as cvo-backendd and cvo-map
+//                 replay it (libcvo/store/replay.hpp), then the final global optimisation (as cvo-map); from
 //                 then on it is read only (slam::Mapper::localize_only);
 //   every frame   KF-CVO tracks it in the session's own odometry frame; its map pose is the
 //                 session's correction as it stood when the frame was tracked, before the back end

@@ -4,21 +4,21 @@
 #include <string>
 #include <vector>
 
-#include "daemon/backendd/keyframe_store.hpp"
-#include "daemon/backendd/store_merges.hpp"
 #include "libcvo/io/input_error.hpp"
 #include "libcvo/lcm/decode.hpp"
 #include "libcvo/lcm/keyframe_conversion.hpp"
 #include "libcvo/lcm/local_graph_conversion.hpp"
 #include "libcvo/lcm/rgbd_conversion.hpp"
+#include "libcvo/store/keyframe_store.hpp"
+#include "libcvo/store/store_merges.hpp"
 
 namespace cvo::tools {
 namespace {
 
 namespace fs = std::filesystem;
-using daemon::backendd::Appended;
-using daemon::backendd::KeyframeStore;
-using daemon::backendd::RecordKind;
+using store::Appended;
+using store::KeyframeStore;
+using store::RecordKind;
 
 // The store, created new: the check is before KeyframeStore, which would open and recover one.
 std::unique_ptr<KeyframeStore> create_store(const fs::path& file) {
@@ -26,7 +26,7 @@ std::unique_ptr<KeyframeStore> create_store(const fs::path& file) {
     throw io::InputError(file,
                          "exists already: cvo-run --store writes a new keyframe store (remove it, or choose "
                          "another file)");
-  std::vector<daemon::backendd::StoredRecord> recovered;
+  std::vector<store::StoredRecord> recovered;
   std::string warning;
   return std::make_unique<KeyframeStore>(file, recovered, warning);
 }
@@ -52,10 +52,10 @@ struct StoreOutput::State {
   lcm::RgbdEncoding encoding;  // first: a bad setting fails before the file is made
   std::string robot;           // the records name it as cvo-trackerd's would (trackerd.robot)
   std::unique_ptr<KeyframeStore> store;
-  daemon::backendd::StoreMerges merges;  // a merged keyframe's record is garbage once its merge is stored
+  store::StoreMerges merges;  // a merged keyframe's record is garbage once its merge is stored
 
   // Nothing is held in memory (no unsaved records): a record not written fails the run.
-  void append(RecordKind kind, const std::vector<std::uint8_t>& bytes, daemon::backendd::RecordRef* where = nullptr) {
+  void append(RecordKind kind, const std::vector<std::uint8_t>& bytes, store::RecordRef* where = nullptr) {
     if (store->append(kind, bytes, where) != Appended::kStored)
       throw io::InputError(store->file(), "cannot write the keyframe store: " + describe(store->health()));
   }
@@ -73,7 +73,7 @@ void StoreOutput::keyframe(core::SessionId session, std::int64_t id, const core:
       lcm::to_message(lcm::Keyframe{session, id, frame, pose, cloud, state_->robot}, state_->encoding, &error);
   if (!message)
     throw io::InputError(state_->store->file(), "keyframe " + std::to_string(id) + " cannot be encoded: " + error);
-  daemon::backendd::RecordRef where;
+  store::RecordRef where;
   state_->append(RecordKind::kKeyframe, lcm::encode(*message), &where);
   state_->merges.keyframe(session, id, where);
 }

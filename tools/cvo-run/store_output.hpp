@@ -4,7 +4,7 @@
 // FILE resumes it, cvo-map reads it). Each record is what the daemon stores: the CVO_KEYFRAME or
 // CVO_LOCAL_GRAPH that cvo-trackerd would send, in libcvo/lcm's encoding (colour as
 // trackerd.keyframe_colour_encoding, depth PNG), written by the daemon's own KeyframeStore
-// (daemon/backendd/keyframe_store.hpp: the file format, the checksums, fdatasync).
+// (libcvo/store/keyframe_store.hpp: the file format, the checksums, fdatasync).
 //
 // Sessions are cvo-run's (1, 2, ... one per folder). A local graph's `utime` ("when the graph was
 // closed") is its newest frame's sensor time, not the wall clock: the same input writes the same
@@ -38,7 +38,7 @@ class StoreOutput {
   /// Appends the local graph's record (keyframe `keyframe_id` of `session`), as above.
   void local_graph(core::SessionId session, std::int64_t keyframe_id, const odometry::LocalGraph& graph);
 
-  /// Appends the record of a merge the mapper made (daemon/backendd/merge_record.hpp), after the
+  /// Appends the record of a merge the mapper made (libcvo/store/merge_record.hpp), after the
   /// keyframe's own record, as above; that record is garbage then, and the store compacts when
   /// garbage passes half of it (keyframe_store.hpp).
   void merge(const slam::KeyframeMerge& merge);
