@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "drivers/lcm_source.hpp"
+#include "drivers/oni_file.hpp"
 #include "drivers/openni2_source.hpp"
 #include "drivers/tum_source.hpp"
 #include "drivers/v4l2_source.hpp"
@@ -21,6 +22,13 @@ std::unique_ptr<FrameSource> open_source(std::string_view spec, const SourceOpti
   }
   throw SourceError(std::string(spec),
                     "not a frame source; valid sources: tum:DIR, lcm:URL, openni2:URI, v4l2:COLOUR,DEPTH");
+}
+
+bool names_device(std::string_view spec) {
+  if (spec.starts_with("v4l2:")) return true;
+  if (!spec.starts_with("openni2:")) return false;
+  const std::string uri(spec.substr(8));
+  return uri.starts_with("cvo-virtual:") || !is_oni_path(uri);
 }
 
 }  // namespace cvo::drivers

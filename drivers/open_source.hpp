@@ -15,4 +15,9 @@ namespace cvo::drivers {
 /// that cannot be opened.
 std::unique_ptr<FrameSource> open_source(std::string_view spec, const SourceOptions& options = {});
 
+/// Whether the spec names a device that may come and go (openni2: cameras and the virtual device,
+/// v4l2: nodes), to be re-opened with back-off; false for finite sources (folders, logs, .oni
+/// files), whose failure to open is final.
+bool names_device(std::string_view spec);
+
 }  // namespace cvo::drivers

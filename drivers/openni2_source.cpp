@@ -9,12 +9,18 @@
 #include <chrono>
 #include <climits>
 #include <cmath>
+#include <cstdio>
 #include <optional>
+
+#include <unistd.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "drivers/depth_registration.hpp"
 #include "drivers/frame_gaps.hpp"
+#include "drivers/oni_file.hpp"
+#include "drivers/openni2_camera_model.hpp"
 #include "drivers/openni2_virtual/virtual_device.hpp"
 #include "drivers/read_result.hpp"
 #include "drivers/usb_cameras.hpp"
@@ -28,8 +34,34 @@ using Clock = std::chrono::steady_clock;
 std::string openni_error() {
   std::string text = std::string("OpenNI: ") + openni::OpenNI::getExtendedError();
   while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())) != 0) text.pop_back();
+  if (text == "OpenNI:") text += " (no reason given)";
   return text;
 }
+
+// A recording that was never closed, played from a repaired copy (oni_file.hpp) that goes with the
+// source: OpenNI's player refuses the original although its frames are all there.
+class RepairedCopy {
+ public:
+  RepairedCopy() = default;
+  ~RepairedCopy() {
+    std::error_code ec;
+    if (!path_.empty()) std::filesystem::remove(path_, ec);
+  }
+  RepairedCopy(const RepairedCopy&) = delete;
+  RepairedCopy& operator=(const RepairedCopy&) = delete;
+
+  /// Writes the copy into the temporary directory and returns its path.
+  const std::filesystem::path& make(const std::filesystem::path& file, const OniFileState& state) {
+    static std::atomic<unsigned> counter{0};
+    path_ = std::filesystem::temp_directory_path() /
+            ("cvo-repaired-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".oni");
+    repair_oni_copy(file, state, path_);
+    return path_;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
 
 // OpenNI is one library per process (shutdown() forbids any later call), so it is initialised on
 // first use and shut down at exit.
@@ -73,33 +105,20 @@ openni::VideoMode find_mode(const openni::VideoStream& stream, openni::PixelForm
                               " (offers: " + (offered.empty() ? "none" : offered) + ")");
 }
 
-// The device's own camera model when it gives one (the cvo-virtual driver does), else from the
-// colour stream's fields of view with the principal point at the image centre.
-core::Intrinsics device_intrinsics(openni::VideoStream& colour, int width, int height, double depth_scale) {
-  core::Intrinsics k;
-  k.width = width;
-  k.height = height;
-  k.depth_scale = depth_scale;
-  namespace virt = virtual_device;
-  if (virt::StreamIntrinsics own; colour.isPropertySupported(virt::kIntrinsicsProperty) &&
-                                  colour.getProperty(virt::kIntrinsicsProperty, &own) == openni::STATUS_OK) {
-    k.fx = own.fx;
-    k.fy = own.fy;
-    k.cx = own.cx;
-    k.cy = own.cy;
-    std::copy(std::begin(own.distortion), std::end(own.distortion), k.distortion.begin());
-    k.readout_s = own.readout_s;
-    return k;
+// Colour: the mode asked for, else the largest smaller one at the rate (a camera whose colour
+// streams smaller than its depth, e.g. QVGA colour beside VGA depth to save USB bandwidth; depth
+// is then brought to colour's size).
+openni::VideoMode find_colour_mode(const openni::VideoStream& colour, const SourceOptions& o, const std::string& spec) {
+  const auto& modes = colour.getSensorInfo().getSupportedVideoModes();
+  std::optional<openni::VideoMode> smaller;
+  for (int i = 0; i < modes.getSize(); ++i) {
+    const auto& m = modes[i];
+    if (m.getPixelFormat() != openni::PIXEL_FORMAT_RGB888 || m.getFps() != o.fps) continue;
+    if (m.getResolutionX() > o.width || m.getResolutionY() > o.height) continue;
+    if (!smaller || m.getResolutionX() > smaller->getResolutionX()) smaller = m;
   }
-  // A float field of view holds about 7 digits, a focal length to some 1e-5 px: rounded to 1e-4 px
-  // so that no digit is made up and a focal length given to 4 decimals (calibrations, the virtual
-  // device's folders) comes back exactly.
-  const auto focal = [](double size, float fov) { return std::round(size / 2.0 / std::tan(fov / 2.0) * 1e4) / 1e4; };
-  k.fx = focal(width, colour.getHorizontalFieldOfView());
-  k.fy = focal(height, colour.getVerticalFieldOfView());
-  k.cx = width / 2.0;
-  k.cy = height / 2.0;
-  return k;
+  if (smaller) return *smaller;
+  return find_mode(colour, openni::PIXEL_FORMAT_RGB888, o, spec, "the colour sensor");  // throws, listing them
 }
 
 // Depth units per metre of OpenNI's depth formats; 0 for others.
@@ -162,10 +181,7 @@ class OpenNi2Source final : public FrameSource {
  public:
   OpenNi2Source(std::string uri, const SourceOptions& options) : spec_("openni2:" + uri) {
     require_openni(spec_);
-    const bool any = uri.empty() || uri == "any";
-    if (device_.open(any ? openni::ANY_DEVICE : uri.c_str()) != openni::STATUS_OK)
-      throw SourceError(spec_, "cannot open " + (any ? std::string("a device") : "'" + uri + "'") + ": " +
-                                   openni_error() + "; " + usb_open_hint(spec_));
+    open_device(uri);
     watch_.watch(device_.getDeviceInfo().getUri());
     create(depth_, openni::SENSOR_DEPTH, "depth");
     create(colour_, openni::SENSOR_COLOR, "colour");
@@ -179,35 +195,20 @@ class OpenNi2Source final : public FrameSource {
       frames_in_file_ = {playback->getNumberOfFrames(depth_), playback->getNumberOfFrames(colour_)};
     } else {
       set_mode(depth_, find_depth_mode(depth_, options, spec_, uri.starts_with(virtual_device::kScheme)));
-      set_mode(colour_, find_mode(colour_, openni::PIXEL_FORMAT_RGB888, options, spec_, "the colour sensor"));
+      set_mode(colour_, find_colour_mode(colour_, options, spec_));
       // The virtual device can also play frame by frame; cameras have no such property.
       if (!options.realtime && device_.isPropertySupported(virtual_device::kPacedProperty))
         device_.setProperty(virtual_device::kPacedProperty, 0);
     }
     registered_ = device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) &&
                   device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR) == openni::STATUS_OK;
-    // Best effort: recordings and some drivers do not support these, and are fine without.
+    // Best effort: recordings and some drivers do not support these, and are fine without. A
+    // stream that stays mirrored (a recording made mirrored) is flipped back in convert().
     device_.setDepthColorSyncEnabled(true);
     depth_.setMirroringEnabled(false);
     colour_.setMirroringEnabled(false);
-
-    const auto depth_mode = depth_.getVideoMode(), colour_mode = colour_.getVideoMode();
-    const double depth_scale = depth_units_per_metre(depth_mode.getPixelFormat());
-    if (depth_scale == 0 || colour_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
-      throw SourceError(spec_, "needs 1 mm or 100 um depth and RGB888 colour (a recording of other formats?)");
-    width_ = colour_mode.getResolutionX();
-    height_ = colour_mode.getResolutionY();
-    if (depth_mode.getResolutionX() != width_ || depth_mode.getResolutionY() != height_)
-      throw SourceError(spec_, "depth is " + mode_text(depth_mode) + " but colour " + mode_text(colour_mode) +
-                                   ": registered depth needs one size");
-    intrinsics_ = options.intrinsics ? *options.intrinsics : device_intrinsics(colour_, width_, height_, depth_scale);
-    intrinsics_.depth_scale = depth_scale;  // the stream's unit, whatever a camera file says
-    if (const auto bad = intrinsics_.validate(); !bad.empty()) throw SourceError(spec_, "intrinsics: " + bad);
-    if (intrinsics_.width != width_ || intrinsics_.height != height_)
-      throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
-                                   std::to_string(intrinsics_.height) + " but the streams are " +
-                                   mode_text(colour_mode));
-
+    mirrored_ = {depth_.getMirroringEnabled(), colour_.getMirroringEnabled()};
+    set_up_images(options);
     if (depth_.start() != openni::STATUS_OK) throw SourceError(spec_, "depth stream does not start: " + openni_error());
     if (colour_.start() != openni::STATUS_OK)
       throw SourceError(spec_, "colour stream does not start: " + openni_error());
@@ -258,8 +259,21 @@ class OpenNi2Source final : public FrameSource {
   }
 
   [[nodiscard]] std::string describe() const override {
-    return spec_ + " (" + std::to_string(width_) + "x" + std::to_string(height_) + ", " +
-           (device_.isFile() ? "recording" : "device") + (registered_ ? "" : ", depth not registered to colour") + ")";
+    std::string d = spec_ + " (" + std::to_string(width_) + "x" + std::to_string(height_) + ", " +
+                    (device_.isFile() ? "recording" : "device");
+    if (file_ && !file_->closed) d += ", " + file_->summary() + ": played from a repaired copy";
+    if (depth_width_ != width_ || depth_height_ != height_)
+      d += ", depth " + std::to_string(depth_width_) + "x" + std::to_string(depth_height_) +
+           (registration_ ? " registered to colour (camera file)"
+            : registered_ ? " registered by the device, scaled to colour's size"
+                          : " scaled to colour's size (ASSUMED registered by the device)");
+    else if (!registered_ && !device_.isFile())
+      d += ", depth not registered to colour";
+    if (mirrored_[0] || mirrored_[1]) d += ", mirrored (flipped back)";
+    char focal[64];
+    std::snprintf(focal, sizeof(focal), "fx %.4f fy %.4f cx %.2f cy %.2f", intrinsics_.fx, intrinsics_.fy,
+                  intrinsics_.cx, intrinsics_.cy);
+    return d + ", intrinsics " + focal + " from " + intrinsics_source_ + ")";
   }
 
   [[nodiscard]] std::uint64_t lost_frames() const override {
@@ -267,6 +281,58 @@ class OpenNi2Source final : public FrameSource {
   }
 
  private:
+  // A file is checked first (OpenNI gives no reason for what it cannot play) and a recording that
+  // was never closed is played from a repaired copy; a device that fails is explained by libusb.
+  void open_device(const std::string& uri) {
+    const bool any = uri.empty() || uri == "any";
+    std::string target = any ? std::string() : uri;
+    if (!any && !uri.starts_with(virtual_device::kScheme) && is_oni_path(uri)) {
+      file_ = inspect_oni(uri);
+      if (!file_->problem.empty()) throw SourceError(spec_, "'" + uri + "': " + file_->problem);
+      if (file_->needs_repair()) target = repaired_.make(uri, *file_).string();
+      if (device_.open(target.c_str()) != openni::STATUS_OK)
+        throw SourceError(spec_,
+                          "cannot open the recording '" + uri + "' (" + file_->summary() + "): " + openni_error());
+      return;
+    }
+    if (device_.open(any ? openni::ANY_DEVICE : target.c_str()) != openni::STATUS_OK)
+      throw SourceError(spec_, "cannot open " + (any ? std::string("a device") : "'" + uri + "'") + ": " +
+                                   openni_error() + "; " + usb_open_hint(spec_));
+  }
+
+  // The frame's size (colour's), its intrinsics, and how depth of another size comes to it.
+  void set_up_images(const SourceOptions& options) {
+    const auto depth_mode = depth_.getVideoMode(), colour_mode = colour_.getVideoMode();
+    const double depth_scale = depth_units_per_metre(depth_mode.getPixelFormat());
+    if (depth_scale == 0 || colour_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
+      throw SourceError(spec_, "needs 1 mm or 100 um depth and RGB888 colour (a recording of other formats?)");
+    width_ = colour_mode.getResolutionX();
+    height_ = colour_mode.getResolutionY();
+    depth_width_ = depth_mode.getResolutionX();
+    depth_height_ = depth_mode.getResolutionY();
+    auto model = openni2_camera_model(device_, depth_, colour_, width_, height_, options.intrinsics, spec_);
+    intrinsics_ = model.intrinsics;
+    intrinsics_source_ = std::move(model.source);
+    intrinsics_.depth_scale = depth_scale;  // the stream's unit, whatever a camera file says
+    if (const auto bad = intrinsics_.validate(); !bad.empty())
+      throw SourceError(spec_, "intrinsics (from " + intrinsics_source_ + "): " + bad);
+    if (intrinsics_.width != width_ || intrinsics_.height != height_)
+      throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
+                                   std::to_string(intrinsics_.height) + " but the streams are " +
+                                   mode_text(colour_mode));
+    if (depth_width_ == width_ && depth_height_ == height_) return;
+    if (options.depth_sensor) {  // a separate depth sensor the camera file describes
+      registration_.emplace(*options.depth_sensor, intrinsics_);
+      return;
+    }
+    // Depth the device registered to colour covers colour's view at its own size: brought to
+    // colour's size pixel for pixel (nearest, so no depth is made up between surfaces).
+    if (static_cast<long>(depth_width_) * height_ != static_cast<long>(width_) * depth_height_)
+      throw SourceError(spec_, "depth is " + mode_text(depth_mode) + " but colour " + mode_text(colour_mode) +
+                                   ", another aspect ratio: registering it needs the depth sensor's calibration "
+                                   "(a camera file with a depth_sensor section, --set camera=FILE.yaml)");
+  }
+
   void create(openni::VideoStream& stream, openni::SensorType type, const char* name) {
     if (device_.getSensorInfo(type) == nullptr) throw SourceError(spec_, std::string("has no ") + name + " sensor");
     if (stream.create(device_, type) != openni::STATUS_OK)
@@ -281,8 +347,8 @@ class OpenNi2Source final : public FrameSource {
   // Recordings number their frames from 1; a stream whose last frame was read has no more.
   [[nodiscard]] bool recording_ended() const {
     if (!frames_in_file_) return false;
-    for (std::size_t s = 0; s < 2; ++s)
-      if (!fresh_[s] && last_index_[s] >= (*frames_in_file_)[s]) return true;
+    for (std::size_t s = 0; s < 2; ++s)  // a count of 0 or less: unknown (a repaired recording)
+      if ((*frames_in_file_)[s] > 0 && !fresh_[s] && last_index_[s] >= (*frames_in_file_)[s]) return true;
     return false;
   }
 
@@ -293,17 +359,28 @@ class OpenNi2Source final : public FrameSource {
   ReadResult convert(core::RgbdFrame& frame) {
     const auto& depth = frames_[0];
     const auto& colour = frames_[1];
-    if (depth.getWidth() != width_ || depth.getHeight() != height_ || colour.getWidth() != width_ ||
+    if (depth.getWidth() != depth_width_ || depth.getHeight() != depth_height_ || colour.getWidth() != width_ ||
         colour.getHeight() != height_)
       return bad_input(core::BadKind::kContent, spec_ + ": a frame of another size than the stream's " +
                                                     std::to_string(width_) + "x" + std::to_string(height_));
     // OpenNI's buffers are only borrowed: wrap them, convert or copy into the caller's images.
     const cv::Mat rgb(height_, width_, CV_8UC3, const_cast<void*>(colour.getData()),
                       static_cast<std::size_t>(colour.getStrideInBytes()));
-    const cv::Mat mm(height_, width_, CV_16UC1, const_cast<void*>(depth.getData()),
+    const cv::Mat mm(depth_height_, depth_width_, CV_16UC1, const_cast<void*>(depth.getData()),
                      static_cast<std::size_t>(depth.getStrideInBytes()));
     cv::cvtColor(rgb, frame.bgr, cv::COLOR_RGB2BGR);
-    mm.copyTo(frame.depth);
+    if (mirrored_[1]) cv::flip(frame.bgr, frame.bgr, 1);
+    const cv::Mat* raw = &mm;
+    if (mirrored_[0]) {  // unflipped before registration: the depth sensor's own image
+      cv::flip(mm, unmirrored_, 1);
+      raw = &unmirrored_;
+    }
+    if (registration_)
+      registration_->apply(*raw, frame.depth);
+    else if (raw->cols != width_ || raw->rows != height_)
+      cv::resize(*raw, frame.depth, cv::Size(width_, height_), 0, 0, cv::INTER_NEAREST);
+    else
+      raw->copyTo(frame.depth);
 
     // Device time has an arbitrary zero: it is moved onto the system clock at the first frame.
     const double colour_s = static_cast<double>(colour.getTimestamp()) * 1e-6;
@@ -319,6 +396,8 @@ class OpenNi2Source final : public FrameSource {
   }
 
   const std::string spec_;
+  std::optional<OniFileState> file_;  // a recording's state, as read before OpenNI opened it
+  RepairedCopy repaired_;             // before the device: removed after it closes
   UnplugWatch watch_;
   openni::Device device_;  // declared first: the streams are destroyed before it closes
   openni::VideoStream depth_, colour_;
@@ -330,8 +409,12 @@ class OpenNi2Source final : public FrameSource {
   std::uint64_t replaced_ = 0;
   std::optional<std::array<int, 2>> frames_in_file_;  // set for a recording
   bool registered_ = false;
-  int width_ = 0, height_ = 0;
+  std::array<bool, 2> mirrored_{false, false};  // [0] depth, [1] colour: the stream stays mirrored
+  int width_ = 0, height_ = 0, depth_width_ = 0, depth_height_ = 0;
   core::Intrinsics intrinsics_;
+  std::string intrinsics_source_;
+  std::optional<DepthRegistration> registration_;  // depth of a separate sensor (camera file)
+  cv::Mat unmirrored_;                             // reused: no allocation per frame
   std::optional<double> clock_offset_;
   std::uint64_t next_index_ = 0;
 };

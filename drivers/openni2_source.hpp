@@ -9,11 +9,17 @@
 //
 // Opening sets up a depth stream (PIXEL_FORMAT_DEPTH_1_MM; the virtual device's DEPTH_100_UM, exact
 // for TUM's units) and a colour stream (RGB888) of options.width x height at options.fps (a recording
-// keeps its own mode), mirroring off, depth registered to colour when the device can, depth/colour
-// frame sync on. Intrinsics: options.intrinsics, else the device's own (the virtual device's
-// kIntrinsicsProperty), else from the colour stream's fields of view, fx = w / 2 / tan(hfov / 2)
-// with the principal point at the image centre (OpenNI's own convention, and all an .oni file
-// keeps); depth_scale is the depth format's, 1000 or 10000.
+// keeps its own modes), mirroring off (a stream that stays mirrored, a recording made so, is flipped
+// back), depth registered to colour when the device can, depth/colour frame sync on. Frames have
+// colour's size: depth of another size is registered with options.depth_sensor when given, else
+// (registered by the device) scaled to it by nearest neighbour. Intrinsics: openni2_camera_model.hpp
+// (the camera file, the device's own model, fields of view, PS1080 zero-plane values, a known
+// camera's published focal length), their source in describe(); depth_scale is the depth
+// format's, 1000 or 10000.
+//
+// A file (oni_file.hpp) is checked before OpenNI sees it: a missing, unreadable, foreign or empty
+// file is a SourceError saying so (never a USB hint); a recording never closed or cut off plays
+// its whole frames from a repaired temporary copy.
 //
 // options.realtime false: a recording plays frame by frame as read (speed -1), and the virtual
 // device likewise (its kPacedProperty), so that a slow consumer loses none; else both play at the

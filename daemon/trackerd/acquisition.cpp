@@ -13,8 +13,6 @@ namespace {
 
 using namespace std::chrono_literals;
 
-bool is_device(const std::string& spec) { return spec.starts_with("openni2:") || spec.starts_with("v4l2:"); }
-
 // Intrinsics for the sources that carry none (v4l2): the configured camera, and its depth sensor
 // when depth is separate. The others bring their own (TUM folder, CVO_RGBD message, OpenNI2 stream).
 drivers::SourceOptions source_options(const config::Config& config, const BusAuth& bus) {
@@ -22,7 +20,10 @@ drivers::SourceOptions source_options(const config::Config& config, const BusAut
   options.realtime = config.trackerd.paced;
   options.bus_keys = bus.keys();  // an lcm: source verifies every CVO_RGBD
   options.bus_max_age_us = bus.max_age_us();
-  if (config.trackerd.source.starts_with("v4l2:")) {
+  // v4l2 needs the camera; an OpenNI2 camera or recording says its own, and a camera the user sets
+  // (any but the default) overrides what it says (drivers/openni2_camera_model.hpp).
+  const bool openni2_given = config.trackerd.source.starts_with("openni2:") && config.camera != config::Config{}.camera;
+  if (config.trackerd.source.starts_with("v4l2:") || openni2_given) {
     const io::CameraFile camera = io::load_camera_file(config.camera);
     options.intrinsics = camera.colour;
     options.depth_sensor = camera.depth_sensor;
@@ -35,7 +36,7 @@ drivers::SourceOptions source_options(const config::Config& config, const BusAut
 SourceFactory configured_source(const config::Config& config, const BusAuth& bus) {
   return [spec = config.trackerd.source,
           options = source_options(config, bus)]() -> std::unique_ptr<drivers::FrameSource> {
-    if (is_device(spec)) return std::make_unique<drivers::ReconnectingSource>(spec, options);
+    if (drivers::names_device(spec)) return std::make_unique<drivers::ReconnectingSource>(spec, options);
     return drivers::open_source(spec, options);
   };
 }
@@ -47,7 +48,8 @@ void Acquisition::run() {
     source = open_source_();
   } catch (const std::exception& e) {
     shared_.notes.note(std::string("cannot open the frame source: ") + e.what());
-    shared_.source_failed = true;  // a folder or URL that is wrong now stays wrong; devices are retried
+    // A folder, log or .oni that is wrong now stays wrong (exit 1); devices are retried instead.
+    shared_.source_failed = true;
     shared_.ring.close();
     return;
   }
@@ -71,6 +73,11 @@ bool Acquisition::read_into(drivers::FrameSource& source, RingSlot& slot) {
   shared_.counters.source_lost_frames = static_cast<std::int64_t>(source.lost_frames());
   switch (result.status) {
     case drivers::ReadStatus::kFrame:
+      // A device opens lazily: what it is (size, intrinsics and their source) is said once, here.
+      if (!described_) {
+        described_ = true;
+        shared_.notes.note("first frame from " + source.describe());
+      }
       if (!connected_) {
         connected_ = true;
         ++connection_;

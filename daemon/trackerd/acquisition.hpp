@@ -33,6 +33,7 @@ class Acquisition {
   std::int64_t next_index_ = 0;
   std::uint64_t connection_ = 0;
   bool connected_ = true;
+  bool described_ = false;  // the source's description noted at its first frame
 };
 
 }  // namespace cvo::daemon::trackerd

@@ -126,7 +126,8 @@ void Publishing::run() {
     if (Clock::now() - last_status_ >= period) publish_status(-1);
   }
   if (const auto note = delivery_.unacknowledged_note(); !note.empty()) shared_.notes.note("exit: " + note);
-  publish_status(cvo_lcm::status_t::STATE_STOPPING);
+  // A source that could not be opened is the daemon's failure, and says so in its last status.
+  publish_status(shared_.source_failed ? cvo_lcm::status_t::STATE_FAILED : cvo_lcm::status_t::STATE_STOPPING);
   shared_.publisher_done = true;
 }
 

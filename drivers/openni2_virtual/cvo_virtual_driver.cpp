@@ -15,6 +15,7 @@
 // OpenNI2 asks a driver for a device it does not list through tryDevice(uri): this driver lists
 // nothing by itself (so "any device" still means a real camera) and answers only its own URIs.
 #include <Driver/OniDriverAPI.h>
+#include <PS1080.h>
 
 #include <algorithm>
 #include <atomic>
@@ -91,6 +92,13 @@ struct Playback {
 
 [[nodiscard]] int width_of(const Playback& p) { return p.sequence.intrinsics().width; }
 [[nodiscard]] int height_of(const Playback& p) { return p.sequence.intrinsics().height; }
+// Colour's size: the folder's, or the colour_size option's.
+[[nodiscard]] int colour_width_of(const Playback& p) {
+  return p.options.colour_size ? p.options.colour_size->first : width_of(p);
+}
+[[nodiscard]] int colour_height_of(const Playback& p) {
+  return p.options.colour_size ? p.options.colour_size->second : height_of(p);
+}
 
 template <class T>
 OniStatus put(void* data, int* size, const T& value) {
@@ -112,7 +120,11 @@ bool take(const void* data, int size, T& value) {
 class VirtualStream final : public oni::driver::StreamBase {
  public:
   VirtualStream(OniSensorType type, const Playback& playback, std::vector<OniVideoMode> modes)
-      : type_(type), playback_(playback), modes_(std::move(modes)), mode_(modes_.front()) {}
+      : type_(type),
+        playback_(playback),
+        modes_(std::move(modes)),
+        mode_(modes_.front()),
+        mirrored_(playback.options.mirrored) {}
 
   OniStatus start() override {
     started_ = true;
@@ -124,12 +136,14 @@ class VirtualStream final : public oni::driver::StreamBase {
   OniBool isPropertySupported(int id) override {
     switch (id) {
       case ONI_STREAM_PROPERTY_VIDEO_MODE:
-      case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:
-      case ONI_STREAM_PROPERTY_VERTICAL_FOV:
       case ONI_STREAM_PROPERTY_MIRRORING:
       case ONI_STREAM_PROPERTY_STRIDE:
-      case ONI_STREAM_PROPERTY_CROPPING:
-      case kIntrinsicsProperty: return TRUE;
+      case ONI_STREAM_PROPERTY_CROPPING: return TRUE;
+      case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:
+      case ONI_STREAM_PROPERTY_VERTICAL_FOV:
+      case kIntrinsicsProperty: return playback_.options.fov ? TRUE : FALSE;
+      case XN_STREAM_PROPERTY_ZERO_PLANE_DISTANCE:
+      case XN_STREAM_PROPERTY_ZERO_PLANE_PIXEL_SIZE: return zero_plane() ? TRUE : FALSE;
       case ONI_STREAM_PROPERTY_MAX_VALUE:
       case ONI_STREAM_PROPERTY_MIN_VALUE: return type_ == ONI_SENSOR_DEPTH;
       default: return FALSE;
@@ -139,8 +153,13 @@ class VirtualStream final : public oni::driver::StreamBase {
   OniStatus getProperty(int id, void* data, int* size) override {
     const std::lock_guard lock(mutex_);
     const auto& k = playback_.intrinsics;
+    if (!isPropertySupported(id)) return ONI_STATUS_NOT_SUPPORTED;
     switch (id) {
       case ONI_STREAM_PROPERTY_VIDEO_MODE: return put(data, size, mode_);
+      // PS1080's types: an unsigned 64-bit integer of millimetres, a double of millimetres.
+      case XN_STREAM_PROPERTY_ZERO_PLANE_DISTANCE:
+        return put(data, size, static_cast<std::uint64_t>(std::llround(*playback_.options.zpd_mm)));
+      case XN_STREAM_PROPERTY_ZERO_PLANE_PIXEL_SIZE: return put(data, size, *playback_.options.zpps_mm);
       case ONI_STREAM_PROPERTY_HORIZONTAL_FOV:
         return put(data, size, static_cast<float>(2.0 * std::atan(width_of(playback_) / (2.0 * k.fx))));
       case ONI_STREAM_PROPERTY_VERTICAL_FOV:
@@ -150,7 +169,7 @@ class VirtualStream final : public oni::driver::StreamBase {
       case ONI_STREAM_PROPERTY_CROPPING: return put(data, size, OniCropping{});
       case ONI_STREAM_PROPERTY_MAX_VALUE: return put(data, size, 65535);
       case ONI_STREAM_PROPERTY_MIN_VALUE: return put(data, size, 0);
-      case kIntrinsicsProperty: return put(data, size, k);
+      case kIntrinsicsProperty: return put(data, size, scaled(k));
       default: return ONI_STATUS_NOT_SUPPORTED;
     }
   }
@@ -160,6 +179,7 @@ class VirtualStream final : public oni::driver::StreamBase {
     if (id == ONI_STREAM_PROPERTY_MIRRORING) {
       OniBool on = FALSE;
       if (!take(data, size, on)) return ONI_STATUS_BAD_PARAMETER;
+      if (playback_.options.mirrored) return on ? ONI_STATUS_OK : ONI_STATUS_NOT_SUPPORTED;  // fixed
       mirrored_ = on != FALSE;
       return ONI_STATUS_OK;
     }
@@ -181,8 +201,22 @@ class VirtualStream final : public oni::driver::StreamBase {
     return ONI_STATUS_NOT_SUPPORTED;
   }
 
+  // What OpenNI's Recorder writes when it attaches the stream: PS1080's zero-plane values, as the
+  // PS1080 driver announces them.
+  void notifyAllProperties() override {
+    if (!zero_plane()) return;
+    const auto zpd = static_cast<std::uint64_t>(std::llround(*playback_.options.zpd_mm));
+    const double zpps = *playback_.options.zpps_mm;
+    raisePropertyChanged(XN_STREAM_PROPERTY_ZERO_PLANE_DISTANCE, &zpd, sizeof(zpd));
+    raisePropertyChanged(XN_STREAM_PROPERTY_ZERO_PLANE_PIXEL_SIZE, &zpps, sizeof(zpps));
+  }
+
   // The sizes OpenNI allocates frames of: the largest mode, so that a mode change never needs more.
-  int getRequiredFrameSize() override { return width_of(playback_) * height_of(playback_) * 3; }
+  int getRequiredFrameSize() override {
+    return std::max(width_of(playback_) * height_of(playback_),
+                    colour_width_of(playback_) * colour_height_of(playback_)) *
+           3;
+  }
 
   /// Sends frame `index` (1-based, as devices number them) of `image` (BGR or raw depth in units of
   /// `depth_scale` per metre), when started.
@@ -209,12 +243,30 @@ class VirtualStream final : public oni::driver::StreamBase {
   }
 
  private:
+  // The folder's camera at this stream's size (colour_size scales colour; pixel centres stay).
+  [[nodiscard]] StreamIntrinsics scaled(StreamIntrinsics k) const {
+    const double sx = static_cast<double>(mode_.resolutionX) / width_of(playback_),
+                 sy = static_cast<double>(mode_.resolutionY) / height_of(playback_);
+    if (sx == 1.0 && sy == 1.0) return k;
+    k.fx *= sx;
+    k.fy *= sy;
+    k.cx = (k.cx + 0.5) * sx - 0.5;
+    k.cy = (k.cy + 0.5) * sy - 0.5;
+    return k;
+  }
+  [[nodiscard]] bool zero_plane() const { return type_ == ONI_SENSOR_DEPTH && playback_.options.zpd_mm.has_value(); }
   [[nodiscard]] int bytes_per_pixel() const { return mode_.pixelFormat == ONI_PIXEL_FORMAT_RGB888 ? 3 : 2; }
 
   void convert(const cv::Mat& image, double depth_scale, OniFrame& frame) const {
     if (type_ == ONI_SENSOR_COLOR) {
       cv::Mat rgb(frame.height, frame.width, CV_8UC3, frame.data, static_cast<std::size_t>(frame.stride));
-      cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
+      if (image.size() == rgb.size()) {
+        cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);
+      } else {  // colour_size: a camera's smaller colour mode
+        cv::Mat scaled;
+        cv::resize(image, scaled, rgb.size(), 0, 0, cv::INTER_AREA);
+        cv::cvtColor(scaled, rgb, cv::COLOR_BGR2RGB);
+      }
       if (mirrored_) cv::flip(rgb, rgb, 1);
       return;
     }
@@ -469,7 +521,7 @@ VirtualDevice::VirtualDevice(VirtualDriver& driver, std::shared_ptr<Playback> pl
     : driver_(driver), playback_(std::move(playback)) {
   const int w = width_of(*playback_), h = height_of(*playback_), fps = playback_->fps;
   depth_modes_ = {{ONI_PIXEL_FORMAT_DEPTH_1_MM, w, h, fps}, {ONI_PIXEL_FORMAT_DEPTH_100_UM, w, h, fps}};
-  colour_modes_ = {{ONI_PIXEL_FORMAT_RGB888, w, h, fps}};
+  colour_modes_ = {{ONI_PIXEL_FORMAT_RGB888, colour_width_of(*playback_), colour_height_of(*playback_), fps}};
   sensors_ = {{ONI_SENSOR_DEPTH, static_cast<int>(depth_modes_.size()), depth_modes_.data()},
               {ONI_SENSOR_COLOR, static_cast<int>(colour_modes_.size()), colour_modes_.data()}};
   thread_ = std::jthread([this](const std::stop_token& stop) { play(stop); });

@@ -22,7 +22,7 @@ TEST(OpenNI2Source, LibraryInitialises) {
 }
 
 TEST(OpenNI2Source, NoDeviceIsSourceErrorWithOpenNIsReason) {
-  for (const std::string spec : {"openni2:", "openni2:any", "openni2:/no/such/recording.oni"}) {
+  for (const std::string spec : {"openni2:", "openni2:any"}) {
     try {
       open_source(spec);
       GTEST_SKIP() << spec << " opened: a device is attached to this machine";
@@ -32,6 +32,26 @@ TEST(OpenNI2Source, NoDeviceIsSourceErrorWithOpenNIsReason) {
       EXPECT_NE(what.find(spec), std::string::npos) << what;
     }
   }
+}
+
+// A file is no device: what is wrong with it is said of the file, never of USB (issue 49).
+TEST(OpenNI2Source, AMissingRecordingIsSourceErrorSayingSoWithoutUsb) {
+  const std::string spec = "openni2:/no/such/recording.oni";
+  try {
+    open_source(spec);
+    FAIL() << "opened a missing file";
+  } catch (const SourceError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(spec), std::string::npos) << what;
+    EXPECT_NE(what.find("no such file"), std::string::npos) << what;
+    EXPECT_EQ(what.find("libusb"), std::string::npos) << what;
+    EXPECT_EQ(what.find("USB"), std::string::npos) << what;
+  }
+  EXPECT_FALSE(names_device(spec)) << "a file is not re-opened with back-off";
+  EXPECT_TRUE(names_device("openni2:any"));
+  EXPECT_TRUE(names_device("openni2:cvo-virtual:/some/folder.oni"));
+  EXPECT_TRUE(names_device("v4l2:/dev/video0,/dev/video1"));
+  EXPECT_FALSE(names_device("tum:/data/fr1"));
 }
 
 TEST(OpenNI2Source, ReconnectingWrapperRetriesWithinTheTimeout) {
