@@ -23,6 +23,7 @@
 #include <variant>
 #include <vector>
 
+#include "frame_feed.hpp"
 #include "libcvo/config/config.hpp"
 #include "libcvo/config/module_parameters.hpp"
 #include "libcvo/core/camera.hpp"
@@ -62,7 +63,9 @@ constexpr const char* kSynopsis =
 
 constexpr const char* kDescription =
     R"(Runs odometry over SEQUENCE, a folder in TUM RGB-D layout (rgb.txt, depth.txt, images, optional
-groundtruth.txt), and writes the estimated poses T_world_camera as a TUM trajectory, stamped with
+groundtruth.txt), or any source cvo-trackerd reads (openni2:FILE.oni, lcm:file://LOG, tum:DIR, a
+device: every frame, as fast as it is tracked; --mode kf-cvo gives cvo-trackerd --deterministic's
+poses), and writes the estimated poses T_world_camera as a TUM trajectory, stamped with
 the colour images' timestamps. A frame whose images cannot be read is skipped and reported (it has
 no pose); a frame that cannot be tracked keeps the constant-velocity prediction and is reported.
 
@@ -114,7 +117,9 @@ struct Arguments {
 };
 
 void add_options(CLI::App& app, Arguments& args) {
-  app.add_option("SEQUENCE", args.sequences, "TUM RGB-D folder; with --mode slam, one per session")->required();
+  app.add_option("SEQUENCE", args.sequences,
+                 "TUM RGB-D folder, or a source (openni2:FILE.oni, lcm:URL, ...); with --mode slam, one per session")
+      ->required();
   app.add_option("--out", args.out, "the trajectory to write")->required()->type_name("TRAJ.txt");
   app.add_option("--mode", args.mode, "the odometry (see modes above)")
       ->check(CLI::IsMember({"cvo", "kf-cvo", "slam", "localize", "opencv-rgbd", "opencv-rgbd-icp"}));
@@ -194,21 +199,21 @@ std::string failure_reason(const odometry::TrackResult& r) {
   return reason + "; pose predicted (constant velocity)";
 }
 
-// Every folder opened before the (long) run, so a bad one fails at once.
-std::vector<io::TumSequence> open_sequences(const Arguments& args, const config::Config& config) {
-  std::vector<io::TumSequence> sequences;
-  for (const auto& folder : args.sequences) {
-    if (!fs::is_directory(folder)) throw io::InputError(folder, "no such folder");
+// Every folder or source opened before the (long) run, so a bad one fails at once.
+std::vector<tools::FrameFeed> open_sequences(const Arguments& args, const config::Config& config) {
+  std::vector<tools::FrameFeed> sequences;
+  for (const auto& sequence : args.sequences) {
     io::TumOptions options = config::tum_options(config);
     options.intrinsics = choose_camera(args, config);
     options.max_frames = args.max_frames;
-    sequences.push_back(io::TumSequence::open(folder, options));
+    sequences.push_back(tools::FrameFeed::open(sequence.string(), options));
+    if (const auto what = sequences.back().describe(); !what.empty()) std::cerr << "cvo-run: reading " << what << "\n";
   }
   return sequences;
 }
 
 // --groundtruth, else every folder's ground truth together (sorted, each stamp once).
-core::Trajectory load_groundtruth(const Arguments& args, const std::vector<io::TumSequence>& sequences,
+core::Trajectory load_groundtruth(const Arguments& args, const std::vector<tools::FrameFeed>& sequences,
                                   std::string& source) {
   if (args.groundtruth) {
     source = args.groundtruth->string();
@@ -236,25 +241,27 @@ void record_covariance(const core::RgbdFrame& frame, const odometry::TrackStep& 
 // Streams one folder through `track` (frame -> TrackResult), adding its frames to the report;
 // returns the poses of the frames tracked. `keyframes` counts this folder's keyframes.
 template <class Track>
-core::Trajectory stream(io::TumSequence& sequence, Track&& track, tools::RunReport& report, std::size_t& keyframes) {
+core::Trajectory stream(tools::FrameFeed& sequence, Track&& track, tools::RunReport& report, std::size_t& keyframes) {
   using Clock = core::SteadyClock;
   core::Trajectory trajectory;
-  trajectory.reserve(sequence.size());
-  program::ProgressBar progress(sequence.size());
+  trajectory.reserve(sequence.expected_frames());
+  program::ProgressBar progress(sequence.expected_frames());
   const auto run_start = Clock::now();
   for (std::size_t frames = 0;;) {
-    const std::size_t index = sequence.position();
-    std::optional<core::RgbdFrame> frame;
-    try {
-      frame = sequence.next();
-    } catch (const io::FrameError& e) {
+    auto item = sequence.next();
+    const std::size_t index = item.index;
+    if (item.kind == tools::FrameFeed::Item::Kind::kBad) {
       // The sequence has moved past the frame: report it and go on with the next one.
-      report.failed.push_back({e.frame_index(), sequence.files()[index].timestamp, "read", e.what()});
+      report.failed.push_back({item.index, item.timestamp, "read", item.error});
       progress.update(++frames);
       ++report.frames;
       continue;
     }
-    if (!frame) break;
+    if (item.kind == tools::FrameFeed::Item::Kind::kEnd) {
+      if (!item.error.empty()) std::cerr << "cvo-run: the source ended: " << item.error << "\n";
+      break;
+    }
+    std::optional<core::RgbdFrame>& frame = item.frame;
     const auto start = Clock::now();
     const odometry::TrackResult r = track(*frame);
     report.track_ms.push_back(core::ms_since(start));
@@ -303,7 +310,7 @@ tools::MapReport write_map(const Arguments& args, const mapping::Mapping& mappin
 // --mode slam: every folder a session (ids 1, 2, ... in order) of one mapper; the trajectory is
 // every joined session's frames in the map frame, kf-cvo's own poses corrected by the back end
 // (slam::correct_trajectory fills in the frames it never saw).
-core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<io::TumSequence>& sequences,
+core::Trajectory run_slam(const Arguments& args, const config::Config& config, std::vector<tools::FrameFeed>& sequences,
                           const core::Trajectory& groundtruth, tools::RunReport& report,
                           std::vector<io::StampedCovariance>& covariances) {
   tools::SlamPipeline pipeline(config, load_vocabulary(args), args.map.has_value(), args.store);
@@ -368,7 +375,7 @@ core::Trajectory run_slam(const Arguments& args, const config::Config& config, s
 }
 
 // --mode localize: one folder, one session after another in the stored map (localize.hpp).
-core::Trajectory run_localize(const Arguments& args, const config::Config& config, io::TumSequence& sequence,
+core::Trajectory run_localize(const Arguments& args, const config::Config& config, tools::FrameFeed& sequence,
                               tools::RunReport& report) {
   tools::Localizer localizer(config, load_vocabulary(args), *args.map_store, std::cerr);
   stream(
@@ -404,7 +411,7 @@ int run(const Arguments& args) {
     throw UsageError("several SEQUENCE folders (sessions) need --mode slam; got " +
                      std::to_string(args.sequences.size()) + " for mode '" + args.mode + "'");
   const config::Config config = program::configuration(args.config, args.sets);
-  std::vector<io::TumSequence> sequences = open_sequences(args, config);
+  std::vector<tools::FrameFeed> sequences = open_sequences(args, config);
 
   // Everything that can fail on input is checked before the (long) run.
   tools::RunReport report;

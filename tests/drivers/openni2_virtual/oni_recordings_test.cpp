@@ -3,7 +3,9 @@
 // depth, streams that stay mirrored), OpenNI's own Recorder writes the .oni (cvo-oni-record), and
 // each is played back through the real OpenNI2 runtime; copies cut off or never closed play what
 // they hold; files that cannot be played make cvo-trackerd exit 1 at once, saying why.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +21,7 @@
 #include "drivers/oni_file.hpp"
 #include "drivers/open_source.hpp"
 #include "drivers/zero_plane.hpp"
+#include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "tests/support/daemon_process.hpp"
 #include "tests/support/lcm_log.hpp"
@@ -242,6 +245,25 @@ TEST(RealRecordings, TrackerdTracksEveryFrameOfAZeroPlaneRecording) {
   ASSERT_EQ(log.poses.size(), 20u) << text;
   for (const auto& p : log.poses)
     for (const double v : p.odom_pose.position) EXPECT_TRUE(std::isfinite(v));
+
+  // cvo-run measures the same recording offline with one command: the daemon's poses (its
+  // odom_pose is KF-CVO's published pose, as cvo-run --mode kf-cvo writes).
+  const auto kf = dir.path() / "kf.txt";
+  const auto run = cvo::testing::run_tool(
+      "cvo-run", cvo::testing::quoted("openni2:" + oni.string()) + " --mode kf-cvo --out " + cvo::testing::quoted(kf),
+      dir.path());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("zero-plane"), std::string::npos) << run.err;
+  const auto offline = io::read_tum_trajectory(kf);
+  ASSERT_EQ(offline.size(), log.poses.size());
+  double furthest = 0;
+  for (std::size_t i = 0; i < offline.size(); ++i) {
+    const Eigen::Vector3d daemon(log.poses[i].odom_pose.position[0], log.poses[i].odom_pose.position[1],
+                                 log.poses[i].odom_pose.position[2]);
+    furthest = std::max(furthest, (offline[i].pose.translation() - daemon).norm());
+  }
+  std::printf("cvo-run vs cvo-trackerd --deterministic on a zero-plane .oni: largest difference %.3g m\n", furthest);
+  EXPECT_LT(furthest, 1e-5);
 }
 
 }  // namespace
