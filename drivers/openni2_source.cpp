@@ -262,11 +262,13 @@ class OpenNi2Source final : public FrameSource {
     std::string d = spec_ + " (" + std::to_string(width_) + "x" + std::to_string(height_) + ", " +
                     (device_.isFile() ? "recording" : "device");
     if (file_ && !file_->closed) d += ", " + file_->summary() + ": played from a repaired copy";
-    if (depth_width_ != width_ || depth_height_ != height_)
+    if (registration_)
       d += ", depth " + std::to_string(depth_width_) + "x" + std::to_string(depth_height_) +
-           (registration_ ? " registered to colour (camera file)"
-            : registered_ ? " registered by the device, scaled to colour's size"
-                          : " scaled to colour's size (ASSUMED registered by the device)");
+           " registered to colour (the camera file's depth_sensor)";
+    else if (depth_width_ != width_ || depth_height_ != height_)
+      d += ", depth " + std::to_string(depth_width_) + "x" + std::to_string(depth_height_) +
+           (registered_ ? " registered by the device, scaled to colour's size"
+                        : " scaled to colour's size (ASSUMED registered by the device)");
     else if (!registered_ && !device_.isFile())
       d += ", depth not registered to colour";
     if (mirrored_[0] || mirrored_[1]) d += ", mirrored (flipped back)";
@@ -320,11 +322,13 @@ class OpenNi2Source final : public FrameSource {
       throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
                                    std::to_string(intrinsics_.height) + " but the streams are " +
                                    mode_text(colour_mode));
-    if (depth_width_ == width_ && depth_height_ == height_) return;
-    if (options.depth_sensor) {  // a separate depth sensor the camera file describes
+    // Depth the device registered (DEPTH_TO_COLOR) is never registered twice; otherwise the camera
+    // file's depth sensor, when given, registers it whatever its size.
+    if (!registered_ && options.depth_sensor) {
       registration_.emplace(*options.depth_sensor, intrinsics_);
       return;
     }
+    if (depth_width_ == width_ && depth_height_ == height_) return;
     // Depth the device registered to colour covers colour's view at its own size: brought to
     // colour's size pixel for pixel (nearest, so no depth is made up between surfaces).
     if (static_cast<long>(depth_width_) * height_ != static_cast<long>(width_) * depth_height_)

@@ -50,6 +50,17 @@ fs::path record(const fs::path& dir, const std::string& name, const std::string&
   return oni;
 }
 
+// The frames a recording holds: depth and colour pairs. OpenNI's Recorder writes on a thread of its
+// own and may not write the last frame it was given before it is destroyed (on a loaded machine):
+// at least `asked` - 1.
+std::size_t frames_in(const fs::path& oni, std::size_t asked) {
+  const auto state = inspect_oni(oni);
+  std::size_t pairs = state.frames_per_node.empty() ? 0 : ~std::size_t{0};
+  for (const auto& [node, frames] : state.frames_per_node) pairs = std::min<std::size_t>(pairs, frames);
+  EXPECT_GE(pairs + 1, asked) << state.summary();
+  return pairs;
+}
+
 // Every frame of the source, to its end.
 std::vector<core::RgbdFrame> read_all(FrameSource& source) {
   std::vector<core::RgbdFrame> frames;
@@ -85,7 +96,7 @@ TEST(RealRecordings, ZeroPlaneValuesGiveTheKinectFocalLength) {
   const auto oni = record(dir.path(), "kinect", std::string("fov=0&") + kKinect, 5);
   const auto source = play(oni);
   const auto frames = read_all(*source);
-  ASSERT_EQ(frames.size(), 5u);
+  ASSERT_EQ(frames.size(), frames_in(oni, 5));
   const auto factory = factory_camera(0x045e, 0x02ae, "");
   ASSERT_TRUE(factory.has_value());
   for (const auto& f : frames) {
@@ -115,7 +126,7 @@ TEST(RealRecordings, ColourSmallerThanDepthGivesFramesOfColoursSize) {
   const auto oni = record(dir.path(), "xtion", "colour_size=320x240", 4);
   const auto source = play(oni);
   const auto frames = read_all(*source);
-  ASSERT_EQ(frames.size(), 4u);
+  ASSERT_EQ(frames.size(), frames_in(oni, 4));
   auto tum = io::TumSequence::open(kClip);
   for (const auto& f : frames) {
     const auto expected = *tum.next();
@@ -136,7 +147,7 @@ TEST(RealRecordings, AMirroredRecordingIsFlippedBack) {
   const auto oni = record(dir.path(), "mirrored", "mirrored=1", 3);
   const auto source = play(oni);
   const auto frames = read_all(*source);
-  ASSERT_EQ(frames.size(), 3u);
+  ASSERT_EQ(frames.size(), frames_in(oni, 3));
   auto tum = io::TumSequence::open(kClip);
   for (const auto& f : frames) {
     const auto expected = *tum.next();
@@ -242,7 +253,7 @@ TEST(RealRecordings, TrackerdTracksEveryFrameOfAZeroPlaneRecording) {
             std::string::npos)
       << text;
   const auto log = cvo::testing::read_published(out);
-  ASSERT_EQ(log.poses.size(), 20u) << text;
+  ASSERT_EQ(log.poses.size(), frames_in(oni, 20)) << text;
   for (const auto& p : log.poses)
     for (const double v : p.odom_pose.position) EXPECT_TRUE(std::isfinite(v));
 
