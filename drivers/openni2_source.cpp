@@ -179,7 +179,9 @@ class UnplugWatch final : public openni::OpenNI::DeviceDisconnectedListener,
 
 class OpenNi2Source final : public FrameSource {
  public:
-  OpenNi2Source(std::string uri, const SourceOptions& options) : spec_("openni2:" + uri) {
+  /// need_intrinsics false: a recorder, which records what the camera sends whether or not it says
+  /// its intrinsics (its frames then carry none).
+  OpenNi2Source(std::string uri, const SourceOptions& options, bool need_intrinsics = true) : spec_("openni2:" + uri) {
     require_openni(spec_);
     open_device(uri);
     watch_.watch(device_.getDeviceInfo().getUri());
@@ -208,7 +210,7 @@ class OpenNi2Source final : public FrameSource {
     depth_.setMirroringEnabled(false);
     colour_.setMirroringEnabled(false);
     mirrored_ = {depth_.getMirroringEnabled(), colour_.getMirroringEnabled()};
-    set_up_images(options);
+    set_up_images(options, need_intrinsics);
     if (depth_.start() != openni::STATUS_OK) throw SourceError(spec_, "depth stream does not start: " + openni_error());
     if (colour_.start() != openni::STATUS_OK)
       throw SourceError(spec_, "colour stream does not start: " + openni_error());
@@ -302,8 +304,29 @@ class OpenNi2Source final : public FrameSource {
                                    openni_error() + "; " + usb_open_hint(spec_));
   }
 
+  // False when the camera says nothing of its intrinsics and they are not needed (a recorder).
+  bool choose_intrinsics(const SourceOptions& options, double depth_scale, bool needed) {
+    try {
+      auto model = openni2_camera_model(device_, depth_, colour_, width_, height_, options.intrinsics, spec_);
+      intrinsics_ = model.intrinsics;
+      intrinsics_source_ = std::move(model.source);
+    } catch (const SourceError&) {
+      if (needed) throw;
+      intrinsics_source_ = "nothing: the camera says none";
+      return false;
+    }
+    intrinsics_.depth_scale = depth_scale;  // the stream's unit, whatever a camera file says
+    if (const auto bad = intrinsics_.validate(); !bad.empty())
+      throw SourceError(spec_, "intrinsics (from " + intrinsics_source_ + "): " + bad);
+    if (intrinsics_.width != width_ || intrinsics_.height != height_)
+      throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
+                                   std::to_string(intrinsics_.height) + " but the streams are " +
+                                   std::to_string(width_) + "x" + std::to_string(height_));
+    return true;
+  }
+
   // The frame's size (colour's), its intrinsics, and how depth of another size comes to it.
-  void set_up_images(const SourceOptions& options) {
+  void set_up_images(const SourceOptions& options, bool need_intrinsics) {
     const auto depth_mode = depth_.getVideoMode(), colour_mode = colour_.getVideoMode();
     const double depth_scale = depth_units_per_metre(depth_mode.getPixelFormat());
     if (depth_scale == 0 || colour_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888)
@@ -312,16 +335,7 @@ class OpenNi2Source final : public FrameSource {
     height_ = colour_mode.getResolutionY();
     depth_width_ = depth_mode.getResolutionX();
     depth_height_ = depth_mode.getResolutionY();
-    auto model = openni2_camera_model(device_, depth_, colour_, width_, height_, options.intrinsics, spec_);
-    intrinsics_ = model.intrinsics;
-    intrinsics_source_ = std::move(model.source);
-    intrinsics_.depth_scale = depth_scale;  // the stream's unit, whatever a camera file says
-    if (const auto bad = intrinsics_.validate(); !bad.empty())
-      throw SourceError(spec_, "intrinsics (from " + intrinsics_source_ + "): " + bad);
-    if (intrinsics_.width != width_ || intrinsics_.height != height_)
-      throw SourceError(spec_, "intrinsics are for " + std::to_string(intrinsics_.width) + "x" +
-                                   std::to_string(intrinsics_.height) + " but the streams are " +
-                                   mode_text(colour_mode));
+    if (!choose_intrinsics(options, depth_scale, need_intrinsics)) return;
     // Depth the device registered (DEPTH_TO_COLOR) is never registered twice; otherwise the camera
     // file's depth sensor, when given, registers it whatever its size.
     if (!registered_ && options.depth_sensor) {
@@ -431,7 +445,7 @@ std::unique_ptr<FrameSource> open_openni2(std::string_view uri, const SourceOpti
 
 std::unique_ptr<FrameSource> open_openni2_recording(std::string_view uri, const std::filesystem::path& oni,
                                                     const SourceOptions& options) {
-  auto source = std::make_unique<OpenNi2Source>(std::string(uri), options);
+  auto source = std::make_unique<OpenNi2Source>(std::string(uri), options, false);
   source->record_to(oni);
   return source;
 }

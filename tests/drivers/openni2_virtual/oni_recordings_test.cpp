@@ -21,6 +21,7 @@
 #include "drivers/oni_file.hpp"
 #include "drivers/open_source.hpp"
 #include "drivers/zero_plane.hpp"
+#include "libcvo/io/intrinsics_file.hpp"
 #include "libcvo/io/trajectory_io.hpp"
 #include "libcvo/io/tum_dataset.hpp"
 #include "tests/support/daemon_process.hpp"
@@ -233,6 +234,32 @@ TEST(RealRecordings, TrackerdExitsOneOnAFileItCannotPlay) {
   fs::copy_file(oni, dir.path() / "no_frame.oni");
   fs::resize_file(dir.path() / "no_frame.oni", 600);
   expect_exit_one(dir.path(), "no_frame", dir.path() / "no_frame.oni", "holds no frame");
+  // A recording that says nothing of its camera (no field of view, no zero plane, no camera
+  // OpenNI's player names): exit 1 naming what it lacks.
+  const auto blind = record(dir.path(), "blind", "fov=0", 2);
+  expect_exit_one(dir.path(), "blind", blind, "no intrinsics");
+}
+
+TEST(RealRecordings, TheCameraKeyGivesARecordingItsIntrinsics) {
+  cvo::test::TempDir dir;
+  const auto blind = record(dir.path(), "blind", "fov=0", 5);
+  core::Intrinsics k;
+  k.fx = 525.0, k.fy = 525.0, k.cx = 319.5, k.cy = 239.5, k.width = 640, k.height = 480, k.depth_scale = 1000;
+  const auto camera = dir.path() / "kinect_rgb.yaml";
+  std::ofstream(camera) << io::format_intrinsics_yaml(k, "a Kinect's colour camera");
+  const auto out = dir.path() / "c.lcmlog", err = dir.path() / "c.stderr";
+  cvo::testing::DaemonProcess d(
+      kTrackerd,
+      {"--lcm-url", "file://" + out.string() + "?mode=w", "--set", "trackerd.realtime_priority=0", "--set",
+       "trackerd.lock_memory=false", "--set", "trackerd.paced=false", "--set", "camera=" + camera.string(), "--source",
+       "openni2:" + blind.string(), "--exit-on-eof", "--deterministic"},
+      err);
+  const auto code = d.wait_for(120s);
+  const auto text = cvo::testing::slurp(err);
+  ASSERT_TRUE(code.has_value()) << text;
+  EXPECT_EQ(*code, 0) << text;
+  EXPECT_NE(text.find("fx 525.0000 fy 525.0000 cx 319.50 cy 239.50 from the camera file"), std::string::npos) << text;
+  EXPECT_EQ(cvo::testing::read_published(out).poses.size(), frames_in(blind, 5)) << text;
 }
 
 TEST(RealRecordings, TrackerdTracksEveryFrameOfAZeroPlaneRecording) {
