@@ -145,7 +145,7 @@ PointSelector::PointSelector(int width, int height, const core::SelectionParamet
   column_cell_.resize(W);
   cell_best_.resize(n);  // enough for s = 1
   cell_magnitude_.resize(n);
-  cell_depth_.resize(n);
+  winners_.resize(n / 16);  // s >= 4 (VGA at ~3 000 points has s = 4-6); more are read again
 }
 
 void PointSelector::grey_row(const std::uint8_t* bgr, float* grey) const {
@@ -482,20 +482,38 @@ SelectionResult PointSelector::reselect(const core::RgbdFrame& frame, PointCloud
   return result;
 }
 
-// 4. Back-project the winners, in row-major order of their cells (deterministic).
+PointSelector::Winner PointSelector::read_winner(const core::RgbdFrame& frame, std::size_t p, RawDepthRange valid,
+                                                 bool distorted) const {
+  const auto& K = frame.intrinsics;
+  const auto W = static_cast<std::size_t>(width_);
+  const int u = static_cast<int>(p % W), v = static_cast<int>(p / W);
+  const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
+  const auto gradient_weight = static_cast<float>(parameters_.gradient_weight);
+  Winner w;
+  w.v = v;
+  w.label = {px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
+             gradient_weight * (grey_[p + W] - grey_[p - W])};
+  w.rx = distorted ? rays_[2 * p] : (static_cast<float>(u) - static_cast<float>(K.cx)) * static_cast<float>(1.0 / K.fx);
+  w.ry = distorted ? rays_[2 * p + 1] : (static_cast<float>(v) - static_cast<float>(K.cy)) * static_cast<float>(1.0 / K.fy);
+  w.depth = window_depth(frame.depth, u, v, parameters_.depth_window,
+                         static_cast<float>(parameters_.depth_window_tolerance), valid);
+  return w;
+}
+
+// 4. Back-project the winners, in row-major order of their cells (deterministic). What depends on
+// the images alone (label, ray, own depth) is read once by select() and kept for reselect():
+// winners lie a few pixels apart over the whole image, which has left the caches by then, and
+// those reads were most of this step's time.
 void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
                                  const core::Vector6d& twist, SelectionResult& result, bool again) {
   const auto& K = frame.intrinsics;
-  const auto W = static_cast<std::size_t>(width_);
   const int s = result.cell_size;
   const RawDepthRange valid = valid_depths(K);
   const bool distorted = K.has_distortion();
   if (distorted && (rays_.empty() || !same_rays(K, ray_intrinsics_))) build_ray_table(K);
   const int cells = ((width_ + s - 1) / s) * ((height_ + s - 1) / s);
-  const float fx_inv = static_cast<float>(1.0 / K.fx), fy_inv = static_cast<float>(1.0 / K.fy);
   const float cx = static_cast<float>(K.cx), cy = static_cast<float>(K.cy);
   const float depth_inv = static_cast<float>(1.0 / K.depth_scale);
-  const auto gradient_weight = static_cast<float>(parameters_.gradient_weight);
   // Depth-time compensation (see the header).
   const bool compensate = colour_T_depth.angle() > 0 || colour_T_depth.translation().squaredNorm() > 0;
   const Eigen::Matrix3f R_cd = colour_T_depth.rotation_matrix().cast<float>();
@@ -505,27 +523,22 @@ void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud
   const RollingShutter shutter(K, twist);
   const int window = parameters_.depth_window;
   const auto tolerance = static_cast<float>(parameters_.depth_window_tolerance);
+  const bool kept = again && winners_kept_;
+  std::size_t k = 0;  // the winner's rank
   for (int c = 0; c < cells; ++c) {
     const auto best = cell_best_[static_cast<std::size_t>(c)];
     if (best < 0) continue;
-    const auto p = static_cast<std::size_t>(best);
-    const int u = static_cast<int>(p % static_cast<std::uint32_t>(width_));
-    const int v = static_cast<int>(p / static_cast<std::uint32_t>(width_));
-    float& own_depth = cell_depth_[static_cast<std::size_t>(c)];
-    if (!again) own_depth = window_depth(frame.depth, u, v, window, tolerance, valid);
-    const float z = own_depth * depth_inv;
-    const auto* px = frame.bgr.ptr<std::uint8_t>(v) + 3 * u;
-    const Feature f{px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
-                    gradient_weight * (grey_[p + W] - grey_[p - W])};
-    const float rx = distorted ? rays_[2 * p] : (static_cast<float>(u) - cx) * fx_inv;
-    const float ry = distorted ? rays_[2 * p + 1] : (static_cast<float>(v) - cy) * fy_inv;
+    const Winner w = kept ? winners_[k] : read_winner(frame, static_cast<std::size_t>(best), valid, distorted);
+    if (!again && k < winners_.size()) winners_[k] = w;
+    ++k;
+    const float z = w.depth * depth_inv;
     if (!compensate) {
-      cloud.push_back(shutter.at_frame_time(Eigen::Vector3f(rx * z, ry * z, z), v), f);
+      cloud.push_back(shutter.at_frame_time(Eigen::Vector3f(w.rx * z, w.ry * z, z), w.v), w.label);
       continue;
     }
     // The ray at the depth time, projected through the lens into the depth image (registered to
     // the colour image, so the same distortion); its depth there scales that ray.
-    const Eigen::Vector3f P_d = R_dc * (Eigen::Vector3f(rx * z, ry * z, z) - t_cd);
+    const Eigen::Vector3f P_d = R_dc * (Eigen::Vector3f(w.rx * z, w.ry * z, z) - t_cd);
     if (!(P_d.z() > 0)) continue;
     const float x = P_d.x() / P_d.z(), y = P_d.y() / P_d.z();
     const auto [xd, yd] = distorted ? core::distort(K.distortion, x, y) : std::array<float, 2>{x, y};
@@ -534,8 +547,9 @@ void PointSelector::back_project(const core::RgbdFrame& frame, PointCloud& cloud
     const float raw = window_depth(frame.depth, static_cast<int>(ud), static_cast<int>(vd), window, tolerance, valid);
     if (!(raw > 0)) continue;
     const Eigen::Vector3f P_c = R_cd * (P_d * (raw * depth_inv / P_d.z())) + t_cd;
-    cloud.push_back(shutter.at_frame_time(P_c, v), f);
+    cloud.push_back(shutter.at_frame_time(P_c, w.v), w.label);
   }
+  if (!again) winners_kept_ = k <= winners_.size();
   result.selected = cloud.size();
   if (cloud.overflowed() > 0) result.status = SelectionStatus::kCapacityClamped;
 }

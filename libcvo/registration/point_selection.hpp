@@ -119,8 +119,16 @@ class PointSelector {
   void choose_winners(int s);
   void build_ray_table(const core::Intrinsics& intrinsics);
   [[nodiscard]] RawDepthRange valid_depths(const core::Intrinsics& K) const;
-  // `again`: the winners' own depths are those select() read (cell_depth_), which depend on the
-  // images alone.
+  // What back_project() needs of a winner that depends on its images alone.
+  struct Winner {
+    int v = 0;         // its row (the rolling shutter's time)
+    Feature label{};   // colour and gradient
+    float rx = 0, ry = 0;  // undistorted ray (x/z, y/z)
+    float depth = 0;   // raw depth over its window (0: none)
+  };
+  [[nodiscard]] Winner read_winner(const core::RgbdFrame& frame, std::size_t pixel, RawDepthRange valid,
+                                   bool distorted) const;
+  // `again` (reselect()): the winners kept by select() are used, when all of them fit.
   void back_project(const core::RgbdFrame& frame, PointCloud& cloud, const core::SE3& colour_T_depth,
                     const core::Vector6d& twist, SelectionResult& result, bool again);
 
@@ -152,7 +160,8 @@ class PointSelector {
   std::vector<std::int32_t> column_cell_;  // per column: its cell's (winners) or the next cell's first column (counts)
   std::vector<std::int32_t> cell_best_;    // per cell: pixel index of its strongest candidate or -1
   std::vector<float> cell_magnitude_;      // per cell: that candidate's |g|
-  std::vector<float> cell_depth_;          // per cell: that candidate's raw depth over its window (step 4)
+  std::vector<Winner> winners_;            // select()'s winners, in order (fixed capacity)
+  bool winners_kept_ = false;              // all of the last select()'s winners are in winners_
   // Distorted cameras only: undistorted (x/z, y/z) per pixel, row-major, for ray_intrinsics_.
   std::vector<float> rays_;
   core::Intrinsics ray_intrinsics_{};
