@@ -494,7 +494,8 @@ PointSelector::Winner PointSelector::read_winner(const core::RgbdFrame& frame, s
   w.label = {px[2] / 255.0f, px[1] / 255.0f, px[0] / 255.0f, gradient_weight * (grey_[p + 1] - grey_[p - 1]),
              gradient_weight * (grey_[p + W] - grey_[p - W])};
   w.rx = distorted ? rays_[2 * p] : (static_cast<float>(u) - static_cast<float>(K.cx)) * static_cast<float>(1.0 / K.fx);
-  w.ry = distorted ? rays_[2 * p + 1] : (static_cast<float>(v) - static_cast<float>(K.cy)) * static_cast<float>(1.0 / K.fy);
+  w.ry = distorted ? rays_[2 * p + 1]
+                   : (static_cast<float>(v) - static_cast<float>(K.cy)) * static_cast<float>(1.0 / K.fy);
   w.depth = window_depth(frame.depth, u, v, parameters_.depth_window,
                          static_cast<float>(parameters_.depth_window_tolerance), valid);
   return w;

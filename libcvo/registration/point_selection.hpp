@@ -121,10 +121,10 @@ class PointSelector {
   [[nodiscard]] RawDepthRange valid_depths(const core::Intrinsics& K) const;
   // What back_project() needs of a winner that depends on its images alone.
   struct Winner {
-    int v = 0;         // its row (the rolling shutter's time)
-    Feature label{};   // colour and gradient
+    int v = 0;             // its row (the rolling shutter's time)
+    Feature label{};       // colour and gradient
     float rx = 0, ry = 0;  // undistorted ray (x/z, y/z)
-    float depth = 0;   // raw depth over its window (0: none)
+    float depth = 0;       // raw depth over its window (0: none)
   };
   [[nodiscard]] Winner read_winner(const core::RgbdFrame& frame, std::size_t pixel, RawDepthRange valid,
                                    bool distorted) const;

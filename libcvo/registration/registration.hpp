@@ -258,8 +258,8 @@ class Registration {
   std::vector<float> collected_label_;          // kFeatureDim per moving point: its label when collected
   std::vector<float> moving_label_;             // kFeatureDim per moving point of the last align(), in order
   std::size_t labelled_points_ = 0;
-  std::vector<std::uint32_t> source_;  // per moving point: the last align()'s point whose list it takes
-  std::vector<std::uint32_t> scratch_fixed_;    // per thread: every candidate of one point, before the budget
+  std::vector<std::uint32_t> source_;         // per moving point: the last align()'s point whose list it takes
+  std::vector<std::uint32_t> scratch_fixed_;  // per thread: every candidate of one point, before the budget
   std::vector<float> scratch_colour_;
   std::vector<float> collected_at_;  // 4 per moving point: where it was when collected, the reach then
   std::vector<Sums> chunk_sums_;
