@@ -243,10 +243,11 @@ TEST(VirtualDevice, TrackerdThroughOpenNI2GivesTheFoldersPoses) {
   ASSERT_EQ(virt.log.poses.size(), 50u) << "every frame tracked\n" << virt.err;
   // The device gives its intrinsics as fields of view in float: focal lengths differ from the
   // folder's by ~1e-6 relative, enough to move a kernel pair across the sparsification threshold
-  // somewhere in 50 frames and the poses by about a millimetre (the depth-time compensation follows
-  // the published motion, so such a difference carries on for a few frames). A wrong or shifted
-  // frame would move them by centimetres.
-  expect_same_poses(tum.log.poses, virt.log.poses, "tum vs virtual device", 2e-3);
+  // somewhere in 50 frames and the poses by millimetres (the depth-time compensation follows
+  // the published motion, so such a difference carries on for a few frames): 0.2 mm or 2.2 mm
+  // depending on which pair crosses where, whether the second frame-to-frame registration reuses
+  // the first one's candidates or not. A wrong or shifted frame would move them by centimetres.
+  expect_same_poses(tum.log.poses, virt.log.poses, "tum vs virtual device", 5e-3);
   ASSERT_FALSE(virt.log.statuses.empty());
   EXPECT_EQ(virt.log.statuses.back().source_gaps, 0);
 }
