@@ -1,83 +1,11 @@
 #pragma once
-// The SLAM back end as one object, for every caller (cvo-run --mode slam, cvo-backendd): keyframes
-// and closed local graphs of any number of tracker sessions in, a multi-session map out.
-//
-//   add_keyframe      (session, id) is stored once; the loop detector gets its images, its CVO
-//                     points and its current estimate (its piece's pose when its graph is in, else
-//                     the session's newest correction applied to its odometry pose), with its
-//                     predecessor in the session as η's normaliser; accepted loops go to the
-//                     Backend; new loops trigger a keyframe-graph optimisation and the detector's
-//                     poses follow it.
-//   add_local_graph   the graph of keyframe (session, id) -> Backend::add_local_graph (loops that
-//                     waited for its keyframe enter now, and are optimised as above).
-//   finish            the global optimisation (Backend::optimise_all).
-//   map               every session (placed or not, its correction), every keyframe's pose, every
-//                     loop: what CVO_MAP carries. O(N) in the keyframes.
-//   session,          one session's entry, and with its newest loops to other sessions (the other
-//   correction        keyframe's pose with each): what CVO_MAP_CORRECTION carries, without building
-//                     the map: O(1) in the keyframes while the keyframe graph grows by leaves.
-//
-// Covariances: each mapped session's entry has the marginal covariance of its newest keyframe's
-// pose in the keyframe graph (posegraph/marginals.hpp). One factorisation of the whole graph gives
-// every session's; between them, a graph that only grew by leaves (a local graph's last frame on one
-// edge) extends them exactly, O(1) per leaf (keyframe_marginals.hpp states the maths); a loop, a join
-// or an optimisation makes the next entry asked for factorise again.
-//
-// Sessions (ORB-SLAM3's atlas, maplab's multi-mission maps; the paper has one run): the first
-// session seen defines the map frame. A later one starts unplaced, a piece of map in its own
-// odometry frame; loops are looked for from its keyframes to every keyframe of every session, and
-// the first verified one to the map joins it (Backend: the later piece moves onto the loop, then
-// the whole graph is optimised); its poses are map poses from then on. Sessions that never join
-// stay pieces of their own and can join later; two unplaced ones that share a loop become one
-// piece.
-//
-// Node ids: a session's frame n is node (ordinal << 40) | n, ordinal the order the session was first
-// seen (so a replay of the same input rebuilds the same graph), n < 2^40 (a year at 30 Hz is 2^30).
-// Frame indices and keyframe ids count from 0 in every session, as the tracker numbers them.
-//
-// Localization (localize_only(), cvo-backendd's backendd.mode=localization, cvo-run --mode
-// localize): after the stored map was applied it is read only. A session not seen before is then a
-// visitor: its keyframes look for loops to the map's keyframes only (the same verification that
-// joins sessions: bag of words, RANSAC, CVO, α), its first verified loop localizes it
-// (LocalizationState::kLocalized), and its correction comes from its window
-// (localization_window.hpp): its newest localization.window_keyframes keyframes, kept in memory
-// only (never in the map, never stored) and forgotten by the loop detector as the window moves on.
-// At most kMaxWindows visitors hold a window at once (the others keep their correction and state:
-// a tracker that went away), and at most kMaxVisitors are remembered at all, so a map serves for
-// months in bounded memory. A stored session's keyframes that are not in the map already are
-// refused then (the map is read only).
-//
-// States (MapSession::state): a mapped session is kLocalized once placed in the map (the first:
-// always), else kLocalizing; a visitor likewise once its window is solved. mark_lost() (the
-// tracker said its odometry failed) makes either kLost: a lost visitor's window is freed.
-// last_match_time is the sensor time of the session's newest keyframe with a verified loop to the
-// map (to another session, for a mapped one; the first session's newest keyframe: it is the map).
-//
-// Revisits (issue #27 item 3; ORB-SLAM culls redundant keyframes, RTAB-Map bounds its working
-// memory): a new keyframe k of a session already in the piece of an earlier keyframe c is covered by c
-// when a verified loop c → k (bag of words, RANSAC, CVO, α: nothing new) shows that c would still
-// serve as k's keyframe: the tracker's own keyframe test γ (eq. 9) of k's cloud against c's at the
-// loop's pose is at or above the tracker's threshold γ_thres (keyframe.inner_product_ratio_threshold,
-// the same key; LoopDetector::coverage says how γ is normalised here). A candidate refused by α
-// only because k's current estimate explains the view at least as well as CVO (a confirmation,
-// loop_verification.hpp: the map holds k where it is already, the commonest case of a revisit) counts
-// the same at the estimate's pose, though it is no loop. Of several the best γ wins. k is then merged into c
-// (Backend::merge_keyframe): an alias X_k = X_c · T_c^k, not a node of the keyframe graph, its edges moved onto c and
-// fused with c's (keyframe_merge.hpp), its other loops kept as loops of c; the loop detector forgets it (its cloud,
-// features and bag of words freed; its successor's η is normalised by c's vector instead, c then a candidate too: the
-// same with or without k's images, so a store's merge record replays to the same map). Its pose stays X_c · T_c^k for
-// correction() and the session's correction, and map() leaves it out: the map's keyframes follow the area. Only a
-// keyframe already in the graph (its predecessor's local graph closed: cvo-run and the tracker send
-// that graph first) and not its piece's anchor is merged. A session's first keyframe proposes no
-// candidates when it comes (no predecessor normalises η): its loops are searched when its successor
-// comes (LoopDetector::detect_first, η normalised by the successor), when a join has usually freed
-// it from anchoring its piece, and entered only if one shows it covered, with its merge (so its merge
-// record holds all they change): a revisiting session's keyframes all follow the area. A service
-// that lives for months settles them (settle()): once merged keyframes are older than their
-// session's two newest, their frames, records and loops are forgotten (Backend::settle keeps what
-// they added to the global optimisation), so memory follows the area too. A wrong loop passes α rarely; a
-// merge holds k rigidly to c in the keyframe graph, and the final optimisation relaxes it as a robust edge
-// (backend.hpp).
+// The SLAM back end as one object, for every caller (cvo-run --mode slam, cvo-backendd, cvo-map):
+// keyframes and closed local graphs of any number of tracker sessions in, a multi-session map out
+// (what CVO_MAP carries: map(); one session's entry, what CVO_MAP_CORRECTION carries: correction()).
+// The first session seen defines the map frame; a later one joins it at its first verified loop to
+// the map. After localize_only() the map is read only and new sessions are localized in it. A
+// revisit's keyframes that an earlier keyframe covers are merged into it, and settled once old.
+// How and why each works (covariances, sessions, node ids, localization, revisits): README.md.
 //
 // Everything that cannot be applied throws MapperError before anything changed, with a message
 // naming the session and keyframe; the mapper stays usable.
@@ -185,7 +113,7 @@ struct Map {
   std::vector<MapLoop> loops;          // in the order accepted
 };
 
-/// A keyframe merged into the earlier keyframe that covers it (see the header).
+/// A keyframe merged into the earlier keyframe that covers it (README.md).
 struct KeyframeMerge {
   core::SessionId session = 0;
   std::int64_t id = 0;
@@ -235,7 +163,7 @@ struct KeyframeOutcome {
   std::size_t loops_tried = 0;          // candidates verified
   std::vector<MapLoop> loops;           // accepted
   std::vector<core::SessionId> joined;  // sessions placed in the map by it
-  // Keyframes it merged (see the header): itself (its loop is in `loops` only if it joined), and its
+  // Keyframes it merged (README.md: "Revisits"): itself (its loop is in `loops` only if it joined), and its
   // session's first keyframe, whose loops are searched once it has a successor.
   std::vector<KeyframeMerge> merges;
 };
@@ -244,9 +172,9 @@ class Mapper {
  public:
   Mapper(loop_closure::Vocabulary vocabulary, const MapperParameters& parameters);
 
-  /// See the header. Throws MapperError when (session, id) is known with another frame or pose
-  /// (a repeat with the same frame index and pose is a duplicate), when id or the frame index is
-  /// not above the session's previous keyframe's, when the frame index is 2^40 or more, and as
+  /// Loops looked for, entered, optimised (README.md: "The mapper's calls"). Throws MapperError when (session, id) is
+  /// known with another frame or pose (a repeat with the same frame index and pose is a duplicate), when id or the
+  /// frame index is not above the session's previous keyframe's, when the frame index is 2^40 or more, and as
   /// LoopDetector::add_keyframe does on a bad frame (wrapped).
   KeyframeOutcome add_keyframe(const SessionKeyframe& keyframe);
 
@@ -260,7 +188,7 @@ class Mapper {
   /// The global optimisation of every frame, in at most max_seconds (Backend::optimise_all).
   posegraph::OptimizationReport finish(double max_seconds = std::numeric_limits<double>::infinity());
 
-  /// From now on the map is read only and new sessions are localized in it (see the header).
+  /// From now on the map is read only and new sessions are localized in it (README.md).
   void localize_only();
   [[nodiscard]] bool localizing_only() const { return map_below_.has_value(); }
   /// The tracker's odometry of `session` failed (a new session follows): its state is kLost.
@@ -296,7 +224,7 @@ class Mapper {
   [[nodiscard]] const Backend& backend() const { return backend_; }
   [[nodiscard]] std::size_t loops_tried() const { return loops_tried_; }
   [[nodiscard]] std::size_t loops_accepted() const { return loops_accepted_; }
-  /// Keyframes merged into ones that cover them (see the header).
+  /// Keyframes merged into ones that cover them (README.md).
   [[nodiscard]] std::size_t merged_keyframes() const { return backend_.merged_keyframes(); }
   /// Applies a merge add_keyframe made before (a store's record): when keyframe (session, id) is
   /// known and merged so already, nothing (false); known and not merged, it is merged; not known
@@ -307,7 +235,7 @@ class Mapper {
   bool apply_merge(const KeyframeMerge& merge);
   /// Settles merged keyframes older than their session's two newest (Backend::settle: their local
   /// graphs' frames go, and the keyframes once nothing names them: their records, loops and
-  /// aliases), so that a map revisited for months holds what grows with its area (see the header).
+  /// aliases), so that a map revisited for months holds what grows with its area (README.md).
   /// A service calls it after each keyframe or local graph; cvo-run, which writes every frame's
   /// pose, does not. A keyframe or local graph of a session at or below its newest settled keyframe
   /// that the mapper does not know is refused from then on (it was forgotten). Returns the keyframes
@@ -327,7 +255,7 @@ class Mapper {
   /// recorded as merged is an alias there. Checked after every change in a debug build (NDEBUG
   /// off), where a break throws std::logic_error at its cause; tests call it.
   [[nodiscard]] std::optional<std::string> inconsistency() const;
-  /// Keyframes held in visitors' windows, all visitors together (bounded: see the header).
+  /// Keyframes held in visitors' windows, all visitors together (bounded: README.md).
   [[nodiscard]] std::size_t window_keyframes() const;
 
   static constexpr std::size_t kMaxWindows = 8;
@@ -338,7 +266,7 @@ class Mapper {
     std::int64_t frame = 0;  // index in its session
     double timestamp = 0;
     core::SE3 odometry;
-    bool merged = false;  // into a keyframe that covers it (see the header)
+    bool merged = false;  // into a keyframe that covers it (README.md)
   };
   struct Session {
     std::int64_t ordinal = 0;
@@ -391,7 +319,7 @@ class Mapper {
   std::vector<core::SessionId> after_change();  // optimise after new loops; note joins
   void check_in_debug() const;                  // inconsistency() as std::logic_error, unless NDEBUG
   // Of the new keyframe's loops (those that joined pieces entered already), the one to the keyframe
-  // that covers it best, if any (the header), with its γ.
+  // that covers it best, if any (README.md: "Revisits"), with its γ.
   std::optional<std::pair<std::size_t, double>> covering_loop(const std::vector<loop_closure::LoopClosure>& loops,
                                                               posegraph::NodeId keyframe, core::SessionId session);
   void merge(const KeyframeMerge& merge, posegraph::NodeId keyframe, posegraph::NodeId covering);
