@@ -21,7 +21,8 @@ namespace cvo::drivers {
 
 struct CameraModel {
   core::Intrinsics intrinsics;
-  std::string source;  // e.g. "zero-plane distance 120 mm and pixel size 0.1042 mm of the depth stream"
+  std::string
+      origin;  // where they came from, e.g. "zero-plane distance 120 mm and pixel size 0.1042 mm of the depth stream"
 };
 
 CameraModel openni2_camera_model(const openni::Device& device, const openni::VideoStream& depth,

@@ -309,7 +309,7 @@ class OpenNi2Source final : public FrameSource {
     try {
       auto model = openni2_camera_model(device_, depth_, colour_, width_, height_, options.intrinsics, spec_);
       intrinsics_ = model.intrinsics;
-      intrinsics_source_ = std::move(model.source);
+      intrinsics_source_ = std::move(model.origin);
     } catch (const SourceError&) {
       if (needed) throw;
       intrinsics_source_ = "nothing: the camera says none";
