@@ -135,79 +135,76 @@ TEST(Registration, CandidatePairsGiveTheResultOfASearchEveryIteration) {
   EXPECT_LT(candidates.collections(), points * static_cast<std::size_t>(a.iterations) / 3);
 }
 
-// The frame selected again at its own motion (odometry/keyframe_odometry.hpp): the same points with
-// the same labels, moved by millimetres. A second align() that reuses the first one's grid and
-// candidates collects only where a point moved beyond its margin or changed its label, and takes
-// the steps a fresh align() takes.
-TEST(Registration, ReusedCandidatesGiveTheResultOfAFreshAlign) {
-  const auto M = motion({0.2, 1, 0.1}, 2.0, {0.02, 0.01, -0.01});
-  const auto pair = testing::render_pair(sim::SceneKind::textured_room, testing::camera_looking_north(), M);
-  const core::CvoParameters parameters;
-  Registration reusing(Capacities{8192}, parameters), fresh(Capacities{8192}, parameters);
-  const auto first = reusing.align(pair.first, pair.second, core::SE3());
-  ASSERT_TRUE(first.converged);
-  // Moved as a compensation moves them (2 mm), and every 50th label changed.
-  PointCloud again(8192);
-  const Eigen::Vector3f shift(0.002f, -0.001f, 0.001f);
-  for (std::size_t i = 0; i < pair.second.size(); ++i) {
-    auto label = pair.second.feature(i);
-    if (i % 50 == 0) label[0] += 0.5f;
-    again.push_back(pair.second.position(i) + shift, label);
+// A rendered pair registered once by `reusing`, for a second align() of its moving points selected
+// again (odometry/keyframe_odometry.hpp), as a compensation moves them (2 mm).
+struct ReuseCase {
+  testing::RenderedPair pair = testing::render_pair(sim::SceneKind::textured_room, testing::camera_looking_north(),
+                                                    motion({0.2, 1, 0.1}, 2.0, {0.02, 0.01, -0.01}));
+  core::CvoParameters parameters;
+  Registration reusing{Capacities{8192}, parameters}, fresh{Capacities{8192}, parameters};
+  RegistrationResult first = reusing.align(pair.first, pair.second, core::SE3());
+  const Eigen::Vector3f shift{0.002f, -0.001f, 0.001f};
+
+  // The second align() with and without the first one's candidates take the same steps.
+  void expect_a_fresh_aligns_result(const PointCloud& again) {
+    const auto a = fresh.align(pair.first, again, first.transform, parameters.ell_min);
+    const auto b = reusing.align(pair.first, again, first.transform, parameters.ell_min, Reuse::kCandidates);
+    ASSERT_TRUE(a.converged && b.converged);
+    EXPECT_EQ(a.iterations, b.iterations);
+    for (std::size_t i = 0; i < fresh.pairs_logged(); ++i)
+      EXPECT_EQ(fresh.pairs_per_iteration()[i], reusing.pairs_per_iteration()[i]) << "iteration " << i;
+    EXPECT_LT((a.transform.inverse() * b.transform).translation().norm(), 1e-5);
+    EXPECT_LT(deg((a.transform.inverse() * b.transform).angle()), 1e-3);
   }
-  const double ell_min = parameters.ell_min;
-  const auto a = fresh.align(pair.first, again, first.transform, ell_min);
-  const auto b = reusing.align(pair.first, again, first.transform, ell_min, Reuse::kCandidates);
-  ASSERT_TRUE(a.converged && b.converged);
-  EXPECT_EQ(a.iterations, b.iterations);
-  for (std::size_t i = 0; i < fresh.pairs_logged(); ++i)
-    EXPECT_EQ(fresh.pairs_per_iteration()[i], reusing.pairs_per_iteration()[i]) << "iteration " << i;
-  EXPECT_LT((a.transform.inverse() * b.transform).translation().norm(), 1e-5);
-  EXPECT_LT(deg((a.transform.inverse() * b.transform).angle()), 1e-3);
-  EXPECT_GT(10 * fresh.collections(), 9 * again.size());    // all but those neither view sees
-  EXPECT_GT(2 * reusing.collections(), again.size() / 50);  // at least half of those whose label changed
+};
+
+// The same points with the same labels, moved by millimetres: a second align() that reuses the
+// first one's grid and candidates collects only where a point moved beyond its margin or changed
+// its label, and takes the steps a fresh align() takes.
+TEST(Registration, ReusedCandidatesGiveTheResultOfAFreshAlign) {
+  ReuseCase r;
+  ASSERT_TRUE(r.first.converged);
+  // Every 50th label changed.
+  PointCloud again(8192);
+  for (std::size_t i = 0; i < r.pair.second.size(); ++i) {
+    auto label = r.pair.second.feature(i);
+    if (i % 50 == 0) label[0] += 0.5f;
+    again.push_back(r.pair.second.position(i) + r.shift, label);
+  }
+  r.expect_a_fresh_aligns_result(again);
+  EXPECT_GT(10 * r.fresh.collections(), 9 * again.size());    // all but those neither view sees
+  EXPECT_GT(2 * r.reusing.collections(), again.size() / 50);  // at least half of those whose label changed
   // Measured: 66 collections (the changed labels) against 3269 for 3398 points (asserted: fewer than half the points).
-  EXPECT_LT(reusing.collections(), again.size() / 2);
+  EXPECT_LT(r.reusing.collections(), again.size() / 2);
   // Another fixed cloud: nothing is kept.
-  const auto c = reusing.align(again, pair.first, first.transform.inverse(), ell_min, Reuse::kCandidates);
+  const auto c =
+      r.reusing.align(again, r.pair.first, r.first.transform.inverse(), r.parameters.ell_min, Reuse::kCandidates);
   EXPECT_TRUE(c.converged);
-  EXPECT_GT(10 * reusing.collections(), 9 * pair.first.size());
+  EXPECT_GT(10 * r.reusing.collections(), 9 * r.pair.first.size());
 }
 
 // Selected again, a frame may lose a point (no depth where the new motion looks) or gain one it had
 // lost, which shifts every later index: the candidate lists follow the points' labels, so the
 // second align() still collects only for the points it did not have, with a fresh align()'s result.
 TEST(Registration, ReusedCandidatesFollowTheirPointsWhenPointsAreDroppedOrAdded) {
-  const auto M = motion({0.2, 1, 0.1}, 2.0, {0.02, 0.01, -0.01});
-  const auto pair = testing::render_pair(sim::SceneKind::textured_room, testing::camera_looking_north(), M);
-  const core::CvoParameters parameters;
-  Registration reusing(Capacities{8192}, parameters), fresh(Capacities{8192}, parameters);
-  const auto first = reusing.align(pair.first, pair.second, core::SE3());
-  ASSERT_TRUE(first.converged);
+  ReuseCase r;
+  ASSERT_TRUE(r.first.converged);
   // Every 97th point dropped, and after every 211th a point the first cloud did not have.
   PointCloud again(8192);
-  const Eigen::Vector3f shift(0.002f, -0.001f, 0.001f);
   std::size_t added = 0;
-  for (std::size_t i = 0; i < pair.second.size(); ++i) {
-    if (i % 97 != 5) again.push_back(pair.second.position(i) + shift, pair.second.feature(i));
+  for (std::size_t i = 0; i < r.pair.second.size(); ++i) {
+    if (i % 97 != 5) again.push_back(r.pair.second.position(i) + r.shift, r.pair.second.feature(i));
     if (i % 211 != 7) continue;
-    auto label = pair.second.feature(i);
+    auto label = r.pair.second.feature(i);
     label[1] += 0.25f;
-    again.push_back(pair.second.position(i) + 2.0f * shift, label);
+    again.push_back(r.pair.second.position(i) + 2.0f * r.shift, label);
     ++added;
   }
-  const double ell_min = parameters.ell_min;
-  const auto a = fresh.align(pair.first, again, first.transform, ell_min);
-  const auto b = reusing.align(pair.first, again, first.transform, ell_min, Reuse::kCandidates);
-  ASSERT_TRUE(a.converged && b.converged);
-  EXPECT_EQ(a.iterations, b.iterations);
-  for (std::size_t i = 0; i < fresh.pairs_logged(); ++i)
-    EXPECT_EQ(fresh.pairs_per_iteration()[i], reusing.pairs_per_iteration()[i]) << "iteration " << i;
-  EXPECT_LT((a.transform.inverse() * b.transform).translation().norm(), 1e-5);
-  EXPECT_LT(deg((a.transform.inverse() * b.transform).angle()), 1e-3);
+  r.expect_a_fresh_aligns_result(again);
   // The added points collect; the first dropped one no longer costs every later point its list
   // (matched by index, 3 000 of the 3 300 collected again).
-  EXPECT_GE(reusing.collections(), added / 2);
-  EXPECT_LT(reusing.collections(), again.size() / 10);
+  EXPECT_GE(r.reusing.collections(), added / 2);
+  EXPECT_LT(r.reusing.collections(), again.size() / 10);
 }
 
 // Where two views differ, points near the edge of one view find partners on one side only, and
