@@ -66,6 +66,13 @@ double kernel_amplitude(const core::CvoParameters& p) { return p.sigma * p.sigma
 // Whether the Gauss-Newton step ξ = H⁻¹ b is within one standard deviation of the estimate
 // (registration.hpp, "Convergence"): ξᵀ Σ⁻¹ ξ = bᵀ B⁻¹ b < 1 with Σ = H⁻¹ B H⁻¹. False when B
 // does not say (singular: too few clusters).
+// Whether `label` (kFeatureDim values) is moving point j's label.
+bool same_label(const float* label, const PointCloud& moving, std::size_t j) {
+  for (std::size_t c = 0; c < kFeatureDim; ++c)
+    if (label[c] != moving.feature_channel(c)[j]) return false;
+  return true;
+}
+
 bool within_noise(const core::Vector6d& b, const core::Matrix6d& scatter) {
   const Eigen::LDLT<core::Matrix6d> ldlt(scatter);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) return false;
@@ -251,7 +258,7 @@ void Registration::match_moving_points(const PointCloud& moving, std::size_t nm)
   for (std::size_t j = 0; j < nm; ++j) {
     source_[j] = kNoSource;
     for (std::size_t d = 0; d < kMatchWindow && k + d < labelled_points_; ++d) {
-      if (!has_label(k + d, moving, j)) continue;
+      if (!same_label(&moving_label_[kFeatureDim * (k + d)], moving, j)) continue;
       source_[j] = static_cast<std::uint32_t>(k + d);
       k += d + 1;
       break;
@@ -264,20 +271,8 @@ void Registration::match_moving_points(const PointCloud& moving, std::size_t nm)
   for (std::size_t j = 0; j < nm; ++j)
     if (source_[j] != kNoSource && source_[j] > j) move_candidates(source_[j], j);
   for (std::size_t j = 0; j < nm; ++j)
-    if (source_[j] == kNoSource || !collected_with(j, moving)) candidate_count_[j] = kUncollected;
-}
-
-// Whether point j's list was collected for the label it has now.
-bool Registration::collected_with(std::size_t j, const PointCloud& moving) const {
-  for (std::size_t c = 0; c < kFeatureDim; ++c)
-    if (collected_label_[kFeatureDim * j + c] != moving.feature_channel(c)[j]) return false;
-  return true;
-}
-
-bool Registration::has_label(std::size_t k, const PointCloud& moving, std::size_t j) const {
-  for (std::size_t c = 0; c < kFeatureDim; ++c)
-    if (moving_label_[kFeatureDim * k + c] != moving.feature_channel(c)[j]) return false;
-  return true;
+    if (source_[j] == kNoSource || !same_label(&collected_label_[kFeatureDim * j], moving, j))
+      candidate_count_[j] = kUncollected;
 }
 
 void Registration::move_candidates(std::size_t from, std::size_t to) {

@@ -209,8 +209,6 @@ class Registration {
   bool build_grid(const PointCloud& fixed, std::size_t n, double ell, double slack_fraction);
   bool keep_grid(const PointCloud& fixed, std::size_t n, double ell, const PointCloud& moving, std::size_t nm);
   void match_moving_points(const PointCloud& moving, std::size_t nm);
-  [[nodiscard]] bool has_label(std::size_t k, const PointCloud& moving, std::size_t j) const;
-  [[nodiscard]] bool collected_with(std::size_t j, const PointCloud& moving) const;
   void move_candidates(std::size_t from, std::size_t to);
   void record_labels(const PointCloud& moving, std::size_t nm);
   void find_cells(const Eigen::Vector3f& w, Cells& cells) const;
